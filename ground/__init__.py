@@ -1,0 +1,1 @@
+"""The ground station: MAVLink ground station core, mission dispatch, telemetry, ground log."""

@@ -1,0 +1,327 @@
+"""Per-component configuration: frozen dataclasses, loaded from TOML and validated.
+
+Every field has a default, a unit in its name where it has one, and a doc comment.
+Cores receive these objects; only entry points read files. A config file is TOML
+with one table per component::
+
+    [sim]
+    world = "campus"
+    seed = 7
+
+    [sim.body]
+    max_speed_m_s = 0.5
+
+Unknown keys, wrong types and out-of-range values raise :class:`ConfigError`
+naming the file, the table and the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+from shared.errors import ConfigError
+
+T = TypeVar("T")
+
+
+# ---------------------------------------------------------------------------
+# Generic loading: mapping -> frozen dataclass, with type and range checks.
+# ---------------------------------------------------------------------------
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file.
+
+    Raises:
+        ConfigError: the file is missing, unreadable or not valid TOML (message
+            names the file and TOML's own line/column).
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise ConfigError(path, "file not found") from None
+    except OSError as e:
+        raise ConfigError(path, f"cannot read: {e.strerror}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(path, f"not valid TOML: {e}") from None
+
+
+def from_mapping(cls: type[T], data: Mapping[str, Any], source: str, key_path: str = "") -> T:
+    """Build dataclass ``cls`` from ``data``, checking keys and types.
+
+    Supported field types: ``bool``, ``int``, ``float`` (ints accepted, NaN and
+    infinities refused), ``str``, ``X | None``, nested dataclasses (TOML tables),
+    ``tuple[float, ...]``, ``tuple[X, ...]`` of dataclasses (arrays of tables) and
+    fixed tuples such as ``tuple[float, float]``. Missing keys take the field's
+    default. ``__post_init__`` may raise :class:`ConfigError`, ``ValueError`` or
+    ``TypeError``; all are re-raised as :class:`ConfigError` at ``where``.
+
+    Args:
+        cls: a dataclass type.
+        data: the parsed TOML table.
+        source: where the data came from (a file path), for messages.
+        key_path: the dotted key of ``data`` inside the file (``""`` at the top).
+
+    Raises:
+        ConfigError: ``"<source>: <key>: <problem>"``.
+    """
+    where = _at(key_path)
+    if not isinstance(data, Mapping):
+        raise ConfigError(source, f"{where}expected a table, got {_describe(data)}")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        raise ConfigError(
+            source, f"{where}unknown key '{unknown[0]}' (known: {', '.join(sorted(fields))})"
+        )
+    kwargs: dict[str, Any] = {}
+    for name, f in fields.items():
+        if name in data:
+            kwargs[name] = _convert(hints[name], data[name], source, _join(key_path, name))
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise ConfigError(source, f"{where}missing required key '{name}'")
+    try:
+        return cls(**kwargs)
+    except (ValueError, TypeError) as e:
+        raise ConfigError(source, f"{where}{e}") from None
+
+
+def _at(key_path: str) -> str:
+    return f"{key_path}: " if key_path else ""
+
+
+def _join(key_path: str, key: str | int) -> str:
+    if isinstance(key, int):
+        return f"{key_path}[{key}]"
+    return f"{key_path}.{key}" if key_path else key
+
+
+def _describe(value: Any) -> str:
+    return "a table" if isinstance(value, dict) else f"{type(value).__name__} {value!r}"
+
+
+def _convert(tp: Any, value: Any, source: str, key_path: str) -> Any:
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+
+    def bad(expected: str) -> ConfigError:
+        return ConfigError(source, f"{key_path}: expected {expected}, got {_describe(value)}")
+
+    if origin in (types.UnionType, typing.Union):
+        if value is None and type(None) in args:
+            return None
+        (inner,) = [a for a in args if a is not type(None)]
+        return _convert(inner, value, source, key_path)
+    if dataclasses.is_dataclass(tp):
+        return from_mapping(tp, value, source, key_path)  # type: ignore[arg-type]
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise bad("true or false")
+        return value
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise bad("an integer")
+        return value
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            raise bad("a finite number")
+        return float(value)
+    if tp is str:
+        if not isinstance(value, str):
+            raise bad("a string")
+        return value
+    if origin is tuple:
+        if not isinstance(value, list | tuple):
+            raise bad("an array")
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_convert(args[0], v, source, _join(key_path, i)) for i, v in enumerate(value))
+        if len(value) != len(args):
+            raise bad(f"an array of {len(args)} values")
+        return tuple(
+            _convert(a, v, source, _join(key_path, i)) for i, (a, v) in enumerate(zip(args, value, strict=True))
+        )
+    raise TypeError(f"from_mapping cannot convert to {tp!r} (at {key_path})")
+
+
+def require(condition: bool, message: str) -> None:
+    """Raise ``ValueError(message)`` unless ``condition``; for ``__post_init__``.
+
+    :func:`from_mapping` turns it into a :class:`ConfigError` naming the file and table.
+    """
+    if not condition:
+        raise ValueError(message)
+
+
+# ---------------------------------------------------------------------------
+# Simulator components.
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class BodyConfig:
+    """The simulated Pioneer 3-AT body (defaults: P3-AT datasheet and MobileSim's model)."""
+
+    length_m: float = 0.626
+    """Length including bumpers, m (ARIA p3at params)."""
+    width_m: float = 0.505
+    """Width, m."""
+    mass_kg: float = 12.0
+    """Mass, kg."""
+    max_speed_m_s: float = 0.7
+    """Forward/backward speed limit, m/s."""
+    max_omega_rad_s: float = math.radians(140.0)
+    """Rotational speed limit, rad/s."""
+    accel_m_s2: float = 0.3
+    """Translational acceleration limit, m/s^2."""
+    decel_m_s2: float = 0.6
+    """Translational deceleration limit, m/s^2."""
+    rot_accel_rad_s2: float = 1.74
+    """Rotational acceleration (and deceleration) limit, rad/s^2."""
+    stall_time_s: float = 0.3
+    """Blocked motion for this long under a non-zero command reports a stall, s."""
+
+    def __post_init__(self) -> None:
+        for name in ("length_m", "width_m", "mass_kg", "max_speed_m_s", "max_omega_rad_s",
+                     "accel_m_s2", "decel_m_s2", "rot_accel_rad_s2", "stall_time_s"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+
+
+@dataclass(frozen=True, slots=True)
+class OdometryConfig:
+    """Wheel odometry errors, kept apart from the ground truth."""
+
+    trans_scale_sigma: float = 0.01
+    """Std of the per-run translational scale error (wheel radius, slip), fraction."""
+    rot_scale_sigma: float = 0.03
+    """Std of the per-run rotational scale error (skid-steer slip), fraction."""
+    trans_noise_m_s: float = 0.005
+    """Std of white noise on the measured speed, per physics step, m/s."""
+    rot_noise_rad_s: float = 0.005
+    """Std of white noise on the measured turn rate, per physics step, rad/s."""
+
+    def __post_init__(self) -> None:
+        for name in ("trans_scale_sigma", "rot_scale_sigma", "trans_noise_m_s", "rot_noise_rad_s"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+
+
+@dataclass(frozen=True, slots=True)
+class CameraMountConfig:
+    """Where the fisheye camera sits on the robot (robot frame: x forward, y left, z up)."""
+
+    x_m: float = 0.2
+    """Forward offset of the optical centre from the robot's centre, m."""
+    y_m: float = 0.0
+    """Leftward offset, m."""
+    height_m: float = 0.3
+    """Height of the optical centre above the floor, m."""
+    yaw_deg: float = 0.0
+    """Optical axis yaw, counter-clockwise from forward, degrees."""
+    pitch_deg: float = 0.0
+    """Optical axis pitch, up positive, degrees."""
+    roll_deg: float = 0.0
+    """Roll about the optical axis, degrees."""
+
+    def __post_init__(self) -> None:
+        require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+        require(abs(self.pitch_deg) <= 90, f"pitch_deg must be within ±90, got {self.pitch_deg}")
+
+
+@dataclass(frozen=True, slots=True)
+class RenderConfig:
+    """The fisheye renderer."""
+
+    noise_sigma: float = 2.0
+    """Std of additive Gaussian sensor noise, grey levels."""
+    illumination_amplitude: float = 0.15
+    """Peak relative change of the global illumination gain over time (0 = constant)."""
+    illumination_period_s: float = 40.0
+    """Period of the slow global illumination change, s."""
+    landmark_size_m: float = 0.15
+    """Side of a landmark's textured patch, m."""
+
+    def __post_init__(self) -> None:
+        require(self.noise_sigma >= 0, f"noise_sigma must be >= 0, got {self.noise_sigma}")
+        require(0 <= self.illumination_amplitude < 1,
+                f"illumination_amplitude must be in [0, 1), got {self.illumination_amplitude}")
+        require(self.illumination_period_s > 0,
+                f"illumination_period_s must be > 0, got {self.illumination_period_s}")
+        require(self.landmark_size_m > 0, f"landmark_size_m must be > 0, got {self.landmark_size_m}")
+
+
+@dataclass(frozen=True, slots=True)
+class PeopleConfig:
+    """People walking about: moving bodies that occlude landmarks and can bump the robot."""
+
+    count: int = 0
+    """Number of people."""
+    speed_m_s: float = 1.0
+    """Walking speed, m/s."""
+    radius_m: float = 0.25
+    """Body radius (a vertical cylinder), m."""
+    height_m: float = 1.75
+    """Body height, m."""
+
+    def __post_init__(self) -> None:
+        require(self.count >= 0, f"count must be >= 0, got {self.count}")
+        require(self.speed_m_s >= 0, f"speed_m_s must be >= 0, got {self.speed_m_s}")
+        require(self.radius_m > 0, f"radius_m must be > 0, got {self.radius_m}")
+        require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+
+
+@dataclass(frozen=True, slots=True)
+class SimConfig:
+    """The simulated world and everything in it."""
+
+    world: str = "lab"
+    """A built-in world name (``lab``, ``campus``) or the path of a world TOML file."""
+    seed: int = 1
+    """Seed of every random draw in the simulation (landmarks, noise, people)."""
+    physics_dt_ns: int = 10_000_000
+    """Fixed physics step, ns (pymunk wants a fixed step)."""
+    frame_period_ns: int = 66_666_667
+    """Camera frame period, ns (15 frames/s, as in the paper)."""
+    landmark_density_scale: float = 1.0
+    """Multiplies the world's landmark densities (1 = as the world file says)."""
+    camera_file: str | None = None
+    """Calibration JSON of the simulated camera; None = the default 800x600, 185 degree model."""
+    body: BodyConfig = field(default_factory=BodyConfig)
+    odometry: OdometryConfig = field(default_factory=OdometryConfig)
+    camera: CameraMountConfig = field(default_factory=CameraMountConfig)
+    render: RenderConfig = field(default_factory=RenderConfig)
+    people: PeopleConfig = field(default_factory=PeopleConfig)
+
+    def __post_init__(self) -> None:
+        require(self.physics_dt_ns > 0, f"physics_dt_ns must be > 0, got {self.physics_dt_ns}")
+        require(self.frame_period_ns >= self.physics_dt_ns,
+                f"frame_period_ns ({self.frame_period_ns}) must be >= physics_dt_ns ({self.physics_dt_ns})")
+        require(self.landmark_density_scale >= 0,
+                f"landmark_density_scale must be >= 0, got {self.landmark_density_scale}")
+
+
+@dataclass(frozen=True, slots=True)
+class VmnavConfig:
+    """The whole configuration file: one table per component."""
+
+    sim: SimConfig = field(default_factory=SimConfig)
+
+
+def load_config(path: str | Path | None) -> VmnavConfig:
+    """Load a vmnav TOML config file; ``None`` gives the defaults.
+
+    Raises:
+        ConfigError: naming the file, table and key at fault.
+    """
+    if path is None:
+        return VmnavConfig()
+    return from_mapping(VmnavConfig, load_toml(path), str(path))

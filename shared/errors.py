@@ -1,0 +1,108 @@
+"""The project's error tree.
+
+Every error vmnav raises on purpose derives from :class:`VmnavError`; the command
+line prints such an error as one line and exits non-zero, anything else is a bug
+and keeps its traceback::
+
+    VmnavError
+    ├── InputError                 bad input from a file or the user; names where
+    │   ├── ConfigError            a config or world file, or a config value
+    │   └── CalibrationError       a camera calibration file or calibration images
+    ├── GeometryError              a geometric computation cannot proceed
+    │   ├── ShapeError             an array has the wrong shape (also a ValueError)
+    │   └── DegenerateGeometryError
+    └── ProtocolError              a byte-level protocol was violated
+        ├── LocalProtocolError     we tried to send something illegal in this state
+        └── RemoteProtocolError    the peer sent something illegal
+            └── ChecksumError      a single frame failed its checksum
+
+Expected outcomes (no match, link lost, mission rejected) are results or events,
+never exceptions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class VmnavError(Exception):
+    """Root of every error vmnav raises on purpose."""
+
+
+class InputError(VmnavError):
+    """Bad input: a file, a value or an argument, with where it came from.
+
+    Args:
+        where: the file path (or ``file: [section] key``) or argument name at fault.
+        problem: what is wrong, with the offending value where useful.
+    """
+
+    def __init__(self, where: str | Path, problem: str) -> None:
+        self.where = str(where)
+        self.problem = problem
+        super().__init__(f"{self.where}: {problem}")
+
+
+class ConfigError(InputError):
+    """A config file, world file or config value is malformed or out of range."""
+
+
+class CalibrationError(InputError):
+    """A calibration file is malformed, or calibration images cannot be used."""
+
+
+class GeometryError(VmnavError):
+    """A geometric computation cannot proceed."""
+
+
+class ShapeError(GeometryError, ValueError):
+    """An array argument has the wrong shape."""
+
+
+class DegenerateGeometryError(GeometryError):
+    """The input is geometrically degenerate (e.g. all points collinear)."""
+
+
+class ProtocolError(VmnavError):
+    """A byte-level protocol was violated."""
+
+
+class LocalProtocolError(ProtocolError):
+    """We tried to send an event that is illegal in the current state."""
+
+
+class RemoteProtocolError(ProtocolError):
+    """The peer sent something illegal."""
+
+
+class ChecksumError(RemoteProtocolError):
+    """A single frame failed its checksum.
+
+    Args:
+        expected: the checksum computed over the frame.
+        actual: the checksum the frame carried.
+    """
+
+    def __init__(self, expected: int, actual: int) -> None:
+        self.expected = expected
+        self.actual = actual
+        super().__init__(f"checksum mismatch: computed 0x{expected:04X}, frame carries 0x{actual:04X}")
+
+
+def check_shape(name: str, array_shape: tuple[int, ...], expected: tuple[int | None, ...]) -> None:
+    """Raise :class:`ShapeError` unless ``array_shape`` matches ``expected``.
+
+    Args:
+        name: the argument's name, for the message.
+        array_shape: the shape of the array given.
+        expected: the shape wanted; ``None`` matches any length on that axis.
+
+    Raises:
+        ShapeError: naming both shapes.
+    """
+    ok = len(array_shape) == len(expected) and all(
+        e is None or e == a for a, e in zip(array_shape, expected, strict=True)
+    )
+    if not ok:
+        want = "(" + ", ".join("N" if e is None else str(e) for e in expected) + ")"
+        raise ShapeError(f"{name}: expected shape {want}, got {tuple(array_shape)}")

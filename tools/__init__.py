@@ -1,0 +1,1 @@
+"""The `vmnav` command line and thin tools around package code."""

@@ -1,0 +1,56 @@
+"""The ``vmnav`` command line.
+
+Each subcommand lives in its own module under ``tools/`` with two functions:
+``add_parser(subparsers)`` declares its arguments, ``run(args) -> int`` turns them
+into config objects and calls package code that knows nothing about argparse.
+Heavy imports (OpenCV, pymunk) happen inside ``run`` so ``vmnav --help`` is fast.
+
+A :class:`~shared.errors.VmnavError` prints as one line on stderr with exit code 1;
+anything else is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Sequence
+
+from shared.errors import VmnavError
+from tools import bench, calibrate, sim_cmd
+
+COMMANDS = (sim_cmd, calibrate, bench)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every working subcommand."""
+    parser = argparse.ArgumentParser(
+        prog="vmnav",
+        description="Visual teach-and-repeat navigation with a fisheye camera (Courbon et al. 2008).",
+    )
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for module in COMMANDS:
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``vmnav`` console script; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=logging.DEBUG if args.verbose else logging.INFO,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        return int(args.run(args))
+    except VmnavError as e:
+        print(f"vmnav {args.command}: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"vmnav {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
