@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from shared.errors import check_shape
+from shared.errors import ShapeError, check_shape
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
@@ -50,8 +50,10 @@ class CameraModel:
         width: image width, px.
         height: image height, px.
         K: (3, 3) float64 camera matrix ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]``, px.
-        xi: sphere-to-plane offset of the unified model (>= 0, dimensionless).
-        D: (4,) float64 distortion ``(k1, k2, p1, p2)`` on the normalised plane.
+        xi: sphere-to-plane offset of the unified model (>= 0, dimensionless); a
+            size-1 array (as ``cv2.omnidir.calibrate`` returns) is accepted.
+        D: (4,) float64 distortion ``(k1, k2, p1, p2)`` on the normalised plane;
+            any size-4 array, e.g. OpenCV's (1, 4), is accepted.
         fov_deg: full field of view of the lens, degrees (rays beyond half of it are invalid).
     """
 
@@ -71,7 +73,11 @@ class CameraModel:
         D.setflags(write=False)
         object.__setattr__(self, "K", K)
         object.__setattr__(self, "D", D)
-        object.__setattr__(self, "xi", float(self.xi))
+        # xi may come straight from cv2.omnidir.calibrate as a (1, 1) array.
+        xi = np.asarray(self.xi, dtype=np.float64)
+        if xi.size != 1:
+            raise ShapeError(f"xi: expected a scalar or a size-1 array, got shape {xi.shape}")
+        object.__setattr__(self, "xi", float(xi.reshape(())))
         object.__setattr__(self, "fov_deg", float(self.fov_deg))
 
     @classmethod
@@ -178,7 +184,9 @@ class CameraModel:
         dy = my * radial + p1 * (r2 + 2.0 * my * my) + 2.0 * p2 * mx * my
         return dx, dy
 
-    def _undistort(self, dx: FloatArray, dy: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+    def _undistort(
+        self, dx: FloatArray, dy: FloatArray
+    ) -> tuple[FloatArray, FloatArray, BoolArray]:
         """Invert :meth:`_distort` by Newton's method on the 2x2 system.
 
         Returns:

@@ -164,6 +164,37 @@ def require(condition: bool, message: str) -> None:
 
 
 # ---------------------------------------------------------------------------
+# ARIA link (shared.aria.session, both roles).
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class AriaLinkConfig:
+    """Timing policy of one ARIA link. Defaults: stock ARIA and ARCOS (aria-protocol.md §3, §7)."""
+
+    sync_reply_timeout_ns: int = 1_000_000_000
+    """Host: wait this long for each SYNC reply before restarting at SYNC0, ns (ARIA: 1000 ms)."""
+    sync_attempts: int = 6
+    """Host: SYNC0s sent before the connect fails (ARIA gives up after 6, about 6.4 s)."""
+    pulse_period_ns: int = 500_000_000
+    """Host: send PULSE after this long without sending anything, ns (ARIA: 500 ms)."""
+    link_timeout_ns: int = 8_000_000_000
+    """Host: no SIP for this long while open means the link is lost, ns (ARIA: 8000 ms)."""
+    sip_period_ns: int = 100_000_000
+    """Robot: SIP cycle, ns (ARCOS and MobileSim: 100 ms; report it in CONFIG's SipCycle)."""
+    watchdog_timeout_ns: int = 2_000_000_000
+    """Robot: no client packet for this long while open trips the watchdog, ns (ARCOS: 2 s)."""
+    frame_timeout_ns: int = 100_000_000
+    """Both: abandon a partial frame after this long without a new byte, ns (ARIA: 100 ms)."""
+
+    def __post_init__(self) -> None:
+        for name in ("sync_reply_timeout_ns", "pulse_period_ns", "link_timeout_ns",
+                     "sip_period_ns", "watchdog_timeout_ns", "frame_timeout_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.sync_attempts >= 1, f"sync_attempts must be >= 1, got {self.sync_attempts}")
+
+
+# ---------------------------------------------------------------------------
 # Simulator components.
 # ---------------------------------------------------------------------------
 
@@ -309,11 +340,80 @@ class SimConfig:
                 f"landmark_density_scale must be >= 0, got {self.landmark_density_scale}")
 
 
+# ---------------------------------------------------------------------------
+# Robot vision components.
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class FeatureConfig:
+    """Harris corners and their ZNCC patch descriptors (Courbon et al. 2008, sec. III-A).
+
+    Defaults follow OpenCV's Harris (``k`` = 0.04, 3x3 block, 3x3 Sobel) and the
+    reference benchmark (300 corners, 11x11 patches).
+    """
+
+    max_corners: int = 300
+    """Keep at most this many corners, strongest Harris response first."""
+    quality_level: float = 0.01
+    """Reject corners whose response is below this fraction of the frame's strongest, in (0, 1)."""
+    min_distance_px: float = 8.0
+    """Minimum Euclidean distance between two corners, px (greedy, strongest first)."""
+    block_size_px: int = 3
+    """Side of the window summing the gradient products of the Harris matrix, px (odd)."""
+    harris_k: float = 0.04
+    """Harris & Stephens' k in det(M) - k trace(M)^2 (dimensionless)."""
+    patch_size_px: int = 11
+    """Side P of the square ZNCC patch, px (odd, >= 3); a descriptor has P*P values."""
+    subpixel_half_window_px: int = 3
+    """Half side of the cv2.cornerSubPix window, px; 0 keeps integer corner positions."""
+
+    def __post_init__(self) -> None:
+        require(self.max_corners >= 1, f"max_corners must be >= 1, got {self.max_corners}")
+        require(0 < self.quality_level < 1,
+                f"quality_level must be in (0, 1), got {self.quality_level}")
+        require(self.min_distance_px >= 0,
+                f"min_distance_px must be >= 0, got {self.min_distance_px}")
+        require(self.block_size_px >= 3 and self.block_size_px % 2 == 1,
+                f"block_size_px must be odd and >= 3, got {self.block_size_px}")
+        require(0 < self.harris_k < 0.25, f"harris_k must be in (0, 0.25), got {self.harris_k}")
+        require(self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
+                f"patch_size_px must be odd and >= 3, got {self.patch_size_px}")
+        require(self.subpixel_half_window_px >= 0,
+                f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}")
+
+
+@dataclass(frozen=True, slots=True)
+class MatchConfig:
+    """ZNCC matching in a search window with the unicity (mutual best) constraint.
+
+    The paper gives no numbers; the defaults are the reference benchmark's window
+    and a threshold measured on synthetic pairs (``robot/vision/bench_features.py``).
+    """
+
+    search_radius_px: float | None = 40.0
+    """Candidates satisfy |dx| <= r and |dy| <= r, px; None searches the whole image
+    (code only: TOML cannot write None, so a file can only set a finite radius)."""
+    min_zncc: float = 0.8
+    """Reject matches whose ZNCC score is below this, in [-1, 1]."""
+    max_distance_ratio: float | None = None
+    """Lowe's ratio test on patch distances sqrt(2 - 2 ZNCC), in (0, 1]; None = off."""
+
+    def __post_init__(self) -> None:
+        require(self.search_radius_px is None or self.search_radius_px > 0,
+                f"search_radius_px must be > 0 or None, got {self.search_radius_px}")
+        require(-1 <= self.min_zncc <= 1, f"min_zncc must be in [-1, 1], got {self.min_zncc}")
+        require(self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
+                f"max_distance_ratio must be in (0, 1] or None, got {self.max_distance_ratio}")
+
+
 @dataclass(frozen=True, slots=True)
 class VmnavConfig:
     """The whole configuration file: one table per component."""
 
     sim: SimConfig = field(default_factory=SimConfig)
+    features: FeatureConfig = field(default_factory=FeatureConfig)
+    matching: MatchConfig = field(default_factory=MatchConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

@@ -86,7 +86,9 @@ class ChecksumError(RemoteProtocolError):
     def __init__(self, expected: int, actual: int) -> None:
         self.expected = expected
         self.actual = actual
-        super().__init__(f"checksum mismatch: computed 0x{expected:04X}, frame carries 0x{actual:04X}")
+        super().__init__(
+            f"checksum mismatch: computed 0x{expected:04X}, frame carries 0x{actual:04X}"
+        )
 
 
 def check_shape(name: str, array_shape: tuple[int, ...], expected: tuple[int | None, ...]) -> None:

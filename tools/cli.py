@@ -26,7 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every working subcommand."""
     parser = argparse.ArgumentParser(
         prog="vmnav",
-        description="Visual teach-and-repeat navigation with a fisheye camera (Courbon et al. 2008).",
+        description="Visual teach-and-repeat navigation with a fisheye camera "
+        "(Courbon et al. 2008).",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

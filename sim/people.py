@@ -1,0 +1,196 @@
+"""People walking about: kinematic pymunk circles that occlude landmarks and can bump the robot.
+
+Rules:
+
+1. A person walks in a straight line at ``speed_m_s`` to a goal, then picks the
+   next one; on arrival it sometimes pauses (probability :data:`PAUSE_PROBABILITY`,
+   for :data:`PAUSE_S` seconds, uniform).
+2. Goals are drawn uniformly over the free space reachable from the robot's
+   start (:class:`~sim.free_space.FreeSpaceMap`) with room for the person's body,
+   and accepted only when the straight walk there keeps the person's body clear
+   of walls and furniture (checked on the map's clearance raster). So people
+   never walk through walls or furniture. A goal whose path passes the robot's
+   current position closely is refused too, unless it leads away from the robot.
+   With no acceptable goal among :data:`GOAL_TRIES` draws the person waits
+   half a second and tries again.
+3. People are kinematic: nothing stops them, and a person who walks into the
+   robot pushes it (that is how people bump the robot). On that contact the
+   person stops, waits :data:`BUMP_PAUSE_S` and walks off elsewhere.
+4. People pass through each other (kinematic bodies do not collide).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import numpy.typing as npt
+import pymunk
+
+from shared.config import PeopleConfig
+from shared.errors import ConfigError
+from sim._geometry import point_segment_distances
+from sim._shapes import Category, tag
+from sim.free_space import FreeSpaceMap
+
+PAUSE_PROBABILITY = 0.3
+"""Chance of pausing on reaching a goal."""
+PAUSE_S = (1.0, 4.0)
+"""Range of a pause, s."""
+BUMP_PAUSE_S = 1.0
+"""Stop after walking into the robot, s."""
+GOAL_TRIES = 8
+"""Goals drawn per attempt."""
+RETRY_S = 0.5
+"""Wait before trying again when no goal was acceptable, s."""
+
+_BODY_CLEARANCE_M = 0.1  # room left between a person and walls or furniture
+_START_CLEARANCE_M = 1.5  # people start at least this far from the robot
+_ROBOT_PASS_M = 0.5  # a goal path passes the robot's centre no closer than radius + this
+_MIN_WALK_M = 1.0  # goals nearer than this are not worth walking to
+
+
+class People:
+    """The people of a simulation; see the module docstring for their rules.
+
+    Args:
+        space: the simulation's space (one kinematic body and circle per person).
+        free_space: where people may go.
+        config: count, speed, radius and height.
+        rng: source of start places, goals and pauses.
+        robot_xy: returns the robot's current (x, y), m.
+    """
+
+    def __init__(
+        self,
+        space: pymunk.Space,
+        free_space: FreeSpaceMap,
+        config: PeopleConfig,
+        rng: np.random.Generator,
+        robot_xy: Callable[[], tuple[float, float]],
+    ) -> None:
+        self.config = config
+        self._space = space
+        self._free_space = free_space
+        self._rng = rng
+        self._robot_xy = robot_xy
+        self._bodies: list[pymunk.Body] = []
+        self._index: dict[pymunk.Shape, int] = {}
+        self._goals: list[tuple[float, float] | None] = [None] * config.count
+        self._wait_s = [0.0] * config.count
+        for i, (x, y) in enumerate(self._start_places()):
+            body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            body.position = (float(x), float(y))
+            shape = pymunk.Circle(body, config.radius_m)
+            tag(shape, Category.PERSON, config.height_m)
+            space.add(body, shape)
+            self._bodies.append(body)
+            self._index[shape] = i
+        space.on_collision(int(Category.PERSON), int(Category.ROBOT), begin=self._on_bump)
+
+    def __len__(self) -> int:
+        return len(self._bodies)
+
+    def positions(self) -> npt.NDArray[np.float64]:
+        """Current positions (M, 2), world frame, m."""
+        return np.array([tuple(b.position) for b in self._bodies], dtype=float).reshape(-1, 2)
+
+    def index_of(self, shape: pymunk.Shape) -> int | None:
+        """Which person ``shape`` is, or None."""
+        return self._index.get(shape)
+
+    def place(
+        self, index: int, position_xy: tuple[float, float], goal_xy: tuple[float, float]
+    ) -> None:
+        """Put person ``index`` at ``position_xy`` walking to ``goal_xy`` (for scenarios and tests).
+
+        The walk is not checked against walls: the caller chooses it.
+        """
+        body = self._bodies[index]
+        body.position = position_xy
+        body.velocity = (0.0, 0.0)
+        self._space.reindex_shapes_for_body(body)
+        self._goals[index] = (float(goal_xy[0]), float(goal_xy[1]))
+        self._wait_s[index] = 0.0
+
+    # -- the step ---------------------------------------------------------------------
+
+    def before_step(self, dt_s: float) -> None:
+        """Set each person's velocity for the coming step."""
+        speed = self.config.speed_m_s
+        for i, body in enumerate(self._bodies):
+            if self._wait_s[i] > 0:
+                self._wait_s[i] -= dt_s
+                body.velocity = (0.0, 0.0)
+                continue
+            goal = self._goals[i]
+            if goal is None:
+                goal = self._goals[i] = self._pick_goal(body.position)
+                if goal is None:
+                    self._wait_s[i] = RETRY_S
+                    body.velocity = (0.0, 0.0)
+                    continue
+            x, y = body.position
+            dx, dy = goal[0] - x, goal[1] - y
+            distance = math.hypot(dx, dy)
+            if distance <= speed * dt_s:  # arrive exactly at the end of this step
+                body.velocity = (dx / dt_s, dy / dt_s)
+                self._goals[i] = None
+                if self._rng.random() < PAUSE_PROBABILITY:
+                    self._wait_s[i] = float(self._rng.uniform(*PAUSE_S))
+            else:
+                body.velocity = (dx * speed / distance, dy * speed / distance)
+
+    def _on_bump(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        i = self._index.get(arbiter.shapes[0])
+        if i is not None:
+            self._goals[i] = None
+            self._wait_s[i] = BUMP_PAUSE_S
+            self._bodies[i].velocity = (0.0, 0.0)
+
+    # -- choosing where to go -----------------------------------------------------------
+
+    def _start_places(self) -> npt.NDArray[np.float64]:
+        """Start positions: clear of walls, furniture, the robot and each other."""
+        r = self.config.radius_m
+        robot = np.asarray(self._robot_xy(), dtype=float)
+        places: list[npt.NDArray[np.float64]] = []
+        for _ in range(100 * self.config.count):
+            p = self._sample(1)[0]
+            if np.hypot(*(p - robot)) >= _START_CLEARANCE_M and all(
+                np.hypot(*(p - q)) >= 2 * r for q in places
+            ):
+                places.append(p)
+                if len(places) == self.config.count:
+                    break
+        if len(places) < self.config.count:
+            raise ConfigError(
+                "people", f"cannot place {self.config.count} people of radius {r} m in this world"
+            )
+        return np.array(places, dtype=float).reshape(-1, 2)
+
+    def _sample(self, count: int) -> npt.NDArray[np.float64]:
+        try:
+            return self._free_space.sample_points(
+                self._rng, count, self.config.radius_m + _BODY_CLEARANCE_M
+            )
+        except ValueError as e:
+            raise ConfigError("people", str(e)) from None
+
+    def _pick_goal(self, position: pymunk.Vec2d) -> tuple[float, float] | None:
+        here = np.array([position.x, position.y])
+        robot = np.asarray(self._robot_xy(), dtype=float)
+        keep_off = self.config.radius_m + _ROBOT_PASS_M
+        for goal in self._sample(GOAL_TRIES):
+            if np.hypot(*(goal - here)) < _MIN_WALK_M:
+                continue
+            passes = point_segment_distances(robot[None, :], here[None, :], goal[None, :])[0, 0]
+            if passes < keep_off and np.dot(goal - here, robot - here) > 0:
+                continue
+            path = (float(here[0]), float(here[1])), (float(goal[0]), float(goal[1]))
+            if self._free_space.path_is_clear(
+                *path, self.config.radius_m + 0.5 * _BODY_CLEARANCE_M
+            ):
+                return path[1]
+        return None

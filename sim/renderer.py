@@ -1,0 +1,409 @@
+"""The fisheye renderer: grey frames of the landmark field through the shared camera model.
+
+Per frame (all vectorised except the per-patch paint):
+
+1. The camera pose follows from the robot's true pose and the camera mount.
+2. Landmarks are culled: behind the patch (normal facing away), outside the lens
+   field of view, or smaller than ``_MIN_PATCH_PX`` on the image.
+3. Occlusion: one pymunk segment query per remaining landmark, from the camera to
+   the landmark on the floor plan, against walls, furniture and people. A hit
+   occludes when the line of sight at the hit is lower than the occluder (a line
+   of sight may pass over a desk or a person).
+4. Each visible patch is painted far-to-near with ``cv2.warpAffine``: the
+   affine map is the local Jacobian of the projection (the images of the patch's
+   horizontal and vertical half-sides), so patches foreshorten and turn with the
+   fisheye distortion, and their centres land at sub-pixel positions.
+5. People are drawn as dark silhouettes (projected vertical cylinders).
+6. A global illumination gain (slow sinusoid) and additive Gaussian sensor noise
+   (from a bank of pre-drawn noise images) are applied; outside the lens's image
+   circle stays black.
+
+The background is a smooth gradient (darker floor, brighter ceiling) computed
+once per camera mount; it has no corners, so every Harris corner of a frame is a
+landmark centre (or a person's outline), and ground truth is exact: the true
+pose, the ids of the visible landmarks and their projected centres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+import pymunk
+
+from shared.camera_model import CameraModel
+from shared.config import CameraMountConfig, RenderConfig
+from sim.landmarks import LandmarkField
+from sim.simulation import OCCLUDER_FILTER, Simulation
+from sim.world import Lighting
+
+FloatArray = npt.NDArray[np.float64]
+
+_MIN_PATCH_PX = 3.0
+"""Patches smaller than this on the image (px, longest side) are not drawn."""
+_NEAR_M = 0.15
+"""Landmarks closer than this to the optical centre are not drawn, m."""
+_QUERY_END_MARGIN_M = 0.12
+"""A line of sight stops this short of its landmark, so the surface carrying it does not hit."""
+_NOISE_BANK_SIZE = 16
+_RENDER_STREAM = 0x52454E44
+"""Mixed with the simulation seed for the renderer's own random stream."""
+_PERSON_GREY = (35, 80)
+"""Range of the grey level of people's silhouettes."""
+_PERSON_SAMPLES = 8
+"""Points per silhouette side (fisheye-curved outline)."""
+
+
+@dataclass(frozen=True, eq=False)
+class RenderedFrame:
+    """One rendered frame with its ground truth.
+
+    Attributes:
+        t_ns: simulation time of the exposure, ns.
+        image: (H, W) uint8 grey image.
+        pose_w: true robot pose (x_m, y_m, yaw_rad) in the world frame.
+        T_world_cam: (4, 4) float64 true camera pose (camera frame -> world frame).
+        visible_ids: (K,) int64 ids of the landmarks drawn, near to far.
+        visible_pixels_xy: (K, 2) float64 projected centres of those landmarks, px.
+        visible_distances_m: (K,) float64 their distances to the optical centre, m.
+        illumination_gain: the global gain applied to this frame.
+    """
+
+    t_ns: int
+    image: npt.NDArray[np.uint8]
+    pose_w: tuple[float, float, float]
+    T_world_cam: FloatArray
+    visible_ids: npt.NDArray[np.int64]
+    visible_pixels_xy: FloatArray
+    visible_distances_m: FloatArray
+    illumination_gain: float
+
+
+def rotation_base_cam(mount: CameraMountConfig) -> FloatArray:
+    """Rotation taking camera-frame vectors into the robot (base) frame.
+
+    Camera frame: z along the optical axis, x right, y down. Base frame: x
+    forward, y left, z up. With zero yaw, pitch and roll the camera looks
+    forward; yaw turns it left, pitch up, roll about its axis.
+
+    Returns:
+        (3, 3) float64 ``R_base_cam``.
+    """
+    R_level = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    yaw, pitch, roll = (math.radians(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
+    cz, sz = math.cos(yaw), math.sin(yaw)
+    cy, sy = math.cos(-pitch), math.sin(-pitch)
+    cx, sx = math.cos(roll), math.sin(roll)
+    Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    return Rz @ Ry @ Rx @ R_level
+
+
+def camera_pose_world(pose_w: tuple[float, float, float], mount: CameraMountConfig) -> FloatArray:
+    """The camera's pose in the world for a robot pose.
+
+    Args:
+        pose_w: robot pose (x_m, y_m, yaw_rad) on the floor plan.
+        mount: where the camera sits on the robot.
+
+    Returns:
+        (4, 4) float64 ``T_world_cam`` (camera frame -> world frame, z up, floor at 0).
+    """
+    x, y, yaw = pose_w
+    c, s = math.cos(yaw), math.sin(yaw)
+    R_world_base = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    T = np.eye(4)
+    T[:3, :3] = R_world_base @ rotation_base_cam(mount)
+    T[:3, 3] = np.array([x, y, 0.0]) + R_world_base @ np.array([mount.x_m, mount.y_m, mount.height_m])
+    return T
+
+
+def _texture_pyramid(textures: npt.NDArray[np.uint8]) -> tuple[npt.NDArray[np.uint8], ...]:
+    """Each landmark's texture at 16, 8 and 4 px, area-averaged (no aliasing when shrunk)."""
+    n, s, _ = textures.shape
+    levels = [textures]
+    while levels[-1].shape[1] > 4:
+        half = levels[-1].shape[1] // 2
+        levels.append(levels[-1].reshape(n, half, 2, half, 2).mean(axis=(2, 4)).round().astype(np.uint8))
+    assert s == 16, "landmark textures are 16x16"
+    return tuple(levels)
+
+
+class FisheyeRenderer:
+    """Renders grey fisheye frames of a :class:`~sim.simulation.Simulation`.
+
+    Args:
+        camera: the simulated lens.
+        mount: the camera's pose on the robot.
+        config: noise, illumination and patch size.
+        lighting: the world's brightness and contrast.
+        landmarks: the landmark field to draw.
+        rng: seeds the noise bank, the per-frame noise choice and the
+            illumination phase.
+    """
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        mount: CameraMountConfig,
+        config: RenderConfig,
+        lighting: Lighting,
+        landmarks: LandmarkField,
+        rng: np.random.Generator,
+    ) -> None:
+        self.camera = camera
+        self.mount = mount
+        self.config = config
+        self.landmarks = landmarks
+        self._rng = rng
+        self._levels = _texture_pyramid(self._contrast_adjusted(landmarks.textures, lighting))
+        self._tangents_h, self._tangents_v = _patch_axes(landmarks.normals_w)
+        self._background, self._circle = self._make_background(lighting)
+        self._noise_pos, self._noise_neg = self._make_noise_bank()
+        self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
+        self._person_grey: dict[int, int] = {}
+
+    @classmethod
+    def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
+        """A renderer for ``sim``'s world, landmarks and config, seeded from its seed."""
+        rng = np.random.default_rng([sim.config.seed, _RENDER_STREAM])
+        return cls(camera, sim.config.camera, sim.config.render, sim.world.lighting, sim.landmarks, rng)
+
+    def render(self, sim: Simulation) -> RenderedFrame:
+        """Render the simulation's current state from the robot's camera.
+
+        Returns:
+            the frame and its ground truth.
+        """
+        pose_w = sim.body.pose_w
+        T_world_cam = camera_pose_world(pose_w, self.mount)
+        R_cam_world = T_world_cam[:3, :3].T
+        centre_w = T_world_cam[:3, 3]
+        image = self._background.copy()
+
+        ids, pix, dist, affines = self._visible_patches(sim, R_cam_world, centre_w)
+        self._draw_people(sim, image, R_cam_world, centre_w)
+        self._paint_all(image, ids, affines, dist)
+
+        gain = self.illumination_gain(sim.now_ns)
+        image = cv2.convertScaleAbs(image, alpha=gain)
+        if self.config.noise_sigma > 0:
+            j = int(self._rng.integers(_NOISE_BANK_SIZE))
+            image = cv2.subtract(cv2.add(image, self._noise_pos[j]), self._noise_neg[j])
+        image = cv2.bitwise_and(image, self._circle)
+        near = np.argsort(dist)
+        return RenderedFrame(
+            t_ns=sim.now_ns,
+            image=image,
+            pose_w=pose_w,
+            T_world_cam=T_world_cam,
+            visible_ids=self.landmarks.ids[ids[near]],
+            visible_pixels_xy=pix[near],
+            visible_distances_m=dist[near],
+            illumination_gain=gain,
+        )
+
+    def illumination_gain(self, t_ns: int) -> float:
+        """The global illumination gain at time ``t_ns`` (1 ± amplitude, slow sinusoid)."""
+        phase = 2.0 * math.pi * (t_ns / 1e9) / self.config.illumination_period_s + self._illumination_phase
+        return 1.0 + self.config.illumination_amplitude * math.sin(phase)
+
+    # -- visibility -----------------------------------------------------------------
+
+    def _visible_patches(
+        self, sim: Simulation, R_cam_world: FloatArray, centre_w: FloatArray
+    ) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
+        """Indices, projected centres (K, 2), distances (K,) and affine maps (K, 2, 3) of visible patches."""
+        lm = self.landmarks
+        rel_w = lm.positions_w - centre_w
+        dist = np.sqrt(np.einsum("ij,ij->i", rel_w, rel_w))
+        facing = np.einsum("ij,ij->i", lm.normals_w, rel_w) < 0.0
+        rel_c = rel_w @ R_cam_world.T
+        in_cone = rel_c[:, 2] > self.camera.min_z_s * dist
+        idx = np.flatnonzero(facing & in_cone & (dist > _NEAR_M))
+
+        half = 0.5 * self.config.landmark_size_m
+        p0, ok0 = self.camera.project(rel_c[idx])
+        ph, okh = self.camera.project(rel_c[idx] + half * (self._tangents_h[idx] @ R_cam_world.T))
+        pv, okv = self.camera.project(rel_c[idx] - half * (self._tangents_v[idx] @ R_cam_world.T))
+        a = ph - p0  # image of the half-side along the patch's horizontal axis (texture +x)
+        b = pv - p0  # image of the half-side along the patch's downward axis (texture +y)
+        size_px = 2.0 * np.maximum(np.hypot(a[:, 0], a[:, 1]), np.hypot(b[:, 0], b[:, 1]))
+        keep = ok0 & okh & okv & (size_px >= _MIN_PATCH_PX)
+        idx, p0, a, b, size_px = idx[keep], p0[keep], a[keep], b[keep], size_px[keep]
+
+        unoccluded = self._unoccluded(sim, idx, centre_w, dist[idx])
+        idx, p0, a, b, size_px = idx[unoccluded], p0[unoccluded], a[unoccluded], b[unoccluded], size_px[unoccluded]
+        affines = np.stack([a, b, p0], axis=2)  # dst = p0 + a * tx + b * ty, (tx, ty) in [-1, 1]
+        return idx, p0, dist[idx], affines
+
+    def _unoccluded(
+        self, sim: Simulation, idx: npt.NDArray[np.int64], centre_w: FloatArray, dist: FloatArray
+    ) -> npt.NDArray[np.bool_]:
+        """Which landmarks no wall, furniture or person hides (one pymunk ray query each).
+
+        A query runs on the floor plan from the camera to ``_QUERY_END_MARGIN_M``
+        short of the landmark. A hit hides the landmark when the occluder is at
+        least as tall as the line of sight where it meets it; when the first hit
+        is lower, every hit on the way is checked.
+        """
+        out = np.ones(idx.shape[0], dtype=bool)
+        lm = self.landmarks.positions_w[idx]
+        cx, cy, cz = (float(v) for v in centre_w)
+        dxy = lm[:, :2] - centre_w[:2]
+        d2 = np.hypot(dxy[:, 0], dxy[:, 1])
+        far = d2 > _QUERY_END_MARGIN_M
+        f = np.where(far, (d2 - _QUERY_END_MARGIN_M) / np.where(far, d2, 1.0), 0.0)
+        ends = (centre_w[:2] + f[:, None] * dxy).tolist()
+        fractions = f.tolist()
+        heights = lm[:, 2].tolist()
+        query_first, query_all = sim.space.segment_query_first, sim.space.segment_query
+        height_of = sim.occluder_height
+        start = (cx, cy)
+        for k in np.flatnonzero(far).tolist():
+            hit = query_first(start, ends[k], 0.0, OCCLUDER_FILTER)
+            if hit is None:
+                continue
+            rise = heights[k] - cz
+            if height_of(hit.shape) >= cz + hit.alpha * fractions[k] * rise:
+                out[k] = False
+                continue
+            # The line of sight passes over the first thing it meets: check everything on the way.
+            out[k] = all(
+                height_of(info.shape) < cz + info.alpha * fractions[k] * rise
+                for info in query_all(start, ends[k], 0.0, OCCLUDER_FILTER)
+            )
+        return out
+
+    # -- painting -------------------------------------------------------------------
+
+    def _paint_all(
+        self, image: npt.NDArray[np.uint8], ids: npt.NDArray[np.int64], affines: FloatArray, dist: FloatArray
+    ) -> None:
+        """Warp each patch's texture into ``image``, far to near.
+
+        Args:
+            image: (H, W) uint8, painted in place.
+            ids: (K,) landmark indices.
+            affines: (K, 2, 3) columns ``a``, ``b``, ``p0``: texture offset (tx, ty)
+                in [-1, 1]^2 lands at ``p0 + a tx + b ty`` (px).
+            dist: (K,) distances to the optical centre, m (painting order).
+        """
+        if ids.shape[0] == 0:
+            return
+        a, b, p0 = affines[:, :, 0], affines[:, :, 1], affines[:, :, 2]
+        size_px = 2.0 * np.maximum(np.hypot(a[:, 0], a[:, 1]), np.hypot(b[:, 0], b[:, 1]))
+        level = np.where(size_px >= 12.0, 0, np.where(size_px >= 6.0, 1, 2))
+        n = np.array([lvl.shape[1] for lvl in self._levels], dtype=np.float64)[level]
+        h, w = image.shape
+        ext = np.abs(a) + np.abs(b)  # (K, 2) half extents of the warped patch, px
+        lo = np.maximum(np.floor(p0 - ext), 0).astype(np.int64)
+        hi = np.minimum(np.ceil(p0 + ext).astype(np.int64) + 1, (w, h))
+        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + a (sx - c) / (n/2) + b (sy - c) / (n/2).
+        half = (n / 2.0)[:, None]
+        c = ((n - 1.0) / 2.0)[:, None]
+        M = np.empty((ids.shape[0], 2, 3))
+        M[:, :, 0] = a / half
+        M[:, :, 1] = b / half
+        M[:, :, 2] = p0 - lo - (a + b) * c / half
+        levels = self._levels
+        for k in np.argsort(-dist):
+            (x0, y0), (x1, y1) = lo[k], hi[k]
+            if x1 > x0 and y1 > y0:
+                cv2.warpAffine(
+                    levels[level[k]][ids[k]], M[k], (int(x1 - x0), int(y1 - y0)), dst=image[y0:y1, x0:x1],
+                    flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_TRANSPARENT,
+                )
+
+    def _draw_people(
+        self, sim: Simulation, image: npt.NDArray[np.uint8], R_cam_world: FloatArray, centre_w: FloatArray
+    ) -> None:
+        """Draw each person not hidden by a wall as a filled, fisheye-curved silhouette."""
+        positions, radius, height = sim.people_state()
+        cx, cy = float(centre_w[0]), float(centre_w[1])
+        heights = np.linspace(0.0, height, _PERSON_SAMPLES)
+        for k, (px, py) in enumerate(positions):
+            dx, dy = px - cx, py - cy
+            d = math.hypot(dx, dy)
+            if d <= radius + _NEAR_M:
+                continue
+            hit = sim.space.segment_query_first((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
+            if hit is not None and hit.shape is not None and not sim.is_person(hit.shape):
+                continue  # hidden behind a wall or furniture (by its centre line)
+            # The two vertical tangent lines of the cylinder seen from the camera.
+            half_angle = math.asin(min(radius / d, 1.0))
+            base = math.atan2(dy, dx)
+            reach = math.sqrt(max(d * d - radius * radius, 0.0))
+            sides = []
+            for sgn in (1.0, -1.0):
+                ang = base + sgn * half_angle
+                sides.append((cx + reach * math.cos(ang), cy + reach * math.sin(ang)))
+            left = np.column_stack([np.full(_PERSON_SAMPLES, sides[0][0]), np.full(_PERSON_SAMPLES, sides[0][1]), heights])
+            right = np.column_stack([np.full(_PERSON_SAMPLES, sides[1][0]), np.full(_PERSON_SAMPLES, sides[1][1]), heights])
+            outline_w = np.vstack([left, right[::-1]])
+            pix, ok = self.camera.project((outline_w - centre_w) @ R_cam_world.T)
+            if not ok.any():
+                continue
+            grey = self._person_grey.setdefault(k, int(self._rng.integers(*_PERSON_GREY)))
+            cv2.fillPoly(image, [np.round(pix[ok] * 16).astype(np.int32)], grey, lineType=cv2.LINE_AA, shift=4)
+
+    # -- fixed images -------------------------------------------------------------------
+
+    @staticmethod
+    def _contrast_adjusted(textures: npt.NDArray[np.uint8], lighting: Lighting) -> npt.NDArray[np.uint8]:
+        """Textures scaled about the scene's mean grey level by the world's contrast."""
+        t = textures.astype(np.float32)
+        out = lighting.brightness + lighting.contrast * (t - 128.0)
+        return np.clip(out, 0, 255).round().astype(np.uint8)
+
+    def _make_background(self, lighting: Lighting) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
+        """The constant background (smooth floor-to-ceiling gradient) and the image-circle mask (255 inside)."""
+        cam = self.camera
+        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height, dtype=np.float64))
+        bearings_c, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
+        up_base = rotation_base_cam(self.mount).T @ np.array([0.0, 0.0, 1.0])
+        with np.errstate(invalid="ignore"):
+            elevation = np.arcsin(np.clip(bearings_c @ up_base, -1.0, 1.0))
+        # Floor 30 % darker than the scene mean, ceiling 15 % brighter, a soft horizon (no corners).
+        blend = 0.5 * (1.0 + np.tanh(np.nan_to_num(elevation) / math.radians(12.0)))
+        grey = lighting.brightness * (0.7 + 0.45 * blend)
+        grey[~valid] = 0.0
+        background = np.clip(grey, 0, 255).round().astype(np.uint8).reshape(cam.height, cam.width)
+        circle = np.where(valid, 255, 0).astype(np.uint8).reshape(cam.height, cam.width)
+        return background, circle
+
+    def _make_noise_bank(self) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
+        """Pre-drawn Gaussian noise images, split into positive and negative uint8 parts."""
+        shape = (_NOISE_BANK_SIZE, self.camera.height, self.camera.width)
+        if self.config.noise_sigma <= 0:
+            zeros = np.zeros(shape, dtype=np.uint8)
+            return zeros, zeros
+        noise = self._rng.normal(0.0, self.config.noise_sigma, size=shape).astype(np.float32)
+        pos = np.clip(np.round(noise), 0, 255).astype(np.uint8)
+        neg = np.clip(np.round(-noise), 0, 255).astype(np.uint8)
+        return pos, neg
+
+
+def _patch_axes(normals_w: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Unit horizontal and upward in-plane axes of each patch (world frame).
+
+    The horizontal axis is up x normal (to the right as one faces the patch);
+    a patch facing straight up or down (ceiling) takes world x instead.
+
+    Returns:
+        tangents_h, tangents_v: (N, 3) float64 unit rows.
+    """
+    up = np.array([0.0, 0.0, 1.0])
+    h = np.cross(up, normals_w)
+    norm = np.linalg.norm(h, axis=1)
+    flat = norm < 1e-6
+    h[flat] = np.array([1.0, 0.0, 0.0])
+    norm[flat] = 1.0
+    h /= norm[:, None]
+    v = np.cross(normals_w, h)
+    v /= np.linalg.norm(v, axis=1)[:, None]
+    return h, v

@@ -1,0 +1,171 @@
+"""The simulation: one pymunk space with the world, the robot and the people, at a fixed step.
+
+Rules:
+
+1. **Seeding.** ``np.random.default_rng(config.seed)`` spawns independent child
+   generators, in this order, for the landmark field, the odometry errors and
+   the people. Each part draws only from its own, so changing the number of
+   people changes neither the landmarks nor the odometry noise.
+2. **Time** is an integer count of nanoseconds since the start, advanced only
+   by :meth:`Simulation.step`. :meth:`Simulation.step_until` takes fixed steps of
+   ``config.physics_dt_ns`` until the deadline is reached or passed (time stays
+   on the step grid; no float accumulation).
+3. **A step**: the body ramps its set-points and sets its velocity, the people
+   set theirs, pymunk integrates, then the body reads its actual motion (truth,
+   bumpers, stall, odometry).
+4. **Shapes.** Walls are static segments (radius
+   :data:`~sim.free_space.WALL_HALF_THICKNESS_M`), furniture static boxes, people
+   kinematic circles, the robot a dynamic box. Each carries its height
+   (:meth:`Simulation.occluder_height`); :data:`OCCLUDER_FILTER` makes ray queries see
+   walls, furniture and people but not the robot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+import pymunk
+
+from shared.config import SimConfig
+from shared.errors import ConfigError
+from sim._shapes import Category, category_of, height_of, tag
+from sim.body import PioneerBody
+from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
+from sim.landmarks import LandmarkField, generate_landmarks
+from sim.people import People
+from sim.world import Pose2, World
+
+OCCLUDER_FILTER = pymunk.ShapeFilter(mask=int(Category.WALL | Category.FURNITURE | Category.PERSON))
+"""Ray-query filter that hits walls, furniture and people, never the robot."""
+
+_STATIC_FILTER = pymunk.ShapeFilter(mask=int(Category.WALL | Category.FURNITURE))
+_COLLISION_SLOP_M = 0.002  # pymunk's allowed overlap (its default, 0.1, assumes pixels)
+_WALL_FRICTION = 0.5
+
+
+class Simulation:
+    """A world, the robot's body, the people and the landmark field, in lock-step.
+
+    Args:
+        world: the place.
+        config: seed, physics step, body, odometry, people and landmark settings.
+
+    Attributes:
+        world: the world.
+        config: the configuration.
+        space: the pymunk space.
+        free_space: the reachable free space of the world.
+        landmarks: the landmark field.
+        body: the robot's body.
+        people: the people.
+    """
+
+    def __init__(self, world: World, config: SimConfig) -> None:
+        self.world = world
+        self.config = config
+        landmark_rng, odometry_rng, people_rng = np.random.default_rng(config.seed).spawn(3)
+        self.space = pymunk.Space()
+        self.space.collision_slop = _COLLISION_SLOP_M
+        self._add_walls_and_furniture()
+        self.free_space = FreeSpaceMap.from_world(world)
+        self.landmarks: LandmarkField = generate_landmarks(
+            world,
+            landmark_rng,
+            config.landmark_density_scale,
+            config.render.landmark_size_m,
+            self.free_space,
+        )
+        self.body = PioneerBody(self.space, config.body, config.odometry, world.start, odometry_rng)
+        self.people = People(self.space, self.free_space, config.people, people_rng, self._robot_xy)
+        self._now_ns = 0
+        self._dt_s = config.physics_dt_ns / 1e9
+
+    def _add_walls_and_furniture(self) -> None:
+        static = self.space.static_body
+        for wall in self.world.walls:
+            segment = pymunk.Segment(static, wall.start, wall.end, WALL_HALF_THICKNESS_M)
+            segment.friction = _WALL_FRICTION
+            tag(segment, Category.WALL, wall.height_m)
+            self.space.add(segment)
+        for box, corners in zip(self.world.furniture, self.world.furniture_corners(), strict=True):
+            poly = pymunk.Poly(static, [tuple(c) for c in corners])
+            poly.friction = _WALL_FRICTION
+            tag(poly, Category.FURNITURE, box.height_m)
+            self.space.add(poly)
+
+    def _robot_xy(self) -> tuple[float, float]:
+        x, y, _ = self.body.pose_w
+        return x, y
+
+    # -- time -------------------------------------------------------------------------
+
+    @property
+    def now_ns(self) -> int:
+        """Simulation time since the start, ns."""
+        return self._now_ns
+
+    def step(self, dt_ns: int | None = None) -> None:
+        """Advance by one physics step of ``dt_ns`` (default ``config.physics_dt_ns``).
+
+        Raises:
+            ValueError: ``dt_ns`` is not a positive integer.
+        """
+        if dt_ns is None:
+            dt_ns, dt_s = self.config.physics_dt_ns, self._dt_s
+        else:
+            if isinstance(dt_ns, bool) or not isinstance(dt_ns, int | np.integer) or dt_ns <= 0:
+                raise ValueError(f"dt_ns must be a positive integer, got {dt_ns!r}")
+            dt_ns, dt_s = int(dt_ns), dt_ns / 1e9
+        self.body.before_step(dt_s)
+        self.people.before_step(dt_s)
+        self.space.step(dt_s)
+        self.body.after_step(dt_s)
+        self._now_ns += dt_ns
+
+    def step_until(self, deadline_ns: int) -> int:
+        """Take fixed steps until ``now_ns >= deadline_ns``; returns the number of steps."""
+        steps = 0
+        while self._now_ns < deadline_ns:
+            self.step()
+            steps += 1
+        return steps
+
+    # -- queries for the renderer and scenarios ---------------------------------------
+
+    @staticmethod
+    def occluder_height(shape: pymunk.Shape) -> float:
+        """Height of a wall, piece of furniture or person hit by a query, m.
+
+        Raises:
+            ValueError: ``shape`` does not belong to a simulation.
+        """
+        return height_of(shape)
+
+    def is_person(self, shape: pymunk.Shape) -> bool:
+        """Whether ``shape`` is one of the people."""
+        return category_of(shape) == Category.PERSON
+
+    def people_state(self) -> tuple[npt.NDArray[np.float64], float, float]:
+        """People's positions (M, 2) (world frame, m), their radius (m) and height (m)."""
+        return self.people.positions(), self.config.people.radius_m, self.config.people.height_m
+
+    def place_robot(self, pose: Pose2) -> None:
+        """Put the robot at rest at ``pose``; odometry restarts there (see :mod:`sim.body`).
+
+        Raises:
+            ConfigError: the robot would overlap a wall or furniture.
+        """
+        probe_body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        probe_body.position = (pose.x_m, pose.y_m)
+        probe_body.angle = np.radians(pose.yaw_deg)
+        probe = pymunk.Poly.create_box(
+            probe_body, (self.config.body.length_m, self.config.body.width_m)
+        )
+        probe.filter = _STATIC_FILTER
+        hits = self.space.shape_query(probe)
+        if hits and hits[0].shape is not None:
+            kind = Category(category_of(hits[0].shape)).name.lower()
+            raise ConfigError(
+                "robot pose", f"({pose.x_m}, {pose.y_m}, {pose.yaw_deg} deg) overlaps a {kind}"
+            )
+        self.body.place(pose)

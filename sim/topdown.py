@@ -1,0 +1,144 @@
+"""Top-down map of a simulated world: walls, furniture, landmarks, people, the robot, its view.
+
+Pure drawing on a colour (BGR uint8) canvas with OpenCV; the caller writes the file.
+World frame: x right, y up on the map (the image's rows are flipped).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from sim.landmarks import Surface
+from sim.renderer import RenderedFrame
+from sim.simulation import OCCLUDER_FILTER, Simulation
+
+_MARGIN_M = 1.0
+_FOV_RAYS = 181
+_FOV_RANGE_M = 30.0
+
+# BGR colours.
+_BACKGROUND = (250, 250, 250)
+_CEILING = (235, 228, 222)
+_WALL = (40, 40, 40)
+_FURNITURE = (150, 170, 190)
+_FOV = (170, 235, 255)
+_LANDMARK = {
+    Surface.WALL: (180, 120, 60),
+    Surface.FURNITURE: (60, 140, 60),
+    Surface.CEILING: (170, 170, 170),
+}
+_VISIBLE = (30, 30, 220)
+_PERSON = (60, 60, 160)
+_ROBOT = (200, 80, 20)
+
+
+class MapCanvas:
+    """Maps world metres to pixels of a canvas covering the world's walls.
+
+    Args:
+        sim: the simulation whose world sets the extent.
+        px_per_m: scale, pixels per metre.
+    """
+
+    def __init__(self, sim: Simulation, px_per_m: float = 30.0) -> None:
+        pts = np.array([p for w in sim.world.walls for p in (w.start, w.end)], dtype=np.float64)
+        self.min_xy = pts.min(axis=0) - _MARGIN_M
+        max_xy = pts.max(axis=0) + _MARGIN_M
+        self.px_per_m = px_per_m
+        w, h = np.ceil((max_xy - self.min_xy) * px_per_m).astype(int)
+        self.image = np.full((int(h), int(w), 3), _BACKGROUND, dtype=np.uint8)
+
+    def px(self, xy_w: npt.ArrayLike) -> npt.NDArray[np.int32]:
+        """World points (N, 2) m -> canvas pixels (N, 2) int32 (y flipped)."""
+        xy = np.atleast_2d(np.asarray(xy_w, dtype=np.float64))
+        u = (xy[:, 0] - self.min_xy[0]) * self.px_per_m
+        v = self.image.shape[0] - 1 - (xy[:, 1] - self.min_xy[1]) * self.px_per_m
+        return np.round(np.column_stack([u, v])).astype(np.int32)
+
+
+def draw_topdown(
+    sim: Simulation, frame: RenderedFrame, fov_deg: float, px_per_m: float = 30.0
+) -> npt.NDArray[np.uint8]:
+    """Draw the world, the robot and the camera's view of the field.
+
+    Args:
+        sim: the simulation (world, landmarks, people, robot).
+        frame: the frame just rendered (its visible landmarks are highlighted).
+        fov_deg: the lens's field of view, degrees (the fan drawn on the floor).
+        px_per_m: map scale.
+
+    Returns:
+        (H, W, 3) uint8 BGR image.
+    """
+    canvas = MapCanvas(sim, px_per_m)
+    img = canvas.image
+    for ceiling in sim.world.ceilings:
+        (x0, y0), (x1, y1) = ceiling.min_corner, ceiling.max_corner
+        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        cv2.fillPoly(img, [canvas.px(corners)], _CEILING)
+    cv2.fillPoly(img, [canvas.px(_fov_polygon(sim, frame, fov_deg))], _FOV, lineType=cv2.LINE_AA)
+    for corners in sim.world.furniture_corners():
+        cv2.fillPoly(img, [canvas.px(corners)], _FURNITURE, lineType=cv2.LINE_AA)
+    for wall in sim.world.walls:
+        a, b = canvas.px([wall.start, wall.end])
+        cv2.line(img, tuple(int(v) for v in a), tuple(int(v) for v in b), _WALL, 3, cv2.LINE_AA)
+
+    lm = sim.landmarks
+    pts = canvas.px(lm.positions_w[:, :2])
+    for surface, colour in _LANDMARK.items():
+        for u, v in pts[lm.surface == surface]:
+            img[max(v - 1, 0) : v + 1, max(u - 1, 0) : u + 1] = colour
+    visible = np.isin(lm.ids, frame.visible_ids)
+    for u, v in pts[visible]:
+        cv2.circle(img, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
+
+    positions, radius, _ = sim.people_state()
+    for p in canvas.px(positions) if len(positions) else []:
+        cv2.circle(
+            img, (int(p[0]), int(p[1])), max(int(radius * px_per_m), 2), _PERSON, -1, cv2.LINE_AA
+        )
+
+    _draw_robot(canvas, sim)
+    return img
+
+
+def _fov_polygon(sim: Simulation, frame: RenderedFrame, fov_deg: float) -> npt.NDArray[np.float64]:
+    """The floor-plan region the camera sees: its horizontal FOV fan, cut by walls and furniture."""
+    cam = frame.T_world_cam
+    cx, cy = float(cam[0, 3]), float(cam[1, 3])
+    axis = cam[:3, 2]
+    heading = math.atan2(axis[1], axis[0])
+    half = math.radians(min(fov_deg, 359.0) / 2.0)
+    pts = [(cx, cy)]
+    for ang in np.linspace(heading - half, heading + half, _FOV_RAYS):
+        end = (cx + _FOV_RANGE_M * math.cos(ang), cy + _FOV_RANGE_M * math.sin(ang))
+        hit = sim.space.segment_query_first((cx, cy), end, 0.0, OCCLUDER_FILTER)
+        pts.append(tuple(hit.point) if hit is not None else end)
+    return np.array(pts)
+
+
+def _draw_robot(canvas: MapCanvas, sim: Simulation) -> None:
+    """The robot's footprint and a heading arrow."""
+    x, y, yaw = sim.body.pose_w
+    half_l, half_w = sim.config.body.length_m / 2.0, sim.config.body.width_m / 2.0
+    c, s = math.cos(yaw), math.sin(yaw)
+    corners = [
+        (x + c * dx - s * dy, y + s * dx + c * dy)
+        for dx, dy in ((half_l, half_w), (half_l, -half_w), (-half_l, -half_w), (-half_l, half_w))
+    ]
+    cv2.fillPoly(canvas.image, [canvas.px(corners)], _ROBOT, lineType=cv2.LINE_AA)
+    tip = (x + c * 0.8, y + s * 0.8)
+    a, b = canvas.px([(x, y), tip])
+    cv2.arrowedLine(
+        canvas.image,
+        tuple(int(v) for v in a),
+        tuple(int(v) for v in b),
+        (0, 0, 0),
+        2,
+        cv2.LINE_AA,
+        tipLength=0.3,
+    )

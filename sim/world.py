@@ -1,0 +1,366 @@
+"""Worlds: floor plans (walls, furniture), ceilings, landmark densities, lighting, start, routes.
+
+A world is plain data: frozen dataclasses, written by hand as a TOML file (the
+built-in ``sim/worlds/lab.toml`` and ``sim/worlds/campus.toml`` are commented
+examples of the format) or built in Python. Frame: x, y on the floor plan, z up,
+the floor at z = 0, metres; yaw counter-clockwise from +x, degrees in files.
+
+Rules a world must satisfy (checked when it is built; a file that breaks one
+raises :class:`ConfigError` naming the file and the problem):
+
+* every number finite; walls of non-zero length; heights, sizes and landmark
+  patch sizes > 0;
+* walls are :data:`WALL_HALF_THICKNESS_M` * 2 thick, centred on their segment;
+* the start pose, every route waypoint and every route leg stay at least
+  :data:`CLEARANCE_M` from the surface of walls and furniture, and every waypoint
+  is reachable from the start;
+* route names are unique and a route has at least two distinct waypoints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from shared.config import from_mapping, load_toml, require
+from shared.errors import ConfigError
+from sim._geometry import (
+    box_corners,
+    point_segment_distances,
+    points_in_polygons,
+    polygon_edges,
+    segment_segment_distance,
+)
+from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
+
+__all__ = [
+    "CLEARANCE_M",
+    "WALL_HALF_THICKNESS_M",
+    "Box",
+    "Ceiling",
+    "LandmarkDensity",
+    "Lighting",
+    "Pose2",
+    "Route",
+    "Wall",
+    "World",
+    "builtin_world_names",
+    "load_world",
+]
+
+CLEARANCE_M = 0.4
+"""Least free distance from the start pose and routes to any wall or furniture surface, m."""
+
+_MIN_WALL_LENGTH_M = 0.01
+
+
+def _finite(name: str, *values: float) -> None:
+    require(all(math.isfinite(v) for v in values), f"{name} must be finite, got {values}")
+
+
+def _check_patch_size(value: float | None) -> None:
+    if value is not None:
+        require(
+            math.isfinite(value) and value > 0, f"patch_size_m must be finite and > 0, got {value}"
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class Wall:
+    """A straight wall: a vertical slab from the floor up to ``height_m``."""
+
+    start: tuple[float, float]
+    """(x, y) of one end, m."""
+    end: tuple[float, float]
+    """(x, y) of the other end, m."""
+    height_m: float
+    """Height, m."""
+    patch_size_m: float | None = None
+    """Side of the landmark patches on both faces, m; None = ``landmarks.patch_size_m``."""
+
+    def __post_init__(self) -> None:
+        _finite("wall ends", *self.start, *self.end)
+        length = math.dist(self.start, self.end)
+        require(length >= _MIN_WALL_LENGTH_M, f"wall has zero length ({self.start} to {self.end})")
+        require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+        _check_patch_size(self.patch_size_m)
+
+    @property
+    def length_m(self) -> float:
+        """Length, m."""
+        return math.dist(self.start, self.end)
+
+
+@dataclass(frozen=True, slots=True)
+class Box:
+    """A piece of furniture: a solid box standing on the floor (desk, shelf, bench, kiosk)."""
+
+    center: tuple[float, float]
+    """(x, y) of the footprint's centre, m."""
+    size: tuple[float, float]
+    """(length along ``yaw_deg``, width across it), m."""
+    yaw_deg: float
+    """Orientation of the length axis, counter-clockwise from +x, degrees."""
+    height_m: float
+    """Height, m."""
+    patch_size_m: float | None = None
+    """Side of the landmark patches on its sides, m; None = ``landmarks.patch_size_m``."""
+
+    def __post_init__(self) -> None:
+        _finite("box center, size and yaw", *self.center, *self.size, self.yaw_deg)
+        require(min(self.size) > 0, f"size must be > 0 in both directions, got {self.size}")
+        require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+        _check_patch_size(self.patch_size_m)
+
+
+@dataclass(frozen=True, slots=True)
+class Ceiling:
+    """A roofed rectangle (axis-aligned): indoor space has one, a courtyard has none."""
+
+    min_corner: tuple[float, float]
+    """(x, y) of the corner with the smallest coordinates, m."""
+    max_corner: tuple[float, float]
+    """(x, y) of the corner with the largest coordinates, m."""
+    height_m: float
+    """Height of the ceiling above the floor, m."""
+    patch_size_m: float | None = None
+    """Side of the landmark patches on it, m; None = ``landmarks.patch_size_m``."""
+
+    def __post_init__(self) -> None:
+        _finite("ceiling corners", *self.min_corner, *self.max_corner)
+        require(
+            self.min_corner[0] < self.max_corner[0] and self.min_corner[1] < self.max_corner[1],
+            f"min_corner {self.min_corner} must be below max_corner {self.max_corner} in x and y",
+        )
+        require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+        _check_patch_size(self.patch_size_m)
+
+
+@dataclass(frozen=True, slots=True)
+class LandmarkDensity:
+    """Landmark patches: mean number per square metre of each kind of surface, default size.
+
+    A surface holds at most one patch per square of side ``patch size + 3 cm``
+    (patches never overlap), so a density above ``1 / (size + 0.03)^2`` saturates.
+    """
+
+    wall_per_m2: float = 1.0
+    """On walls (both faces), patches per m^2."""
+    furniture_per_m2: float = 1.0
+    """On the vertical faces of furniture, patches per m^2."""
+    ceiling_per_m2: float = 0.3
+    """On ceilings, patches per m^2."""
+    patch_size_m: float = 0.15
+    """Side of a square patch, m, on every wall, box and ceiling that sets no ``patch_size_m``."""
+
+    def __post_init__(self) -> None:
+        for name in ("wall_per_m2", "furniture_per_m2", "ceiling_per_m2"):
+            value = getattr(self, name)
+            require(math.isfinite(value) and value >= 0, f"{name} must be >= 0, got {value}")
+        _check_patch_size(self.patch_size_m)
+
+
+@dataclass(frozen=True, slots=True)
+class Lighting:
+    """How the scene looks to the camera."""
+
+    brightness: float = 110.0
+    """Mean grey level of plain surfaces, 0..255."""
+    contrast: float = 1.0
+    """Scale of the landmark patches' contrast around that level (1 = as generated)."""
+
+    def __post_init__(self) -> None:
+        require(0 < self.brightness < 255, f"brightness must be in (0, 255), got {self.brightness}")
+        require(0 < self.contrast <= 4, f"contrast must be in (0, 4], got {self.contrast}")
+
+
+@dataclass(frozen=True, slots=True)
+class Pose2:
+    """A pose on the floor plan."""
+
+    x_m: float
+    """x, m."""
+    y_m: float
+    """y, m."""
+    yaw_deg: float = 0.0
+    """Heading, counter-clockwise from +x, degrees."""
+
+    def __post_init__(self) -> None:
+        _finite("pose", self.x_m, self.y_m, self.yaw_deg)
+
+
+@dataclass(frozen=True, slots=True)
+class Route:
+    """A named polyline through free space, for the scripted teach driver."""
+
+    name: str
+    """Unique name within the world."""
+    waypoints: tuple[tuple[float, float], ...]
+    """(x, y) points, m, driven in order; at least two."""
+
+    def __post_init__(self) -> None:
+        require(bool(self.name.strip()), "route name must not be empty")
+        require(len(self.waypoints) >= 2, f"route '{self.name}' needs at least 2 waypoints")
+        for i, (p, q) in enumerate(zip(self.waypoints, self.waypoints[1:], strict=False)):
+            _finite(f"route '{self.name}' waypoint {i}", *p)
+            require(math.dist(p, q) > 0.01, f"route '{self.name}' repeats waypoint {i} at {p}")
+        _finite(f"route '{self.name}' waypoint {len(self.waypoints) - 1}", *self.waypoints[-1])
+
+    def start_pose(self) -> Pose2:
+        """The pose at the first waypoint, facing the second."""
+        (x0, y0), (x1, y1) = self.waypoints[0], self.waypoints[1]
+        return Pose2(x0, y0, math.degrees(math.atan2(y1 - y0, x1 - x0)))
+
+
+@dataclass(frozen=True, slots=True)
+class World:
+    """A simulated place: see the module docstring for the rules it must satisfy."""
+
+    name: str
+    """Short name."""
+    walls: tuple[Wall, ...]
+    """The floor plan's walls; their bounding box is the world's extent."""
+    start: Pose2
+    """Where the robot starts."""
+    description: str = ""
+    """One or two sentences for humans."""
+    furniture: tuple[Box, ...] = ()
+    """Boxes standing on the floor."""
+    ceilings: tuple[Ceiling, ...] = ()
+    """Roofed rectangles; outside them the sky is open."""
+    landmarks: LandmarkDensity = LandmarkDensity()
+    """Landmark densities per kind of surface and the default patch size."""
+    lighting: Lighting = Lighting()
+    """Scene brightness and landmark contrast."""
+    routes: tuple[Route, ...] = ()
+    """Named routes through free space."""
+
+    def __post_init__(self) -> None:
+        require(bool(self.name.strip()), "name must not be empty")
+        require(len(self.walls) > 0, "a world needs at least one wall")
+        names = [r.name for r in self.routes]
+        for name in names:
+            require(names.count(name) == 1, f"route name '{name}' is used twice")
+        obstacles = _Obstacles.of(self)
+        obstacles.check_point("start pose", (self.start.x_m, self.start.y_m))
+        for route in self.routes:
+            for i, p in enumerate(route.waypoints):
+                obstacles.check_point(f"route '{route.name}' waypoint {i}", p)
+            for i, (p, q) in enumerate(zip(route.waypoints, route.waypoints[1:], strict=False)):
+                obstacles.check_leg(f"route '{route.name}' leg {i}->{i + 1}", p, q)
+        free_space = FreeSpaceMap.from_world(self)
+        for route in self.routes:
+            reachable = free_space.is_reachable(np.asarray(route.waypoints, dtype=float))
+            if not reachable.all():
+                i = int(np.argmin(reachable))
+                raise ValueError(
+                    f"route '{route.name}' waypoint {i} {route.waypoints[i]} "
+                    "is not reachable from the start"
+                )
+
+    def extent(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The walls' bounding box: ((x_min, y_min), (x_max, y_max)), m."""
+        ends = np.array([w.start for w in self.walls] + [w.end for w in self.walls], dtype=float)
+        lo, hi = ends.min(axis=0), ends.max(axis=0)
+        return (float(lo[0]), float(lo[1])), (float(hi[0]), float(hi[1]))
+
+    def furniture_corners(self) -> np.ndarray:
+        """(F, 4, 2) footprint corners of the furniture, counter-clockwise, m."""
+        return np.array(
+            [box_corners(b.center, b.size, b.yaw_deg) for b in self.furniture], dtype=float
+        ).reshape(-1, 4, 2)
+
+
+@dataclass(frozen=True)
+class _Obstacles:
+    """Walls (with thickness) and furniture edges as one set of segments: the clearance rules."""
+
+    world: World
+    a: np.ndarray  # (S, 2) segment starts: walls, then 4 edges per box
+    b: np.ndarray  # (S, 2) segment ends
+    radius: np.ndarray  # (S,) half thickness: walls' for walls, 0 for furniture edges
+    corners: np.ndarray  # (F, 4, 2) furniture footprints
+
+    @classmethod
+    def of(cls, world: World) -> _Obstacles:
+        corners = world.furniture_corners()
+        edge_a, edge_b = polygon_edges(corners)
+        a = np.concatenate([np.array([w.start for w in world.walls], dtype=float), edge_a])
+        b = np.concatenate([np.array([w.end for w in world.walls], dtype=float), edge_b])
+        radius = np.concatenate(
+            [np.full(len(world.walls), WALL_HALF_THICKNESS_M), np.zeros(len(edge_a))]
+        )
+        return cls(world, a, b, radius, corners)
+
+    def _name(self, segment: int) -> str:
+        walls = self.world.walls
+        if segment < len(walls):
+            return f"wall {segment} ({walls[segment].start} to {walls[segment].end})"
+        box = (segment - len(walls)) // 4
+        return f"furniture {box} at {self.world.furniture[box].center}"
+
+    def _require_gap(self, what: str, gaps: np.ndarray) -> None:
+        i = int(np.argmin(gaps))
+        require(
+            gaps[i] >= CLEARANCE_M,
+            f"{what} is {max(float(gaps[i]), 0.0):.2f} m from {self._name(i)}; "
+            f"need >= {CLEARANCE_M} m",
+        )
+
+    def check_point(self, what: str, xy: tuple[float, float]) -> None:
+        lo, hi = self.world.extent()
+        require(
+            lo[0] <= xy[0] <= hi[0] and lo[1] <= xy[1] <= hi[1],
+            f"{what} {tuple(xy)} is outside the walls' extent {lo}..{hi}",
+        )
+        point = np.asarray([xy], dtype=float)
+        gaps = point_segment_distances(point, self.a, self.b)[0] - self.radius
+        inside = points_in_polygons(point, self.corners)[0]
+        if inside.any():
+            gaps[len(self.world.walls) + 4 * int(np.argmax(inside))] = 0.0
+        self._require_gap(f"{what} {tuple(xy)}", gaps)
+
+    def check_leg(self, what: str, p: tuple[float, float], q: tuple[float, float]) -> None:
+        gaps = (
+            segment_segment_distance(
+                np.asarray(p, dtype=float), np.asarray(q, dtype=float), self.a, self.b
+            )
+            - self.radius
+        )
+        self._require_gap(what, gaps)
+
+
+def builtin_world_names() -> tuple[str, ...]:
+    """Names of the worlds shipped in ``sim/worlds/`` (sorted)."""
+    folder = resources.files("sim") / "worlds"
+    return tuple(
+        sorted(p.name.removesuffix(".toml") for p in folder.iterdir() if p.name.endswith(".toml"))
+    )
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """Load a built-in world by name, or a world TOML file by path.
+
+    Args:
+        name_or_path: ``"lab"``, ``"campus"``, or the path of a ``.toml`` file.
+
+    Raises:
+        ConfigError: unknown name, unreadable file, or a world that breaks a rule
+            (one line naming the file and the problem).
+    """
+    text = str(name_or_path)
+    if text in builtin_world_names():
+        with resources.as_file(resources.files("sim") / "worlds" / f"{text}.toml") as path:
+            return from_mapping(World, load_toml(path), str(path))
+    path = Path(text)
+    if path.suffix != ".toml" and not path.exists():
+        raise ConfigError(
+            text,
+            f"unknown world (built-in: {', '.join(builtin_world_names())}; "
+            "or the path of a .toml world file)",
+        )
+    return from_mapping(World, load_toml(path), str(path))

@@ -1,0 +1,216 @@
+"""Tests of robot/vision/matching.py: ZNCC matching with window and unicity."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from robot.vision.features import Features, detect_harris
+from robot.vision.matching import Matches, match_zncc
+from robot.vision.synthetic import similarity_homography, transform_pixels, warped_pair
+from shared.config import FeatureConfig, MatchConfig
+from shared.errors import ShapeError
+
+FEATURES = FeatureConfig()
+CONFIG = MatchConfig()
+
+
+def _random_features(rng: np.random.Generator, n: int, extent_px: int, side: int = 3) -> Features:
+    """n features at random integer positions in [0, extent_px]^2 with random unit patches."""
+    patches = rng.standard_normal((n, side * side))
+    patches -= patches.mean(axis=1, keepdims=True)
+    patches /= np.linalg.norm(patches, axis=1, keepdims=True)
+    pixels = rng.integers(0, extent_px + 1, (n, 2)).astype(np.float64)
+    return Features(pixels, patches, np.ones(n))
+
+
+def _brute_force(feats_a: Features, feats_b: Features, config: MatchConfig) -> set[tuple[int, int]]:
+    """The paper's rule written as plain loops: best in window, threshold, mutual best."""
+    scores = feats_a.patches @ feats_b.patches.T
+    r = config.search_radius_px
+
+    def candidate(i: int, j: int) -> bool:
+        d = np.abs(feats_a.pixels_xy[i] - feats_b.pixels_xy[j])
+        return r is None or bool(np.all(d <= r))
+
+    def best(items: list[int], score: list[float]) -> int | None:
+        return items[int(np.argmax(score))] if items else None
+
+    n, m = len(feats_a), len(feats_b)
+    out = set()
+    for i in range(n):
+        cands = [j for j in range(m) if candidate(i, j)]
+        j = best(cands, [scores[i, k] for k in cands])
+        if j is None or scores[i, j] < config.min_zncc:
+            continue
+        back = [k for k in range(n) if candidate(k, j)]
+        if best(back, [scores[k, j] for k in back]) == i:
+            out.add((i, j))
+    return out
+
+
+def _shifted_matches(shift_xy: tuple[float, float], seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Matched pixels between a texture and its shifted, re-lit, noisy copy."""
+    pair = warped_pair(np.random.default_rng(seed), similarity_homography(shift_xy),
+                       width=400, height=300, noise_sigma=2.0, gain=0.75, offset=25.0)
+    feats_a = detect_harris(pair.image_a, FEATURES)
+    feats_b = detect_harris(pair.image_b, FEATURES)
+    return match_zncc(feats_a, feats_b, CONFIG).pixels_xy(feats_a, feats_b)
+
+
+class TestMatches:
+    def test_pixels_xy(self) -> None:
+        feats_a = Features(np.array([[1.0, 2.0], [3.0, 4.0]]), np.zeros((2, 9)), np.zeros(2))
+        pixels_b = np.array([[5.0, 6.0], [7.0, 8.0], [9.0, 10.0]])
+        feats_b = Features(pixels_b, np.zeros((3, 9)), np.zeros(3))
+        matches = Matches(np.array([1]), np.array([2]), np.array([0.9]))
+        pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
+        np.testing.assert_array_equal(pixels_a, [[3.0, 4.0]])
+        np.testing.assert_array_equal(pixels_b, [[9.0, 10.0]])
+        assert len(matches) == 1
+        with pytest.raises(ValueError, match="read-only"):
+            matches.idx_a[0] = 0
+
+    def test_shape_errors(self) -> None:
+        with pytest.raises(ShapeError, match="idx_b"):
+            Matches(np.zeros(2), np.zeros(3), np.zeros(2))
+        with pytest.raises(ShapeError, match="score"):
+            Matches(np.zeros(2), np.zeros(2), np.zeros((2, 1)))
+
+
+class TestMatchZncc:
+    def test_smoke(self, rng: np.random.Generator) -> None:
+        feats = _random_features(rng, 20, 100)
+        matches = match_zncc(feats, feats, CONFIG)
+        assert matches.idx_a.dtype == np.intp and matches.score.dtype == np.float32
+        assert len(matches) == 20
+
+    def test_patch_size_mismatch(self, rng: np.random.Generator) -> None:
+        with pytest.raises(ShapeError, match="patch sizes differ, 3 px and 5 px"):
+            match_zncc(_random_features(rng, 4, 50, 3), _random_features(rng, 4, 50, 5), CONFIG)
+
+    @pytest.mark.parametrize("shift_xy", [(7.0, -4.0), (5.4, 3.7), (-12.25, 0.6)])
+    def test_recovers_shift(self, shift_xy: tuple[float, float]) -> None:
+        pixels_a, pixels_b = _shifted_matches(shift_xy, seed=11)
+        displacement = pixels_b - pixels_a
+        inliers = np.linalg.norm(displacement - shift_xy, axis=1) <= 2.0
+        assert len(pixels_a) >= 60
+        assert inliers.mean() > 0.9
+        np.testing.assert_allclose(np.median(displacement[inliers], axis=0), shift_xy, atol=0.15)
+
+    def test_recovers_homography(self) -> None:
+        H_b_a = similarity_homography(
+            (10.0, -6.0), np.radians(2.0), 1.02, (200.0, 150.0), (1e-5, 0.0)
+        )
+        pair = warped_pair(np.random.default_rng(3), H_b_a, 400, 300, gain=1.2, offset=-15.0)
+        feats_a = detect_harris(pair.image_a, FEATURES)
+        feats_b = detect_harris(pair.image_b, FEATURES)
+        pixels_a, pixels_b = match_zncc(feats_a, feats_b, CONFIG).pixels_xy(feats_a, feats_b)
+        error_px = np.linalg.norm(transform_pixels(H_b_a, pixels_a) - pixels_b, axis=1)
+        assert len(error_px) >= 60 and np.mean(error_px <= 2.0) > 0.9
+
+    def test_unicity(self, rng: np.random.Generator) -> None:
+        # Many near-duplicate patches: without the mutual check, several A would pick one B.
+        feats_a = _random_features(rng, 60, 40)
+        base = feats_a.patches[0]
+        noisy = base + 0.3 * rng.standard_normal((80, base.shape[0]))
+        noisy -= noisy.mean(axis=1, keepdims=True)
+        noisy /= np.linalg.norm(noisy, axis=1, keepdims=True)
+        feats_b = Features(rng.integers(0, 41, (80, 2)).astype(float), noisy, np.ones(80))
+        matches = match_zncc(feats_a, feats_b, dataclasses.replace(CONFIG, min_zncc=-1.0))
+        assert len(matches) > 0
+        assert len(np.unique(matches.idx_a)) == len(matches)
+        assert len(np.unique(matches.idx_b)) == len(matches)
+
+    def test_window_is_respected(self, rng: np.random.Generator) -> None:
+        # B's twin of A lies 11 px away: found with r = 11 (inclusive), not with r = 10.
+        feats_a = _random_features(rng, 1, 0)
+        shifted = feats_a.pixels_xy + np.array([[11.0, -3.0]])
+        feats_b = Features(shifted, feats_a.patches, np.ones(1))
+        for radius, found in ((11.0, 1), (10.0, 0), (None, 1)):
+            config = dataclasses.replace(CONFIG, search_radius_px=radius)
+            assert len(match_zncc(feats_a, feats_b, config)) == found
+
+    def test_window_is_respected_on_images(self) -> None:
+        pair = warped_pair(np.random.default_rng(4), similarity_homography((9.0, 0.0)), 400, 300)
+        feats_a = detect_harris(pair.image_a, FEATURES)
+        feats_b = detect_harris(pair.image_b, FEATURES)
+        matches = match_zncc(feats_a, feats_b, dataclasses.replace(CONFIG, search_radius_px=6.0))
+        pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
+        assert np.all(np.abs(pixels_b - pixels_a) <= 6.0)
+
+    def test_threshold(self, rng: np.random.Generator) -> None:
+        feats_a, feats_b = _random_features(rng, 30, 20), _random_features(rng, 30, 20)
+        matches = match_zncc(feats_a, feats_b, dataclasses.replace(CONFIG, min_zncc=0.3))
+        assert np.all(matches.score >= 0.3)
+        expected = feats_a.patches[matches.idx_a] @ feats_b.patches[matches.idx_b].T
+        np.testing.assert_allclose(matches.score, np.diag(expected), atol=1e-6)
+
+    def test_brightness_affine_invariance(self) -> None:
+        rng = np.random.default_rng(6)
+        image = np.clip(np.rint(warped_pair(rng, np.eye(3), 320, 240).image_a * 0.6 + 40), 0, 255)
+        image = image.astype(np.uint8)
+        relit = np.clip(np.rint(1.4 * image.astype(float) - 50.0), 0, 255).astype(np.uint8)
+        feats_a, feats_b = detect_harris(image, FEATURES), detect_harris(relit, FEATURES)
+        matches = match_zncc(feats_a, feats_b, CONFIG)
+        pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
+        assert len(matches) > 0.9 * len(feats_a)
+        assert np.median(matches.score) > 0.99
+        assert np.mean(np.linalg.norm(pixels_b - pixels_a, axis=1) <= 0.5) > 0.95
+
+    def test_ratio_test(self, rng: np.random.Generator) -> None:
+        # p + e and p - e (e orthogonal to p) are equally close to A's patch p:
+        # ambiguous, kept without the ratio test only. One of them with an
+        # unrelated patch passes it.
+        feats_a = _random_features(rng, 1, 0)
+        p = feats_a.patches[0].astype(np.float64)
+        e = rng.standard_normal(9)
+        e -= e.mean() + (e @ p) * p
+        e *= 0.2 / np.linalg.norm(e)
+        plus, minus = (p + e) / np.linalg.norm(p + e), (p - e) / np.linalg.norm(p - e)
+        ratio = dataclasses.replace(CONFIG, max_distance_ratio=0.8)
+        ambiguous = Features(np.zeros((2, 2)), np.stack([plus, minus]), np.ones(2))
+        assert len(match_zncc(feats_a, ambiguous, CONFIG)) == 1
+        assert len(match_zncc(feats_a, ambiguous, ratio)) == 0
+        other = _random_features(rng, 1, 0).patches[0]
+        distinct = Features(np.zeros((2, 2)), np.stack([other, plus]), np.ones(2))
+        matches = match_zncc(feats_a, distinct, ratio)
+        assert matches.idx_b.tolist() == [1]
+
+    @pytest.mark.parametrize(("n", "m"), [(0, 0), (0, 5), (5, 0)])
+    def test_empty_inputs(self, n: int, m: int, rng: np.random.Generator) -> None:
+        matches = match_zncc(_random_features(rng, n, 50), _random_features(rng, m, 50), CONFIG)
+        assert len(matches) == 0
+        assert matches.idx_a.shape == matches.idx_b.shape == matches.score.shape == (0,)
+
+    def test_no_candidates_in_window(self, rng: np.random.Generator) -> None:
+        feats_a = _random_features(rng, 5, 10)
+        feats_b = Features(feats_a.pixels_xy + 500.0, feats_a.patches, np.ones(5))
+        assert len(match_zncc(feats_a, feats_b, CONFIG)) == 0
+
+    @settings(max_examples=60, deadline=None)
+    @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 40),
+           radius=st.sampled_from([None, 1.0, 40.0]))
+    def test_self_match_is_identity(self, seed: int, n: int, radius: float | None) -> None:
+        feats = _random_features(np.random.default_rng(seed), n, 200, side=5)
+        matches = match_zncc(feats, feats, dataclasses.replace(CONFIG, search_radius_px=radius))
+        np.testing.assert_array_equal(matches.idx_a, np.arange(n))
+        np.testing.assert_array_equal(matches.idx_b, np.arange(n))
+        np.testing.assert_allclose(matches.score, 1.0, atol=1e-5)
+
+    @settings(max_examples=100, deadline=None)
+    @given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 15), m=st.integers(0, 15),
+           radius=st.sampled_from([None, 3.0, 5.0, 10.0]),
+           min_zncc=st.sampled_from([-1.0, 0.0, 0.4]))
+    def test_equals_brute_force(self, seed: int, n: int, m: int, radius: float | None,
+                                min_zncc: float) -> None:
+        rng = np.random.default_rng(seed)
+        feats_a, feats_b = _random_features(rng, n, 12), _random_features(rng, m, 12)
+        config = MatchConfig(search_radius_px=radius, min_zncc=min_zncc)
+        matches = match_zncc(feats_a, feats_b, config)
+        found = set(zip(matches.idx_a.tolist(), matches.idx_b.tolist(), strict=True))
+        assert found == _brute_force(feats_a, feats_b, config)

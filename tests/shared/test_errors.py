@@ -1,0 +1,43 @@
+from __future__ import annotations
+
+import pytest
+
+from shared.errors import (
+    CalibrationError,
+    ChecksumError,
+    ConfigError,
+    InputError,
+    ShapeError,
+    VmnavError,
+    check_shape,
+)
+
+
+def test_tree() -> None:
+    assert issubclass(ConfigError, InputError)
+    assert issubclass(CalibrationError, InputError)
+    assert issubclass(InputError, VmnavError)
+    assert issubclass(ShapeError, ValueError)
+    assert issubclass(ChecksumError, VmnavError)
+
+
+def test_input_error_names_where() -> None:
+    err = ConfigError("world.toml", "walls[3]: zero length")
+    assert str(err) == "world.toml: walls[3]: zero length"
+    assert err.where == "world.toml"
+
+
+def test_checksum_error_carries_values() -> None:
+    err = ChecksumError(0x1234, 0x4321)
+    assert (err.expected, err.actual) == (0x1234, 0x4321)
+    assert "0x1234" in str(err)
+
+
+class TestCheckShape:
+    def test_accepts_wildcard(self) -> None:
+        check_shape("points", (7, 3), (None, 3))
+
+    @pytest.mark.parametrize("shape", [(7, 2), (7,), (7, 3, 1)])
+    def test_rejects_and_names_both_shapes(self, shape: tuple[int, ...]) -> None:
+        with pytest.raises(ShapeError, match=r"points: expected shape \(N, 3\), got"):
+            check_shape("points", shape, (None, 3))

@@ -1,0 +1,91 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from shared.config import PeopleConfig, SimConfig
+from shared.errors import ConfigError
+from sim._geometry import point_segment_distances, points_in_polygons
+from sim.free_space import WALL_HALF_THICKNESS_M
+from sim.simulation import Simulation
+from sim.world import World, load_world
+from tests.sim.rooms import box_room
+
+
+def people_sim(world: World, count: int, seed: int = 1, speed: float = 1.0) -> Simulation:
+    config = SimConfig(
+        seed=seed, landmark_density_scale=0.0, people=PeopleConfig(count=count, speed_m_s=speed)
+    )
+    return Simulation(world, config)
+
+
+class TestWalking:
+    def test_people_never_cross_walls_or_furniture_over_a_long_run(self) -> None:
+        world = load_world("lab")
+        sim = people_sim(world, count=5, seed=7)
+        track = []
+        for _ in range(6000):  # 60 s
+            sim.step()
+            track.append(sim.people.positions())
+        positions = np.array(track)  # (T, M, 2)
+        flat = positions.reshape(-1, 2)
+        radius = sim.config.people.radius_m
+        a = np.array([w.start for w in world.walls])
+        b = np.array([w.end for w in world.walls])
+        wall_gap = point_segment_distances(flat, a, b).min(axis=1) - WALL_HALF_THICKNESS_M
+        assert wall_gap.min() >= radius - 1e-6
+        assert not points_in_polygons(flat, world.furniture_corners()).any()
+        assert sim.free_space.is_reachable(flat).all()
+        # Steps are short (no teleporting through a wall): at most speed * dt.
+        steps = np.linalg.norm(np.diff(positions, axis=0), axis=2)
+        assert steps.max() <= 1.0 * 0.01 + 1e-9
+        # They walk a lot and pause sometimes.
+        assert steps.sum(axis=0).min() > 10.0
+        assert (steps == 0).mean() > 0.01
+
+    def test_same_seed_same_walks_other_seed_other_walks(self) -> None:
+        world = box_room()
+
+        def walk(seed: int) -> np.ndarray:
+            sim = people_sim(world, count=3, seed=seed)
+            sim.step_until(2_000_000_000)
+            return sim.people.positions()
+
+        assert np.array_equal(walk(1), walk(1))
+        assert not np.array_equal(walk(1), walk(2))
+
+    def test_people_start_away_from_the_robot(self) -> None:
+        sim = people_sim(box_room(), count=4)
+        positions, radius, height = sim.people_state()
+        assert positions.shape == (4, 2)
+        assert (radius, height) == (0.25, 1.75)
+        assert np.linalg.norm(positions - [5.0, 3.0], axis=1).min() >= 1.5
+
+    def test_too_many_people_for_the_world(self) -> None:
+        with pytest.raises(ConfigError, match=r"^people: cannot place 40 people"):
+            people_sim(box_room((4.0, 3.0)), count=40)
+
+
+class TestBumping:
+    def test_a_person_walking_into_the_robot_bumps_and_pushes_it(self) -> None:
+        sim = people_sim(box_room(), count=1)
+        sim.people.place(0, (8.0, 3.0), (2.0, 3.0))  # straight at the robot's front
+        bumped = []
+        for _ in range(400):
+            sim.step()
+            bumped.append(sim.body.bumped_front)
+        assert any(bumped) and not sim.body.bumped_rear
+        assert sim.body.pose_w[0] < 5.0  # pushed back
+        # The person stopped on contact, then walked off: no longer touching the robot.
+        assert not bumped[-1]
+        assert np.linalg.norm(sim.people.positions()[0] - sim.body.pose_w[:2]) > 0.5
+
+    def test_the_robot_driving_into_a_standing_person_stalls(self) -> None:
+        sim = people_sim(box_room(), count=1, speed=0.0)
+        sim.people.place(0, (6.5, 3.0), (6.5, 3.0))
+        sim.body.command(0.3, 0.0)
+        sim.step_until(4_000_000_000)
+        assert sim.body.bumped_front and sim.body.stalled
+        assert sim.body.pose_w[0] == pytest.approx(
+            6.5 - 0.25 - sim.config.body.length_m / 2, abs=0.01
+        )

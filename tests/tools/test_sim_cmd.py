@@ -1,0 +1,74 @@
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import pytest
+
+from tools.cli import main
+
+
+def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+class TestSnapshot:
+    def test_writes_frame_map_and_json(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        code, out, _ = run(
+            ["sim", "snapshot", "--world", "lab", "--seed", "1", "--out", str(tmp_path), "--x", "8", "--y", "10"],
+            capsys,
+        )
+        assert code == 0
+        assert "landmarks visible" in out
+        frame = cv2.imread(str(tmp_path / "frame.png"), cv2.IMREAD_UNCHANGED)
+        assert frame.shape == (600, 800)
+        topdown = cv2.imread(str(tmp_path / "map.png"), cv2.IMREAD_UNCHANGED)
+        assert topdown.ndim == 3 and topdown.shape[2] == 3
+        summary = json.loads((tmp_path / "snapshot.json").read_text())
+        assert summary["pose_w"] == {"x_m": 8.0, "y_m": 10.0, "yaw_deg": 0.0}
+        assert summary["visible_landmarks"] == len(summary["visible"]) > 100
+        assert summary["world"] == "lab"
+        assert all(0 <= v["u_px"] < 800 and 0 <= v["v_px"] < 600 for v in summary["visible"])
+
+    def test_campus_and_start_pose(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        code, out, _ = run(["sim", "snapshot", "--world", "campus", "--out", str(tmp_path)], capsys)
+        assert code == 0
+        assert json.loads((tmp_path / "snapshot.json").read_text())["world"] == "campus"
+
+    @pytest.mark.parametrize(
+        ("args", "fragment"),
+        [
+            (["--world", "moon"], "moon"),
+            (["--x", "1"], "give both --x and --y"),
+            (["--x", "0.0", "--y", "10.0"], ""),  # inside the west wall
+            (["--camera", "/nonexistent/camera.json"], "/nonexistent/camera.json"),
+            (["--config", "/nonexistent/vmnav.toml"], "/nonexistent/vmnav.toml"),
+        ],
+    )
+    def test_bad_input_is_one_line_and_exit_1(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], fragment: str
+    ) -> None:
+        code, _, err = run(["sim", "snapshot", "--out", str(tmp_path), *args], capsys)
+        assert code == 1
+        assert err.count("\n") == 1 and err.startswith("vmnav sim: error:")
+        assert fragment in err
+        assert "Traceback" not in err
+
+    def test_malformed_world_file(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        world = tmp_path / "bad.toml"
+        world.write_text('name = "bad"\nstart = { x_m = 1.0, y_m = 1.0 }\nwalls = [{ start = [0, 0], end = [0, 0], height_m = 2.0 }]\n')
+        code, _, err = run(["sim", "snapshot", "--world", str(world), "--out", str(tmp_path / "o")], capsys)
+        assert code == 1
+        assert str(world) in err and err.count("\n") == 1
+
+
+def test_help_lists_only_working_commands(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(["--help"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out
+    listed = [line.split()[0] for line in out.split("options:")[0].splitlines() if line.startswith("    ")]
+    assert listed == ["sim", "calibrate", "bench"]
