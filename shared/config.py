@@ -134,7 +134,11 @@ def _convert(tp: Any, value: Any, source: str, key_path: str) -> Any:
             raise bad("an integer")
         return value
     if tp is float:
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
             raise bad("a finite number")
         return float(value)
     if tp is str:
@@ -145,11 +149,14 @@ def _convert(tp: Any, value: Any, source: str, key_path: str) -> Any:
         if not isinstance(value, list | tuple):
             raise bad("an array")
         if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_convert(args[0], v, source, _join(key_path, i)) for i, v in enumerate(value))
+            return tuple(
+                _convert(args[0], v, source, _join(key_path, i)) for i, v in enumerate(value)
+            )
         if len(value) != len(args):
             raise bad(f"an array of {len(args)} values")
         return tuple(
-            _convert(a, v, source, _join(key_path, i)) for i, (a, v) in enumerate(zip(args, value, strict=True))
+            _convert(a, v, source, _join(key_path, i))
+            for i, (a, v) in enumerate(zip(args, value, strict=True))
         )
     raise TypeError(f"from_mapping cannot convert to {tp!r} (at {key_path})")
 
@@ -188,8 +195,14 @@ class AriaLinkConfig:
     """Both: abandon a partial frame after this long without a new byte, ns (ARIA: 100 ms)."""
 
     def __post_init__(self) -> None:
-        for name in ("sync_reply_timeout_ns", "pulse_period_ns", "link_timeout_ns",
-                     "sip_period_ns", "watchdog_timeout_ns", "frame_timeout_ns"):
+        for name in (
+            "sync_reply_timeout_ns",
+            "pulse_period_ns",
+            "link_timeout_ns",
+            "sip_period_ns",
+            "watchdog_timeout_ns",
+            "frame_timeout_ns",
+        ):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.sync_attempts >= 1, f"sync_attempts must be >= 1, got {self.sync_attempts}")
 
@@ -223,8 +236,17 @@ class BodyConfig:
     """Blocked motion for this long under a non-zero command reports a stall, s."""
 
     def __post_init__(self) -> None:
-        for name in ("length_m", "width_m", "mass_kg", "max_speed_m_s", "max_omega_rad_s",
-                     "accel_m_s2", "decel_m_s2", "rot_accel_rad_s2", "stall_time_s"):
+        for name in (
+            "length_m",
+            "width_m",
+            "mass_kg",
+            "max_speed_m_s",
+            "max_omega_rad_s",
+            "accel_m_s2",
+            "decel_m_s2",
+            "rot_accel_rad_s2",
+            "stall_time_s",
+        ):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
 
 
@@ -278,16 +300,17 @@ class RenderConfig:
     """Peak relative change of the global illumination gain over time (0 = constant)."""
     illumination_period_s: float = 40.0
     """Period of the slow global illumination change, s."""
-    landmark_size_m: float = 0.15
-    """Side of a landmark's textured patch, m."""
 
     def __post_init__(self) -> None:
         require(self.noise_sigma >= 0, f"noise_sigma must be >= 0, got {self.noise_sigma}")
-        require(0 <= self.illumination_amplitude < 1,
-                f"illumination_amplitude must be in [0, 1), got {self.illumination_amplitude}")
-        require(self.illumination_period_s > 0,
-                f"illumination_period_s must be > 0, got {self.illumination_period_s}")
-        require(self.landmark_size_m > 0, f"landmark_size_m must be > 0, got {self.landmark_size_m}")
+        require(
+            0 <= self.illumination_amplitude < 1,
+            f"illumination_amplitude must be in [0, 1), got {self.illumination_amplitude}",
+        )
+        require(
+            self.illumination_period_s > 0,
+            f"illumination_period_s must be > 0, got {self.illumination_period_s}",
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -334,10 +357,15 @@ class SimConfig:
 
     def __post_init__(self) -> None:
         require(self.physics_dt_ns > 0, f"physics_dt_ns must be > 0, got {self.physics_dt_ns}")
-        require(self.frame_period_ns >= self.physics_dt_ns,
-                f"frame_period_ns ({self.frame_period_ns}) must be >= physics_dt_ns ({self.physics_dt_ns})")
-        require(self.landmark_density_scale >= 0,
-                f"landmark_density_scale must be >= 0, got {self.landmark_density_scale}")
+        require(
+            self.frame_period_ns >= self.physics_dt_ns,
+            f"frame_period_ns ({self.frame_period_ns}) must be >= "
+            f"physics_dt_ns ({self.physics_dt_ns})",
+        )
+        require(
+            self.landmark_density_scale >= 0,
+            f"landmark_density_scale must be >= 0, got {self.landmark_density_scale}",
+        )
 
 
 # ---------------------------------------------------------------------------
@@ -370,17 +398,25 @@ class FeatureConfig:
 
     def __post_init__(self) -> None:
         require(self.max_corners >= 1, f"max_corners must be >= 1, got {self.max_corners}")
-        require(0 < self.quality_level < 1,
-                f"quality_level must be in (0, 1), got {self.quality_level}")
-        require(self.min_distance_px >= 0,
-                f"min_distance_px must be >= 0, got {self.min_distance_px}")
-        require(self.block_size_px >= 3 and self.block_size_px % 2 == 1,
-                f"block_size_px must be odd and >= 3, got {self.block_size_px}")
+        require(
+            0 < self.quality_level < 1, f"quality_level must be in (0, 1), got {self.quality_level}"
+        )
+        require(
+            self.min_distance_px >= 0, f"min_distance_px must be >= 0, got {self.min_distance_px}"
+        )
+        require(
+            self.block_size_px >= 3 and self.block_size_px % 2 == 1,
+            f"block_size_px must be odd and >= 3, got {self.block_size_px}",
+        )
         require(0 < self.harris_k < 0.25, f"harris_k must be in (0, 0.25), got {self.harris_k}")
-        require(self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
-                f"patch_size_px must be odd and >= 3, got {self.patch_size_px}")
-        require(self.subpixel_half_window_px >= 0,
-                f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}")
+        require(
+            self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
+            f"patch_size_px must be odd and >= 3, got {self.patch_size_px}",
+        )
+        require(
+            self.subpixel_half_window_px >= 0,
+            f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}",
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -400,11 +436,194 @@ class MatchConfig:
     """Lowe's ratio test on patch distances sqrt(2 - 2 ZNCC), in (0, 1]; None = off."""
 
     def __post_init__(self) -> None:
-        require(self.search_radius_px is None or self.search_radius_px > 0,
-                f"search_radius_px must be > 0 or None, got {self.search_radius_px}")
+        require(
+            self.search_radius_px is None or self.search_radius_px > 0,
+            f"search_radius_px must be > 0 or None, got {self.search_radius_px}",
+        )
         require(-1 <= self.min_zncc <= 1, f"min_zncc must be in [-1, 1], got {self.min_zncc}")
-        require(self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
-                f"max_distance_ratio must be in (0, 1] or None, got {self.max_distance_ratio}")
+        require(
+            self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
+            f"max_distance_ratio must be in (0, 1] or None, got {self.max_distance_ratio}",
+        )
+
+
+# ---------------------------------------------------------------------------
+# Teaching: key image selection (robot) and the scripted teach driver (sim).
+# ---------------------------------------------------------------------------
+
+
+def _tracking_match_config() -> MatchConfig:
+    return MatchConfig(search_radius_px=20.0, min_zncc=0.7)
+
+
+@dataclass(frozen=True, slots=True)
+class TeachConfig:
+    """Key image selection (Courbon et al. 2008, sec. II-C) and joining new paths to a memory.
+
+    The default M was chosen in the ``lab`` world at the teach driver's default speed:
+    it gives about two key images per metre on straight corridors (the measured
+    spacing is printed by ``vmnav teach``).
+    """
+
+    min_tracked_points: int = 50
+    """M: a key image shares at least this many points tracked from the previous one."""
+    max_missed_frames: int = 2
+    """A tracked point survives this many consecutive frames without a match (detector blinks)."""
+    tracking: MatchConfig = field(default_factory=_tracking_match_config)
+    """Frame-to-frame matching of the tracked points (small window, mutual best)."""
+    junction_min_matches: int = 30
+    """A new path's end joins the memory at a key image with at least this many matches."""
+
+    def __post_init__(self) -> None:
+        require(
+            self.min_tracked_points >= 1,
+            f"min_tracked_points must be >= 1, got {self.min_tracked_points}",
+        )
+        require(
+            self.max_missed_frames >= 0,
+            f"max_missed_frames must be >= 0, got {self.max_missed_frames}",
+        )
+        require(
+            self.junction_min_matches >= 1,
+            f"junction_min_matches must be >= 1, got {self.junction_min_matches}",
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class TeachDriverConfig:
+    """The simulator's scripted human-like teach driver (``sim.teach_driver``).
+
+    Pure pursuit of the route shifted sideways by a smooth random wander, at a
+    cruise speed that drifts slowly: a person steering by eye, never exactly on
+    the line, never exactly at constant speed.
+    """
+
+    speed_m_s: float = 0.3
+    """Mean cruise speed, m/s."""
+    speed_variation: float = 0.1
+    """Peak relative deviation of the cruise speed (smooth in distance), fraction in [0, 1)."""
+    wander_amplitude_m: float = 0.04
+    """Peak lateral offset of the pursued line from the route, m."""
+    wander_wavelength_m: tuple[float, float] = (2.0, 6.0)
+    """Range of the wavelengths of the wander and the speed drift, along the route, m."""
+    lookahead_m: float = 0.6
+    """Pure-pursuit look-ahead distance, m."""
+    max_omega_rad_s: float = 0.6
+    """Turn-rate limit, rad/s (a person turns slowly while teaching)."""
+    goal_tolerance_m: float = 0.1
+    """The drive ends within this distance of the route's last waypoint, m."""
+
+    def __post_init__(self) -> None:
+        for name in ("speed_m_s", "lookahead_m", "max_omega_rad_s", "goal_tolerance_m"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(
+            0 <= self.speed_variation < 1,
+            f"speed_variation must be in [0, 1), got {self.speed_variation}",
+        )
+        require(
+            self.wander_amplitude_m >= 0,
+            f"wander_amplitude_m must be >= 0, got {self.wander_amplitude_m}",
+        )
+        low, high = self.wander_wavelength_m
+        require(
+            0 < low <= high,
+            f"wander_wavelength_m must be (low, high) with 0 < low <= high, got {(low, high)}",
+        )
+
+
+#: Models of :class:`RelativePoseConfig`: "planar" (upright planar 2-point), "general"
+#: (5-point), "auto" (planar, and 5-point as well when the planar fit looks poor).
+RELATIVE_POSE_MODELS = ("planar", "general", "auto")
+
+
+@dataclass(frozen=True, slots=True)
+class RelativePoseConfig:
+    """Robust relative pose from unit bearings (reference visual-navigation.md, sec. 4.4).
+
+    RANSAC over minimal solvers (PoseLib's upright planar 2-point, or 5-point),
+    scored by the angular Sampson error on the sphere, then refined on the inliers.
+    Thresholds are angles: 1 px is about 5.7 mrad on the default 185 degree lens.
+    """
+
+    model: str = "auto"
+    """One of ``RELATIVE_POSE_MODELS``; the planar model needs level bearings (y vertical)."""
+    inlier_threshold_rad: float = 0.012
+    """A correspondence is an inlier when its angular Sampson error is below this, rad."""
+    huber_scale_rad: float = 0.006
+    """Residuals beyond this are down-weighted (Huber loss) in the refinement, rad."""
+    confidence: float = 0.999
+    """RANSAC stops when an all-inlier sample was drawn with this probability."""
+    max_iterations: int = 256
+    """Most minimal samples drawn for the planar model."""
+    max_iterations_general: int = 1024
+    """Most minimal samples drawn for the general (5-point) model."""
+    min_inliers: int = 12
+    """A fit with fewer inliers is not ok."""
+    min_planar_inlier_ratio: float = 0.5
+    """Model "auto": below this planar inlier ratio the 5-point model is tried too."""
+
+    def __post_init__(self) -> None:
+        require(
+            self.model in RELATIVE_POSE_MODELS,
+            f"model must be one of {', '.join(RELATIVE_POSE_MODELS)}, got {self.model!r}",
+        )
+        require(
+            0 < self.inlier_threshold_rad < 0.5,
+            f"inlier_threshold_rad must be in (0, 0.5), got {self.inlier_threshold_rad}",
+        )
+        require(
+            0 < self.huber_scale_rad <= self.inlier_threshold_rad,
+            f"huber_scale_rad must be in (0, inlier_threshold_rad], got {self.huber_scale_rad}",
+        )
+        require(0 < self.confidence < 1, f"confidence must be in (0, 1), got {self.confidence}")
+        require(self.max_iterations >= 1, f"max_iterations must be >= 1, got {self.max_iterations}")
+        require(
+            self.max_iterations_general >= 1,
+            f"max_iterations_general must be >= 1, got {self.max_iterations_general}",
+        )
+        require(self.min_inliers >= 5, f"min_inliers must be >= 5, got {self.min_inliers}")
+        require(
+            0 <= self.min_planar_inlier_ratio <= 1,
+            f"min_planar_inlier_ratio must be in [0, 1], got {self.min_planar_inlier_ratio}",
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class PathStateConfig:
+    """Lateral and angular error from the current view and two key images (DESIGN.md sec. 5.5)."""
+
+    relative_pose: RelativePoseConfig = field(default_factory=RelativePoseConfig)
+    min_parallax_deg: float = 2.0
+    """Triangulated key-pair points need at least this angle between their two rays, degrees."""
+    max_point_distance_m: float = 30.0
+    """Triangulated points farther than this from the next key image are dropped, m."""
+    point_threshold_rad: float = 0.02
+    """A 3D point is an inlier of the current pose when it reprojects within this angle, rad."""
+    min_points: int = 6
+    """The three-view scale needs at least this many inlier 3D points seen in the current view."""
+    max_odometry_disagreement_deg: float = 15.0
+    """A key pair is refused when the visual baseline direction and the teach odometry's
+    differ by more than this, degrees."""
+
+    def __post_init__(self) -> None:
+        require(
+            0 <= self.min_parallax_deg < 90,
+            f"min_parallax_deg must be in [0, 90), got {self.min_parallax_deg}",
+        )
+        require(
+            self.max_point_distance_m > 0,
+            f"max_point_distance_m must be > 0, got {self.max_point_distance_m}",
+        )
+        require(
+            0 < self.point_threshold_rad < 0.5,
+            f"point_threshold_rad must be in (0, 0.5), got {self.point_threshold_rad}",
+        )
+        require(self.min_points >= 2, f"min_points must be >= 2, got {self.min_points}")
+        require(
+            0 < self.max_odometry_disagreement_deg <= 180,
+            f"max_odometry_disagreement_deg must be in (0, 180], got "
+            f"{self.max_odometry_disagreement_deg}",
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -414,6 +633,9 @@ class VmnavConfig:
     sim: SimConfig = field(default_factory=SimConfig)
     features: FeatureConfig = field(default_factory=FeatureConfig)
     matching: MatchConfig = field(default_factory=MatchConfig)
+    path_state: PathStateConfig = field(default_factory=PathStateConfig)
+    teach: TeachConfig = field(default_factory=TeachConfig)
+    teach_driver: TeachDriverConfig = field(default_factory=TeachDriverConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

@@ -7,7 +7,9 @@ and keeps its traceback::
     VmnavError
     ├── InputError                 bad input from a file or the user; names where
     │   ├── ConfigError            a config or world file, or a config value
-    │   └── CalibrationError       a camera calibration file or calibration images
+    │   ├── CalibrationError       a camera calibration file or calibration images
+    │   └── MemoryFormatError      a visual memory (on disk or being assembled) breaks its format
+    ├── UnknownKeyframeError       a key image id that is not in the visual memory (also a LookupError)
     ├── GeometryError              a geometric computation cannot proceed
     │   ├── ShapeError             an array has the wrong shape (also a ValueError)
     │   └── DegenerateGeometryError
@@ -49,6 +51,27 @@ class ConfigError(InputError):
 
 class CalibrationError(InputError):
     """A calibration file is malformed, or calibration images cannot be used."""
+
+
+class MemoryFormatError(InputError):
+    """A visual memory breaks its format: a file on disk, or a record being added.
+
+    ``where`` names the file (``mem/features/12.npz``) or the record (``key image 12``).
+    """
+
+
+class UnknownKeyframeError(VmnavError, LookupError):
+    """A key image id that the visual memory does not hold.
+
+    Args:
+        keyframe_id: the id asked for.
+        known: how many key images the memory holds, for the message.
+    """
+
+    def __init__(self, keyframe_id: int, known: int) -> None:
+        self.keyframe_id = keyframe_id
+        self.known = known
+        super().__init__(f"no key image with id {keyframe_id} in the memory ({known} key images)")
 
 
 class GeometryError(VmnavError):
@@ -106,5 +129,6 @@ def check_shape(name: str, array_shape: tuple[int, ...], expected: tuple[int | N
         e is None or e == a for a, e in zip(array_shape, expected, strict=True)
     )
     if not ok:
-        want = "(" + ", ".join("N" if e is None else str(e) for e in expected) + ")"
+        dims = ["N" if e is None else str(e) for e in expected]
+        want = "(" + ", ".join(dims) + ("," if len(dims) == 1 else "") + ")"
         raise ShapeError(f"{name}: expected shape {want}, got {tuple(array_shape)}")

@@ -1,13 +1,23 @@
 """The 3D landmark field: textured square patches on walls, furniture and ceilings.
 
-Placement. Each surface (a face of a wall, a vertical side of a piece of
-furniture, a ceiling rectangle) is covered with a jittered grid whose cell area
-is 1 / density: one candidate per cell, uniform in the cell's central 80 %, so
-expected counts follow the density while no two patches clump (neighbours are
-at least 0.2 cells apart). A candidate is kept only if
+Size. Each surface (a face of a wall, a vertical side of a piece of furniture,
+a ceiling rectangle) carries square patches of one size: its element's
+``patch_size_m``, else the world's ``landmarks.patch_size_m``. Patches are
+axis-aligned on their surface (edges horizontal and vertical on walls and
+furniture, along x and y on ceilings).
 
-* it is off the floor (centre >= 0.3 m up on walls), away from wall ends, corners
-  and edges (the whole patch fits on its surface), and not above a ceiling;
+Placement. Each surface is covered with a jittered grid of square cells of side
+``max(1 / sqrt(density), pitch)``, where ``pitch = size + 3 cm``: one candidate
+per cell, uniform in a central square of side ``min(0.8 cell, cell - pitch)``.
+Expected counts follow the density while no two patches clump or overlap:
+centres in different cells are at least ``pitch`` apart along one of the
+surface's axes, so neighbouring patches keep a plain gap of >= 3 cm. A density
+above ``1 / pitch^2`` saturates at one patch per cell of side ``pitch``. A
+candidate is kept only if
+
+* it is off the floor (centre >= 0.3 m up and bottom edge >= 3 cm up on walls),
+  away from wall ends, corners and edges (the whole patch fits on its surface),
+  and not above a ceiling;
 * the points 5 cm in front of its centre and of its two side edges are in free
   space (not in a wall, not in furniture, inside the world's extent), which
   drops patches hidden behind a desk or in a wall junction;
@@ -58,7 +68,8 @@ _REACH_PROBE_M = 0.25  # reachability probe in front of the patch (beyond the ra
 _WALL_MIN_Z_M = 0.3  # lowest patch centre on walls
 _WALL_END_MARGIN_M = 0.25  # least distance of a patch centre from a wall's end
 _EDGE_MARGIN_M = 0.03  # least gap between a patch's edge and its surface's edge
-_JITTER = 0.8  # a candidate lies uniformly in the central 80 % of its grid cell
+_PATCH_GAP_M = 0.03  # least gap between neighbouring patches on one surface
+_JITTER = 0.8  # a candidate lies uniformly in at most the central 80 % of its grid cell
 
 # Texture design (grey levels around 128, pixels of the 16 x 16 patch).
 _LEVEL_MAX = 90.0  # quadrant levels are 128 + U(-90, 90)
@@ -88,6 +99,7 @@ class LandmarkField:
         positions_w: (N, 3) float64, patch centres, world frame (z up, floor at 0), m.
         normals_w: (N, 3) float64, unit normals of the patches, pointing into free space.
         surface: (N,) int8, :class:`Surface` values.
+        sizes_m: (N,) float64, side of each square patch, m (the texture spans it).
         textures: (N, 16, 16) uint8, grey levels (see the module docstring).
     """
 
@@ -95,6 +107,7 @@ class LandmarkField:
     positions_w: npt.NDArray[np.float64]
     normals_w: npt.NDArray[np.float64]
     surface: npt.NDArray[np.int8]
+    sizes_m: npt.NDArray[np.float64]
     textures: npt.NDArray[np.uint8]
 
     def __post_init__(self) -> None:
@@ -103,8 +116,12 @@ class LandmarkField:
         check_shape("positions_w", self.positions_w.shape, (n, 3))
         check_shape("normals_w", self.normals_w.shape, (n, 3))
         check_shape("surface", self.surface.shape, (n,))
+        check_shape("sizes_m", self.sizes_m.shape, (n,))
         check_shape("textures", self.textures.shape, (n, PATCH_PX, PATCH_PX))
-        for array in (self.ids, self.positions_w, self.normals_w, self.surface, self.textures):
+        arrays = (
+            self.ids, self.positions_w, self.normals_w, self.surface, self.sizes_m, self.textures
+        )
+        for array in arrays:
             array.setflags(write=False)
 
     def __len__(self) -> int:
@@ -115,50 +132,45 @@ def generate_landmarks(
     world: World,
     rng: np.random.Generator,
     density_scale: float = 1.0,
-    patch_size_m: float = 0.15,
     free_space: FreeSpaceMap | None = None,
 ) -> LandmarkField:
     """Place and texture the landmark patches of ``world``.
 
     Args:
-        world: the world (its ``landmarks`` densities give patches per m^2).
+        world: the world (its ``landmarks`` give patches per m^2 and the default
+            patch size; walls, boxes and ceilings may set their own size).
         rng: the only source of randomness; the same state gives the same field.
         density_scale: multiplies all densities (>= 0).
-        patch_size_m: side of a patch, m (keeps whole patches on their surfaces).
         free_space: the world's free-space map, if already built (else built here).
 
     Returns:
         The field, in the order walls, furniture, ceilings.
 
     Raises:
-        ValueError: ``density_scale`` < 0 or ``patch_size_m`` <= 0.
+        ValueError: ``density_scale`` < 0.
     """
     if not density_scale >= 0:
         raise ValueError(f"density_scale must be >= 0, got {density_scale}")
-    if not patch_size_m > 0:
-        raise ValueError(f"patch_size_m must be > 0, got {patch_size_m}")
-    half = patch_size_m / 2
     density = world.landmarks
     parts = [
-        _wall_candidates(world, rng, density.wall_per_m2 * density_scale, half),
-        _furniture_candidates(world, rng, density.furniture_per_m2 * density_scale, half),
-        _ceiling_candidates(world, rng, density.ceiling_per_m2 * density_scale, half),
+        _wall_candidates(world, rng, density.wall_per_m2 * density_scale),
+        _furniture_candidates(world, rng, density.furniture_per_m2 * density_scale),
+        _ceiling_candidates(world, rng, density.ceiling_per_m2 * density_scale),
     ]
-    positions = np.concatenate([p[0] for p in parts])
-    normals = np.concatenate([p[1] for p in parts])
+    positions, normals, sizes = (np.concatenate([p[k] for p in parts]) for k in range(3))
     surface = np.concatenate(
         [np.full(len(p[0]), kind, np.int8) for p, kind in zip(parts, Surface, strict=True)]
     )
     keep = _in_free_space(
-        world, free_space or FreeSpaceMap.from_world(world), positions, normals, half
+        world, free_space or FreeSpaceMap.from_world(world), positions, normals, sizes / 2
     )
-    positions, normals, surface = positions[keep], normals[keep], surface[keep]
-    n = positions.shape[0]
+    n = int(np.count_nonzero(keep))
     return LandmarkField(
         ids=np.arange(n, dtype=np.int64),
-        positions_w=positions,
-        normals_w=normals,
-        surface=surface,
+        positions_w=positions[keep],
+        normals_w=normals[keep],
+        surface=surface[keep],
+        sizes_m=sizes[keep],
         textures=make_textures(rng, n),
     )
 
@@ -168,23 +180,29 @@ def generate_landmarks(
 # ---------------------------------------------------------------------------
 
 _Candidates = tuple[
-    npt.NDArray[np.float64], npt.NDArray[np.float64]
-]  # positions (K, 3), normals (K, 3)
+    npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]
+]  # positions (K, 3), normals (K, 3), patch sides (K,)
 
 
 def _jittered_grid(
-    rng: np.random.Generator, width: float, height: float, density: float
+    rng: np.random.Generator, width: float, height: float, density: float, pitch: float
 ) -> npt.NDArray[np.float64]:
-    """Points (K, 2) in [0, width] x [0, height], one per cell of area 1 / density, jittered."""
+    """Points (K, 2) in [0, width] x [0, height], one per jittered grid cell.
+
+    The cells are squares of side ``max(1 / sqrt(density), pitch)``; each point lies
+    uniformly in a central square of its cell small enough that points in
+    different cells are >= ``pitch`` apart along u or v (Chebyshev distance).
+    """
     if density <= 0 or width <= 0 or height <= 0:
         return np.empty((0, 2))
-    cell = 1.0 / math.sqrt(density)
+    cell = max(1.0 / math.sqrt(density), pitch)
+    span = min(_JITTER, 1.0 - pitch / cell)  # side of the central square, in cells
     origin = -rng.uniform(0.0, cell, 2)
     nu = math.ceil((width - origin[0]) / cell)
     nv = math.ceil((height - origin[1]) / cell)
     iu, iv = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
     corners = origin + cell * np.stack([iu.ravel(), iv.ravel()], axis=1)
-    points = corners + cell * ((1 - _JITTER) / 2 + _JITTER * rng.uniform(0.0, 1.0, corners.shape))
+    points = corners + cell * ((1 - span) / 2 + span * rng.uniform(0.0, 1.0, corners.shape))
     inside = (
         (points[:, 0] >= 0)
         & (points[:, 0] <= width)
@@ -204,24 +222,36 @@ def _vertical_face(
     normal_xy: npt.NDArray[np.float64],
     offset: float,
     density: float,
+    size: float,
 ) -> _Candidates:
     """Candidates on a vertical rectangle: along ``direction`` from ``start``, z in ``z_range``."""
-    uv = _jittered_grid(rng, length - 2 * u_margin, z_range[1] - z_range[0], density)
+    uv = _jittered_grid(
+        rng, length - 2 * u_margin, z_range[1] - z_range[0], density, size + _PATCH_GAP_M
+    )
     xy = start + np.outer(uv[:, 0] + u_margin, direction) + offset * normal_xy
     positions = np.column_stack([xy, uv[:, 1] + z_range[0]])
     normals = np.tile(np.append(normal_xy, 0.0), (len(uv), 1))
-    return positions, normals
+    return positions, normals, np.full(len(uv), size)
 
 
-def _wall_candidates(
-    world: World, rng: np.random.Generator, density: float, half: float
-) -> _Candidates:
+def _patch_size(own: float | None, world: World) -> float:
+    """An element's own patch side, else the world's default, m."""
+    return world.landmarks.patch_size_m if own is None else own
+
+
+def _wall_candidates(world: World, rng: np.random.Generator, density: float) -> _Candidates:
     out: list[_Candidates] = []
-    u_margin = max(_WALL_END_MARGIN_M, half + _EDGE_MARGIN_M)
     for wall in world.walls:
+        size = _patch_size(wall.patch_size_m, world)
+        half = size / 2
+        # A wall's end may sit on another wall's centre line: keep clear of that wall too.
+        u_margin = max(_WALL_END_MARGIN_M, WALL_HALF_THICKNESS_M + half + _EDGE_MARGIN_M)
         a, b = np.asarray(wall.start, dtype=float), np.asarray(wall.end, dtype=float)
         direction = (b - a) / wall.length_m
-        z_range = (_WALL_MIN_Z_M, wall.height_m - half - _EDGE_MARGIN_M)
+        z_range = (
+            max(_WALL_MIN_Z_M, half + _EDGE_MARGIN_M),
+            wall.height_m - half - _EDGE_MARGIN_M,
+        )
         left = np.array([-direction[1], direction[0]])
         for normal in (left, -left):
             out.append(
@@ -235,17 +265,17 @@ def _wall_candidates(
                     normal,
                     WALL_HALF_THICKNESS_M + PROUD_M,
                     density,
+                    size,
                 )
             )
     return _stack(out)
 
 
-def _furniture_candidates(
-    world: World, rng: np.random.Generator, density: float, half: float
-) -> _Candidates:
+def _furniture_candidates(world: World, rng: np.random.Generator, density: float) -> _Candidates:
     out: list[_Candidates] = []
-    margin = half + _EDGE_MARGIN_M
     for box, corners in zip(world.furniture, world.furniture_corners(), strict=True):
+        size = _patch_size(box.patch_size_m, world)
+        margin = size / 2 + _EDGE_MARGIN_M
         for k in range(4):
             a, b = corners[k], corners[(k + 1) % 4]
             length = float(np.linalg.norm(b - a))
@@ -262,29 +292,31 @@ def _furniture_candidates(
                     outward,
                     PROUD_M,
                     density,
+                    size,
                 )
             )
     return _stack(out)
 
 
-def _ceiling_candidates(
-    world: World, rng: np.random.Generator, density: float, half: float
-) -> _Candidates:
+def _ceiling_candidates(world: World, rng: np.random.Generator, density: float) -> _Candidates:
     out: list[_Candidates] = []
-    margin = half + _EDGE_MARGIN_M
     for ceiling in world.ceilings:
+        size = _patch_size(ceiling.patch_size_m, world)
+        margin = size / 2 + _EDGE_MARGIN_M
         lo = np.asarray(ceiling.min_corner, dtype=float) + margin
-        size = np.asarray(ceiling.max_corner, dtype=float) - margin - lo
-        xy = lo + _jittered_grid(rng, size[0], size[1], density)
+        extent = np.asarray(ceiling.max_corner, dtype=float) - margin - lo
+        xy = lo + _jittered_grid(rng, extent[0], extent[1], density, size + _PATCH_GAP_M)
         positions = np.column_stack([xy, np.full(len(xy), ceiling.height_m - PROUD_M)])
-        out.append((positions, np.tile([0.0, 0.0, -1.0], (len(xy), 1))))
+        normals = np.tile([0.0, 0.0, -1.0], (len(xy), 1))
+        out.append((positions, normals, np.full(len(xy), size)))
     return _stack(out)
 
 
 def _stack(parts: list[_Candidates]) -> _Candidates:
     if not parts:
-        return np.empty((0, 3)), np.empty((0, 3))
-    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+        return np.empty((0, 3)), np.empty((0, 3)), np.empty(0)
+    positions, normals, sizes = (np.concatenate([p[k] for p in parts]) for k in range(3))
+    return positions, normals, sizes
 
 
 def _in_free_space(
@@ -292,9 +324,12 @@ def _in_free_space(
     free_space: FreeSpaceMap,
     positions: npt.NDArray[np.float64],
     normals: npt.NDArray[np.float64],
-    half: float,
+    half: npt.NDArray[np.float64],
 ) -> npt.NDArray[np.bool_]:
-    """Which candidates face free, reachable space (see the module docstring)."""
+    """Which candidates face free, reachable space (see the module docstring).
+
+    ``half`` is (K,) half the side of each candidate's patch, m.
+    """
     if len(positions) == 0:
         return np.zeros(0, bool)
     # Probes 5 cm in front of the centre and of the two side edges (for a ceiling
@@ -305,8 +340,8 @@ def _in_free_space(
     side /= np.linalg.norm(side, axis=1, keepdims=True)
     front = positions + _PROBE_M * normals
     ok = np.ones(len(positions), bool)
-    for offset in (0.0, half, -half):
-        ok &= _free_at(world, front + offset * side)
+    for sign in (0.0, 1.0, -1.0):
+        ok &= _free_at(world, front + (sign * half)[:, None] * side)
     reach = positions[:, :2] + _REACH_PROBE_M * normals[:, :2]
     ok &= free_space.is_reachable(reach)
     return ok

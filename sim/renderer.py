@@ -18,10 +18,12 @@ Per frame (all vectorised except the per-patch paint):
    (from a bank of pre-drawn noise images) are applied; outside the lens's image
    circle stays black.
 
-The background is a smooth gradient (darker floor, brighter ceiling) computed
-once per camera mount; it has no corners, so every Harris corner of a frame is a
-landmark centre (or a person's outline), and ground truth is exact: the true
-pose, the ids of the visible landmarks and their projected centres.
+Behind the patches, the world's walls, furniture, floor, ceilings and sky are
+shaded from the true pose (:mod:`sim.surfaces`: 2D ray casting on a coarse grid,
+soft edges), so frames read like a corridor or courtyard seen through the lens;
+their edges are blurred so that Harris corners stay on the landmark centres (or
+people's outlines). Ground truth is exact: the true pose, the ids of the visible
+landmarks and their projected centres.
 """
 
 from __future__ import annotations
@@ -32,13 +34,14 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 import numpy.typing as npt
-import pymunk
 
 from shared.camera_model import CameraModel
+from shared.camera_mount import camera_pose_world, rotation_base_cam
 from shared.config import CameraMountConfig, RenderConfig
 from sim.landmarks import LandmarkField
 from sim.simulation import OCCLUDER_FILTER, Simulation
-from sim.world import Lighting
+from sim.surfaces import SurfaceShader
+from sim.world import Lighting, World
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -51,8 +54,9 @@ _QUERY_END_MARGIN_M = 0.12
 _NOISE_BANK_SIZE = 16
 _RENDER_STREAM = 0x52454E44
 """Mixed with the simulation seed for the renderer's own random stream."""
-_PERSON_GREY = (35, 80)
-"""Range of the grey level of people's silhouettes."""
+_PERSON_GREY = (0.15, 0.42)
+"""Range of the grey level of people's silhouettes, as fractions of the world's brightness
+(below the shaded floor's 0.6, so people stand out against it)."""
 _PERSON_SAMPLES = 8
 """Points per silhouette side (fisheye-curved outline)."""
 
@@ -82,53 +86,15 @@ class RenderedFrame:
     illumination_gain: float
 
 
-def rotation_base_cam(mount: CameraMountConfig) -> FloatArray:
-    """Rotation taking camera-frame vectors into the robot (base) frame.
-
-    Camera frame: z along the optical axis, x right, y down. Base frame: x
-    forward, y left, z up. With zero yaw, pitch and roll the camera looks
-    forward; yaw turns it left, pitch up, roll about its axis.
-
-    Returns:
-        (3, 3) float64 ``R_base_cam``.
-    """
-    R_level = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-    yaw, pitch, roll = (math.radians(a) for a in (mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
-    cz, sz = math.cos(yaw), math.sin(yaw)
-    cy, sy = math.cos(-pitch), math.sin(-pitch)
-    cx, sx = math.cos(roll), math.sin(roll)
-    Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    return Rz @ Ry @ Rx @ R_level
-
-
-def camera_pose_world(pose_w: tuple[float, float, float], mount: CameraMountConfig) -> FloatArray:
-    """The camera's pose in the world for a robot pose.
-
-    Args:
-        pose_w: robot pose (x_m, y_m, yaw_rad) on the floor plan.
-        mount: where the camera sits on the robot.
-
-    Returns:
-        (4, 4) float64 ``T_world_cam`` (camera frame -> world frame, z up, floor at 0).
-    """
-    x, y, yaw = pose_w
-    c, s = math.cos(yaw), math.sin(yaw)
-    R_world_base = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    T = np.eye(4)
-    T[:3, :3] = R_world_base @ rotation_base_cam(mount)
-    T[:3, 3] = np.array([x, y, 0.0]) + R_world_base @ np.array([mount.x_m, mount.y_m, mount.height_m])
-    return T
-
-
 def _texture_pyramid(textures: npt.NDArray[np.uint8]) -> tuple[npt.NDArray[np.uint8], ...]:
     """Each landmark's texture at 16, 8 and 4 px, area-averaged (no aliasing when shrunk)."""
     n, s, _ = textures.shape
     levels = [textures]
     while levels[-1].shape[1] > 4:
         half = levels[-1].shape[1] // 2
-        levels.append(levels[-1].reshape(n, half, 2, half, 2).mean(axis=(2, 4)).round().astype(np.uint8))
+        levels.append(
+            levels[-1].reshape(n, half, 2, half, 2).mean(axis=(2, 4)).round().astype(np.uint8)
+        )
     assert s == 16, "landmark textures are 16x16"
     return tuple(levels)
 
@@ -139,8 +105,8 @@ class FisheyeRenderer:
     Args:
         camera: the simulated lens.
         mount: the camera's pose on the robot.
-        config: noise, illumination and patch size.
-        lighting: the world's brightness and contrast.
+        config: noise and illumination.
+        world: the surfaces shaded behind the landmarks, and the lighting.
         landmarks: the landmark field to draw.
         rng: seeds the noise bank, the per-frame noise choice and the
             illumination phase.
@@ -151,7 +117,7 @@ class FisheyeRenderer:
         camera: CameraModel,
         mount: CameraMountConfig,
         config: RenderConfig,
-        lighting: Lighting,
+        world: World,
         landmarks: LandmarkField,
         rng: np.random.Generator,
     ) -> None:
@@ -160,9 +126,11 @@ class FisheyeRenderer:
         self.config = config
         self.landmarks = landmarks
         self._rng = rng
-        self._levels = _texture_pyramid(self._contrast_adjusted(landmarks.textures, lighting))
+        self._levels = _texture_pyramid(self._contrast_adjusted(landmarks.textures, world.lighting))
         self._tangents_h, self._tangents_v = _patch_axes(landmarks.normals_w)
-        self._background, self._circle = self._make_background(lighting)
+        self._surfaces = SurfaceShader(world, camera, rotation_base_cam(mount), mount.height_m)
+        self._brightness = world.lighting.brightness
+        self._circle = self._make_circle()
         self._noise_pos, self._noise_neg = self._make_noise_bank()
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
         self._person_grey: dict[int, int] = {}
@@ -171,7 +139,7 @@ class FisheyeRenderer:
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
         """A renderer for ``sim``'s world, landmarks and config, seeded from its seed."""
         rng = np.random.default_rng([sim.config.seed, _RENDER_STREAM])
-        return cls(camera, sim.config.camera, sim.config.render, sim.world.lighting, sim.landmarks, rng)
+        return cls(camera, sim.config.camera, sim.config.render, sim.world, sim.landmarks, rng)
 
     def render(self, sim: Simulation) -> RenderedFrame:
         """Render the simulation's current state from the robot's camera.
@@ -183,7 +151,7 @@ class FisheyeRenderer:
         T_world_cam = camera_pose_world(pose_w, self.mount)
         R_cam_world = T_world_cam[:3, :3].T
         centre_w = T_world_cam[:3, 3]
-        image = self._background.copy()
+        image = self._surfaces.shade(centre_w[:2], pose_w[2])
 
         ids, pix, dist, affines = self._visible_patches(sim, R_cam_world, centre_w)
         self._draw_people(sim, image, R_cam_world, centre_w)
@@ -209,7 +177,10 @@ class FisheyeRenderer:
 
     def illumination_gain(self, t_ns: int) -> float:
         """The global illumination gain at time ``t_ns`` (1 ± amplitude, slow sinusoid)."""
-        phase = 2.0 * math.pi * (t_ns / 1e9) / self.config.illumination_period_s + self._illumination_phase
+        phase = (
+            2.0 * math.pi * (t_ns / 1e9) / self.config.illumination_period_s
+            + self._illumination_phase
+        )
         return 1.0 + self.config.illumination_amplitude * math.sin(phase)
 
     # -- visibility -----------------------------------------------------------------
@@ -217,7 +188,7 @@ class FisheyeRenderer:
     def _visible_patches(
         self, sim: Simulation, R_cam_world: FloatArray, centre_w: FloatArray
     ) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
-        """Indices, projected centres (K, 2), distances (K,) and affine maps (K, 2, 3) of visible patches."""
+        """Visible patches: indices, centres (K, 2) px, distances (K,) m, affine maps (K, 2, 3)."""
         lm = self.landmarks
         rel_w = lm.positions_w - centre_w
         dist = np.sqrt(np.einsum("ij,ij->i", rel_w, rel_w))
@@ -226,7 +197,7 @@ class FisheyeRenderer:
         in_cone = rel_c[:, 2] > self.camera.min_z_s * dist
         idx = np.flatnonzero(facing & in_cone & (dist > _NEAR_M))
 
-        half = 0.5 * self.config.landmark_size_m
+        half = 0.5 * lm.sizes_m[idx, None]  # (K, 1) half side of each patch, m
         p0, ok0 = self.camera.project(rel_c[idx])
         ph, okh = self.camera.project(rel_c[idx] + half * (self._tangents_h[idx] @ R_cam_world.T))
         pv, okv = self.camera.project(rel_c[idx] - half * (self._tangents_v[idx] @ R_cam_world.T))
@@ -237,7 +208,13 @@ class FisheyeRenderer:
         idx, p0, a, b, size_px = idx[keep], p0[keep], a[keep], b[keep], size_px[keep]
 
         unoccluded = self._unoccluded(sim, idx, centre_w, dist[idx])
-        idx, p0, a, b, size_px = idx[unoccluded], p0[unoccluded], a[unoccluded], b[unoccluded], size_px[unoccluded]
+        idx, p0, a, b, size_px = (
+            idx[unoccluded],
+            p0[unoccluded],
+            a[unoccluded],
+            b[unoccluded],
+            size_px[unoccluded],
+        )
         affines = np.stack([a, b, p0], axis=2)  # dst = p0 + a * tx + b * ty, (tx, ty) in [-1, 1]
         return idx, p0, dist[idx], affines
 
@@ -282,7 +259,11 @@ class FisheyeRenderer:
     # -- painting -------------------------------------------------------------------
 
     def _paint_all(
-        self, image: npt.NDArray[np.uint8], ids: npt.NDArray[np.int64], affines: FloatArray, dist: FloatArray
+        self,
+        image: npt.NDArray[np.uint8],
+        ids: npt.NDArray[np.int64],
+        affines: FloatArray,
+        dist: FloatArray,
     ) -> None:
         """Warp each patch's texture into ``image``, far to near.
 
@@ -303,7 +284,7 @@ class FisheyeRenderer:
         ext = np.abs(a) + np.abs(b)  # (K, 2) half extents of the warped patch, px
         lo = np.maximum(np.floor(p0 - ext), 0).astype(np.int64)
         hi = np.minimum(np.ceil(p0 + ext).astype(np.int64) + 1, (w, h))
-        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + a (sx - c) / (n/2) + b (sy - c) / (n/2).
+        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + (a (sx - c) + b (sy - c)) / (n / 2).
         half = (n / 2.0)[:, None]
         c = ((n - 1.0) / 2.0)[:, None]
         M = np.empty((ids.shape[0], 2, 3))
@@ -315,12 +296,20 @@ class FisheyeRenderer:
             (x0, y0), (x1, y1) = lo[k], hi[k]
             if x1 > x0 and y1 > y0:
                 cv2.warpAffine(
-                    levels[level[k]][ids[k]], M[k], (int(x1 - x0), int(y1 - y0)), dst=image[y0:y1, x0:x1],
-                    flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_TRANSPARENT,
+                    levels[level[k]][ids[k]],
+                    M[k],
+                    (int(x1 - x0), int(y1 - y0)),
+                    dst=image[y0:y1, x0:x1],
+                    flags=cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_TRANSPARENT,
                 )
 
     def _draw_people(
-        self, sim: Simulation, image: npt.NDArray[np.uint8], R_cam_world: FloatArray, centre_w: FloatArray
+        self,
+        sim: Simulation,
+        image: npt.NDArray[np.uint8],
+        R_cam_world: FloatArray,
+        centre_w: FloatArray,
     ) -> None:
         """Draw each person not hidden by a wall as a filled, fisheye-curved silhouette."""
         positions, radius, height = sim.people_state()
@@ -342,39 +331,52 @@ class FisheyeRenderer:
             for sgn in (1.0, -1.0):
                 ang = base + sgn * half_angle
                 sides.append((cx + reach * math.cos(ang), cy + reach * math.sin(ang)))
-            left = np.column_stack([np.full(_PERSON_SAMPLES, sides[0][0]), np.full(_PERSON_SAMPLES, sides[0][1]), heights])
-            right = np.column_stack([np.full(_PERSON_SAMPLES, sides[1][0]), np.full(_PERSON_SAMPLES, sides[1][1]), heights])
+            left = np.column_stack(
+                [
+                    np.full(_PERSON_SAMPLES, sides[0][0]),
+                    np.full(_PERSON_SAMPLES, sides[0][1]),
+                    heights,
+                ]
+            )
+            right = np.column_stack(
+                [
+                    np.full(_PERSON_SAMPLES, sides[1][0]),
+                    np.full(_PERSON_SAMPLES, sides[1][1]),
+                    heights,
+                ]
+            )
             outline_w = np.vstack([left, right[::-1]])
             pix, ok = self.camera.project((outline_w - centre_w) @ R_cam_world.T)
             if not ok.any():
                 continue
-            grey = self._person_grey.setdefault(k, int(self._rng.integers(*_PERSON_GREY)))
-            cv2.fillPoly(image, [np.round(pix[ok] * 16).astype(np.int32)], grey, lineType=cv2.LINE_AA, shift=4)
+            grey = self._person_grey.setdefault(
+                k, round(self._brightness * float(self._rng.uniform(*_PERSON_GREY)))
+            )
+            cv2.fillPoly(
+                image,
+                [np.round(pix[ok] * 16).astype(np.int32)],
+                grey,
+                lineType=cv2.LINE_AA,
+                shift=4,
+            )
 
     # -- fixed images -------------------------------------------------------------------
 
     @staticmethod
-    def _contrast_adjusted(textures: npt.NDArray[np.uint8], lighting: Lighting) -> npt.NDArray[np.uint8]:
+    def _contrast_adjusted(
+        textures: npt.NDArray[np.uint8], lighting: Lighting
+    ) -> npt.NDArray[np.uint8]:
         """Textures scaled about the scene's mean grey level by the world's contrast."""
         t = textures.astype(np.float32)
         out = lighting.brightness + lighting.contrast * (t - 128.0)
         return np.clip(out, 0, 255).round().astype(np.uint8)
 
-    def _make_background(self, lighting: Lighting) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
-        """The constant background (smooth floor-to-ceiling gradient) and the image-circle mask (255 inside)."""
+    def _make_circle(self) -> npt.NDArray[np.uint8]:
+        """The lens's image-circle mask: (H, W) uint8, 255 where a pixel has a valid ray, else 0."""
         cam = self.camera
-        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height, dtype=np.float64))
-        bearings_c, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
-        up_base = rotation_base_cam(self.mount).T @ np.array([0.0, 0.0, 1.0])
-        with np.errstate(invalid="ignore"):
-            elevation = np.arcsin(np.clip(bearings_c @ up_base, -1.0, 1.0))
-        # Floor 30 % darker than the scene mean, ceiling 15 % brighter, a soft horizon (no corners).
-        blend = 0.5 * (1.0 + np.tanh(np.nan_to_num(elevation) / math.radians(12.0)))
-        grey = lighting.brightness * (0.7 + 0.45 * blend)
-        grey[~valid] = 0.0
-        background = np.clip(grey, 0, 255).round().astype(np.uint8).reshape(cam.height, cam.width)
-        circle = np.where(valid, 255, 0).astype(np.uint8).reshape(cam.height, cam.width)
-        return background, circle
+        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height))
+        _, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
+        return np.where(valid, 255, 0).astype(np.uint8).reshape(cam.height, cam.width)
 
     def _make_noise_bank(self) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
         """Pre-drawn Gaussian noise images, split into positive and negative uint8 parts."""

@@ -72,7 +72,6 @@ class Simulation:
             world,
             landmark_rng,
             config.landmark_density_scale,
-            config.render.landmark_size_m,
             self.free_space,
         )
         self.body = PioneerBody(self.space, config.body, config.odometry, world.start, odometry_rng)

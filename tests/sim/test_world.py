@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,8 @@ from sim.world import (
     CLEARANCE_M,
     WALL_HALF_THICKNESS_M,
     Box,
+    Ceiling,
+    LandmarkDensity,
     Pose2,
     Route,
     Wall,
@@ -98,6 +101,17 @@ class TestBuiltinWorlds:
         assert campus.lighting.brightness > lab.lighting.brightness
         assert campus.landmarks.wall_per_m2 < lab.landmarks.wall_per_m2
 
+    def test_campus_facades_have_big_patches_and_the_lab_the_default(self) -> None:
+        lab, campus = load_world("lab"), load_world("campus")
+        assert lab.landmarks.patch_size_m == 0.15
+        assert all(w.patch_size_m is None for w in lab.walls)
+        facades = [w for w in campus.walls if w.height_m >= 8.0]
+        assert len(facades) == 5
+        assert all(0.6 <= (w.patch_size_m or 0.0) <= 0.8 for w in facades)
+        corridor = [w for w in campus.walls if w.height_m < 8.0]
+        assert all(w.patch_size_m is None for w in corridor)
+        assert campus.landmarks.patch_size_m == 0.15
+
     def test_route_start_pose_faces_the_second_waypoint(self) -> None:
         route = Route("r", ((1.0, 1.0), (1.0, 3.0)))
         assert route.start_pose() == Pose2(1.0, 1.0, 90.0)
@@ -109,6 +123,24 @@ class TestLoadWorld:
         assert world.name == "tiny"
         assert world.furniture[0] == Box((5.0, 3.3), (1.2, 0.6), 0.0, 0.75)
         assert world.routes[0].waypoints == ((1.0, 2.0), (5.0, 2.0))
+
+    def test_patch_sizes_per_element_and_default(self, tmp_path: Path) -> None:
+        text = (
+            GOOD.replace(
+                'description = "two rooms"\n',
+                'description = "two rooms"\nlandmarks = { patch_size_m = 0.25 }\n',
+            )
+            .replace("height_m = 2.5 },", "height_m = 2.5, patch_size_m = 0.7 },", 1)
+            .replace("height_m = 0.75", "height_m = 0.75, patch_size_m = 0.3")
+        )
+        world = load_world(write(tmp_path, text))
+        assert world.landmarks == LandmarkDensity(patch_size_m=0.25)
+        assert [w.patch_size_m for w in world.walls] == [0.7] + [None] * 5
+        assert world.furniture[0].patch_size_m == 0.3
+        assert world.ceilings[0].patch_size_m is None
+        plain = load_world(write(tmp_path, GOOD))
+        assert plain.landmarks.patch_size_m == 0.15
+        assert all(w.patch_size_m is None for w in plain.walls)
 
     def test_unknown_name(self) -> None:
         with pytest.raises(ConfigError, match=r"^moon: unknown world \(built-in: campus, lab"):
@@ -167,6 +199,36 @@ class TestLoadWorld:
                 "route name 'through_door' is used twice",
             ),
             ("walls = [", "walls = [[", "not valid TOML"),
+            (
+                "end = [6.0, 0.0], height_m = 2.5",
+                "end = [6.0, 0.0], height_m = 2.5, patch_size_m = 0",
+                r"walls\[0\]: patch_size_m must be finite and > 0, got 0.0",
+            ),
+            (
+                "end = [6.0, 0.0], height_m = 2.5",
+                "end = [6.0, 0.0], height_m = 2.5, patch_size_m = inf",
+                r"walls\[0\].patch_size_m: expected a finite number, got float inf",
+            ),
+            (
+                "end = [6.0, 0.0], height_m = 2.5",
+                'end = [6.0, 0.0], height_m = 2.5, patch_size_m = "big"',
+                r"walls\[0\].patch_size_m: expected a finite number, got str 'big'",
+            ),
+            (
+                'description = "two rooms"\n',
+                'description = "two rooms"\nlandmarks = { patch_size_m = -0.5 }\n',
+                "landmarks: patch_size_m must be finite and > 0, got -0.5",
+            ),
+            (
+                "height_m = 0.75",
+                "height_m = 0.75, patch_size_m = nan",
+                r"furniture\[0\].patch_size_m: expected a finite number, got float nan",
+            ),
+            (
+                "max_corner = [6.0, 4.0], height_m = 2.5",
+                "max_corner = [6.0, 4.0], height_m = 2.5, patch_size_m = -1",
+                r"ceilings\[0\]: patch_size_m must be finite and > 0, got -1.0",
+            ),
         ],
     )
     def test_bad_file_names_the_file_and_the_problem(
@@ -206,5 +268,14 @@ class TestWorldDataclass:
     def test_non_finite_values_are_refused(self) -> None:
         with pytest.raises(ValueError, match="finite"):
             Wall((0.0, math.nan), (1.0, 0.0), 2.0)
+        refused = "patch_size_m must be finite and > 0, got "
+        with pytest.raises(ValueError, match=refused + "nan"):
+            Wall((0.0, 0.0), (1.0, 0.0), 2.0, patch_size_m=math.nan)
+        with pytest.raises(ValueError, match=refused + "inf"):
+            Box((0.0, 0.0), (1.0, 1.0), 0.0, 1.0, patch_size_m=math.inf)
+        with pytest.raises(ValueError, match=re.escape(refused + "0.0")):
+            Ceiling((0.0, 0.0), (1.0, 1.0), 2.0, patch_size_m=0.0)
+        with pytest.raises(ValueError, match=re.escape(refused + "-0.1")):
+            LandmarkDensity(patch_size_m=-0.1)
         with pytest.raises(ValueError, match="finite"):
             Pose2(math.inf, 0.0)

@@ -16,9 +16,24 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
 
 
 class TestSnapshot:
-    def test_writes_frame_map_and_json(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    def test_writes_frame_map_and_json(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
         code, out, _ = run(
-            ["sim", "snapshot", "--world", "lab", "--seed", "1", "--out", str(tmp_path), "--x", "8", "--y", "10"],
+            [
+                "sim",
+                "snapshot",
+                "--world",
+                "lab",
+                "--seed",
+                "1",
+                "--out",
+                str(tmp_path),
+                "--x",
+                "8",
+                "--y",
+                "10",
+            ],
             capsys,
         )
         assert code == 0
@@ -33,8 +48,10 @@ class TestSnapshot:
         assert summary["world"] == "lab"
         assert all(0 <= v["u_px"] < 800 and 0 <= v["v_px"] < 600 for v in summary["visible"])
 
-    def test_campus_and_start_pose(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-        code, out, _ = run(["sim", "snapshot", "--world", "campus", "--out", str(tmp_path)], capsys)
+    def test_campus_and_start_pose(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        code, _, _ = run(["sim", "snapshot", "--world", "campus", "--out", str(tmp_path)], capsys)
         assert code == 0
         assert json.loads((tmp_path / "snapshot.json").read_text())["world"] == "campus"
 
@@ -59,8 +76,13 @@ class TestSnapshot:
 
     def test_malformed_world_file(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
         world = tmp_path / "bad.toml"
-        world.write_text('name = "bad"\nstart = { x_m = 1.0, y_m = 1.0 }\nwalls = [{ start = [0, 0], end = [0, 0], height_m = 2.0 }]\n')
-        code, _, err = run(["sim", "snapshot", "--world", str(world), "--out", str(tmp_path / "o")], capsys)
+        world.write_text(
+            'name = "bad"\nstart = { x_m = 1.0, y_m = 1.0 }\n'
+            "walls = [{ start = [0, 0], end = [0, 0], height_m = 2.0 }]\n"
+        )
+        code, _, err = run(
+            ["sim", "snapshot", "--world", str(world), "--out", str(tmp_path / "o")], capsys
+        )
         assert code == 1
         assert str(world) in err and err.count("\n") == 1
 
@@ -70,5 +92,7 @@ def test_help_lists_only_working_commands(capsys: pytest.CaptureFixture[str]) ->
         main(["--help"])
     assert exit_.value.code == 0
     out = capsys.readouterr().out
-    listed = [line.split()[0] for line in out.split("options:")[0].splitlines() if line.startswith("    ")]
-    assert listed == ["sim", "calibrate", "bench"]
+    listed = [
+        line.split()[0] for line in out.split("options:")[0].splitlines() if line.startswith("    ")
+    ]
+    assert listed == ["sim", "calibrate", "bench", "memory"]
