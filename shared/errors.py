@@ -9,7 +9,7 @@ and keeps its traceback::
     │   ├── ConfigError            a config or world file, or a config value
     │   ├── CalibrationError       a camera calibration file or calibration images
     │   └── MemoryFormatError      a visual memory (on disk or being assembled) breaks its format
-    ├── UnknownKeyframeError       a key image id that is not in the visual memory (also a LookupError)
+    ├── UnknownKeyframeError       a key image id the visual memory does not hold (a LookupError)
     ├── GeometryError              a geometric computation cannot proceed
     │   ├── ShapeError             an array has the wrong shape (also a ValueError)
     │   └── DegenerateGeometryError

@@ -284,7 +284,7 @@ class FisheyeRenderer:
         ext = np.abs(a) + np.abs(b)  # (K, 2) half extents of the warped patch, px
         lo = np.maximum(np.floor(p0 - ext), 0).astype(np.int64)
         hi = np.minimum(np.ceil(p0 + ext).astype(np.int64) + 1, (w, h))
-        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + (a (sx - c) + b (sy - c)) / (n / 2).
+        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + (a (sx - c) + b (sy - c)) / (n/2).
         half = (n / 2.0)[:, None]
         c = ((n - 1.0) / 2.0)[:, None]
         M = np.empty((ids.shape[0], 2, 3))
