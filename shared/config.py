@@ -467,12 +467,17 @@ class TeachConfig:
 
     min_tracked_points: int = 50
     """M: a key image shares at least this many points tracked from the previous one."""
+    min_tracked_fraction: float = 0.5
+    """In (0, 1]. A key image with few corners needs only this fraction of them tracked
+    (the threshold is min(M, ceil(fraction * corners))): in a sparse scene a fixed M
+    would force a key image at every frame."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
     tracking: MatchConfig = field(default_factory=_tracking_match_config)
     """Frame-to-frame matching of the tracked points (small window, mutual best)."""
-    junction_min_matches: int = 30
-    """A new path's end joins the memory at a key image with at least this many matches."""
+    junction_min_matches: int = 40
+    """A path's end joins a key image of another path with at least this many matches
+    (two unrelated views share up to about 25 chance matches without a search window)."""
 
     def __post_init__(self) -> None:
         require(
@@ -557,10 +562,13 @@ class RelativePoseConfig:
     """Most minimal samples drawn for the planar model."""
     max_iterations_general: int = 1024
     """Most minimal samples drawn for the general (5-point) model."""
-    min_inliers: int = 12
-    """A fit with fewer inliers is not ok."""
+    min_inliers: int = 8
+    """A fit with fewer inliers is not ok (the planar model has 2 degrees of freedom)."""
     min_planar_inlier_ratio: float = 0.5
     """Model "auto": below this planar inlier ratio the 5-point model is tried too."""
+    refine_passes: int = 2
+    """Refine on the inliers and re-select them this many times (0: the best RANSAC
+    hypothesis, with its inliers)."""
 
     def __post_init__(self) -> None:
         require(
@@ -586,6 +594,7 @@ class RelativePoseConfig:
             0 <= self.min_planar_inlier_ratio <= 1,
             f"min_planar_inlier_ratio must be in [0, 1], got {self.min_planar_inlier_ratio}",
         )
+        require(self.refine_passes >= 0, f"refine_passes must be >= 0, got {self.refine_passes}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -593,14 +602,21 @@ class PathStateConfig:
     """Lateral and angular error from the current view and two key images (DESIGN.md sec. 5.5)."""
 
     relative_pose: RelativePoseConfig = field(default_factory=RelativePoseConfig)
+    """Relative pose of two key images, and of the two-view state (refined)."""
+    pose_before_resection: RelativePoseConfig = field(
+        default_factory=lambda: RelativePoseConfig(refine_passes=1))
+    """Relative pose of the current view and the next key image in the three-view state:
+    the planar resection refines it further, so one refinement pass suffices."""
     min_parallax_deg: float = 2.0
     """Triangulated key-pair points need at least this angle between their two rays, degrees."""
     max_point_distance_m: float = 30.0
     """Triangulated points farther than this from the next key image are dropped, m."""
     point_threshold_rad: float = 0.02
     """A 3D point is an inlier of the current pose when it reprojects within this angle, rad."""
-    min_points: int = 6
-    """The three-view scale needs at least this many inlier 3D points seen in the current view."""
+    min_points: int = 3
+    """The three-view state needs at least this many inlier key-pair points in the current
+    view (the epipolar matches fix yaw and direction; the points fix the scale, one degree
+    of freedom, so 3 leave two for redundancy; measured on simulator frames)."""
     max_odometry_disagreement_deg: float = 15.0
     """A key pair is refused when the visual baseline direction and the teach odometry's
     differ by more than this, degrees."""
@@ -626,6 +642,47 @@ class PathStateConfig:
         )
 
 
+def _localize_match_config() -> MatchConfig:
+    return MatchConfig(search_radius_px=None, min_zncc=0.8)
+
+
+@dataclass(frozen=True, slots=True)
+class LocalizeConfig:
+    """Localization of an image in the visual memory (Courbon et al. 2008, sec. II-D).
+
+    A global prefilter ranks every key image by the similarity of patch-normalised
+    thumbnails (Milford and Wyeth's SeqSLAM / QVPR teach-and-repeat normalisation),
+    then the paper's rule (most Harris + ZNCC matches) picks among the best
+    ``candidates``. Defaults measured on the ``lab`` world (``tools/localize_bench.py``).
+    """
+
+    candidates: int = 20
+    """Key images verified by full matching, the prefilter's best first."""
+    min_matches: int = 25
+    """The winner is a localization (``ok``) with at least this many matches (two unrelated
+    views share up to about 25 chance matches without a search window)."""
+    matching: MatchConfig = field(default_factory=_localize_match_config)
+    """Full matching of the query against a candidate (no window: the view may have turned)."""
+    prefilter_rows_fraction: float = 0.6
+    """Thumbnail rows used from the top, fraction in (0, 1]: the floor below the horizon is
+    near, bare and changes most with a lateral offset."""
+    prefilter_window_px: int = 9
+    """Side of the window of the thumbnail's patch normalisation, thumbnail px (odd)."""
+    prefilter_max_shift_px: int = 6
+    """The query thumbnail is compared shifted sideways by up to this, thumbnail px
+    (a turn of the robot shifts the view sideways; 6 px of 80 is about 14 degrees)."""
+
+    def __post_init__(self) -> None:
+        require(self.candidates >= 1, f"candidates must be >= 1, got {self.candidates}")
+        require(self.min_matches >= 1, f"min_matches must be >= 1, got {self.min_matches}")
+        require(0 < self.prefilter_rows_fraction <= 1,
+                f"prefilter_rows_fraction must be in (0, 1], got {self.prefilter_rows_fraction}")
+        require(self.prefilter_window_px >= 3 and self.prefilter_window_px % 2 == 1,
+                f"prefilter_window_px must be odd and >= 3, got {self.prefilter_window_px}")
+        require(self.prefilter_max_shift_px >= 0,
+                f"prefilter_max_shift_px must be >= 0, got {self.prefilter_max_shift_px}")
+
+
 @dataclass(frozen=True, slots=True)
 class VmnavConfig:
     """The whole configuration file: one table per component."""
@@ -636,6 +693,7 @@ class VmnavConfig:
     path_state: PathStateConfig = field(default_factory=PathStateConfig)
     teach: TeachConfig = field(default_factory=TeachConfig)
     teach_driver: TeachDriverConfig = field(default_factory=TeachDriverConfig)
+    localize: LocalizeConfig = field(default_factory=LocalizeConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

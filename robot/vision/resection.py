@@ -1,0 +1,198 @@
+"""Metric planar pose of the current view from key-pair points and epipolar matches.
+
+Reference visual-navigation.md, sec. 1.2, steps 3-4, restricted to the robot's
+three degrees of freedom: the current level camera differs from the next key
+image's by a yaw phi about the (vertical) y axis and an optical centre C = (c_x,
+0, c_z), so ``X_n = R_y(phi) X_c + C``. Two kinds of measurement constrain it:
+
+* key-pair points X_n (metric, :mod:`robot.vision.key_pair`) seen along b_c in
+  the current view: the chord residual ``X_c / |X_c| - b_c`` with ``X_c = R^T
+  (X_n - C)`` (three components, length 2 sin(angle / 2), so no antipodal
+  ambiguity beyond 90 degrees); these fix the scale;
+* every epipolar inlier between the current and next views: the angular Sampson
+  error (:mod:`robot.vision._epipolar_error`) with t = C / |C|, scale-free, which
+  sharpens the yaw and the direction of C.
+
+The start comes from the two-view fit: its yaw, and C = lambda t with lambda the
+median over the points of the least-squares distance along t that puts X_n on the
+ray R b_c (``u x X_n = lambda u x t``, u = R b_c). Then Levenberg-Marquardt with
+a Huber loss and analytic Jacobians on the fit's inliers, re-selection of the
+point and epipolar inliers among all matches, and a second pass.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+import numpy.typing as npt
+
+from robot.vision._epipolar_error import EpipolarPairs, rotation_y, rotation_y_derivative
+from robot.vision._robust_lm import minimise_huber
+from robot.vision.epipolar import check_bearings
+from robot.vision.triangulation import cross_rows, skew
+from shared.config import PathStateConfig
+from shared.errors import check_shape
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Points whose ray is within this angle of the translation direction carry no scale.
+_MIN_SCALE_ANGLE_RAD = math.radians(1.0)
+#: |C| below this is treated as zero when forming t = C / |C|, m.
+_MIN_CENTRE_M = 1e-9
+#: Refinements, each followed by re-selecting the inliers among all matches.
+_PASSES = 2
+
+
+@dataclass(frozen=True, eq=False)
+class PlanarResection:
+    """The current level camera's metric pose in the next key image's level frame.
+
+    Attributes:
+        T_n_c: (4, 4) float64, ``X_n = T_n_c X_c`` (rotation about y, centre at y = 0), m.
+        point_inlier_mask: (K,) bool, matches whose key-pair point lies within
+            ``config.point_threshold_rad`` of the current ray.
+        point_residual_rad: (K,) float64 angle between each match's point and its ray,
+            rad (NaN where the match has no point).
+        epipolar_inlier_mask: (K,) bool, matches within the epipolar inlier threshold.
+        ok: at least ``config.min_points`` point inliers.
+    """
+
+    T_n_c: FloatArray
+    point_inlier_mask: BoolArray
+    point_residual_rad: FloatArray
+    epipolar_inlier_mask: BoolArray
+    ok: bool
+
+    @property
+    def n_point_inliers(self) -> int:
+        """Number of point inliers."""
+        return int(np.count_nonzero(self.point_inlier_mask))
+
+
+def _initial_scale(u: FloatArray, points_n: FloatArray, t: FloatArray) -> float:
+    """Median over points of the distance along unit t that puts each point on its ray u."""
+    ut = u @ skew(t)  # u x t (rows)
+    ux = cross_rows(u, points_n)
+    nn = np.einsum("ij,ij->i", ut, ut)
+    usable = nn > math.sin(_MIN_SCALE_ANGLE_RAD) ** 2
+    if not np.any(usable):
+        return 0.0
+    return float(np.median(np.einsum("ij,ij->i", ux[usable], ut[usable]) / nn[usable]))
+
+
+def _residuals(x: FloatArray, bp: FloatArray, points_n: FloatArray,
+               pairs: EpipolarPairs) -> tuple[FloatArray, FloatArray]:
+    """Residuals (3P chord components, component-major, then K Sampson errors) and Jacobian.
+
+    With D = X_n - C, X_c = R_y(phi)^T D = (c D_x - s D_z, D_y, s D_x + c D_z) and
+    h = X_c / |X_c|: d h / d phi = (-h_z, 0, h_x) (a rotation about y moves h
+    perpendicular to itself), and for a unit change of C along u (u = -R^T e_x or
+    -R^T e_z in the current frame), d h = (u - h (h . u)) / |X_c|.
+    """
+    c, s = math.cos(x[0]), math.sin(x[0])
+    dx, dy, dz = points_n[:, 0] - x[1], points_n[:, 1], points_n[:, 2] - x[2]
+    px, py, pz = c * dx - s * dz, dy, s * dx + c * dz
+    inv = 1.0 / np.sqrt(px * px + py * py + pz * pz)
+    hx, hy, hz = px * inv, py * inv, pz * inv
+    zeros = np.zeros_like(hx)
+    columns = [np.concatenate([-hz, zeros, hx])]
+    for ux, uz in ((-c, -s), (s, -c)):  # d X_c / d c_x and d X_c / d c_z
+        k = hx * ux + hz * uz
+        columns.append(np.concatenate([(ux - hx * k) * inv, -hy * k * inv, (uz - hz * k) * inv]))
+    R = rotation_y(x[0])
+    centre = math.hypot(x[1], x[2])
+    if centre > _MIN_CENTRE_M:
+        t = np.array([x[1], 0.0, x[2]]) / centre
+        dts = ((np.array([1.0, 0.0, 0.0]) - t * t[0]) / centre,
+               (np.array([0.0, 0.0, 1.0]) - t * t[2]) / centre)
+    else:
+        # At the key image itself every direction fits the (pure rotation) matches.
+        t, dts = np.array([0.0, 0.0, 1.0]), (np.zeros(3), np.zeros(3))
+    dR = rotation_y_derivative(x[0])
+    r_epi, J_epi = pairs.errors_and_derivatives(
+        skew(t) @ R, np.array([skew(t) @ dR, skew(dts[0]) @ R, skew(dts[1]) @ R])
+    )
+    r_points = np.concatenate([hx - bp[:, 0], hy - bp[:, 1], hz - bp[:, 2]])
+    return np.concatenate([r_points, r_epi]), np.vstack([np.column_stack(columns), J_epi])
+
+
+def _pose_matrix(x: FloatArray) -> FloatArray:
+    T = np.eye(4)
+    T[:3, :3] = rotation_y(x[0])
+    T[:3, 3] = (x[1], 0.0, x[2])
+    return T
+
+
+def resect_planar(
+    bearings_c: FloatArray, bearings_n: FloatArray, points_n: FloatArray,
+    initial_inliers: npt.ArrayLike, R_n_c: FloatArray, t_n_c: FloatArray,
+    config: PathStateConfig,
+) -> PlanarResection:
+    """Metric planar pose of the current view with respect to the next key image.
+
+    Args:
+        bearings_c: (K, 3) unit rays of the current-next matches, current level frame.
+        bearings_n: (K, 3) the same matches in the next key image's level frame.
+        points_n: (K, 3) the key-pair point of each match's next-image feature, next
+            level frame, m; NaN rows where the feature has none.
+        initial_inliers: (K,) bool, the two-view fit's inliers (the first pass uses
+            these; later passes re-select among all matches).
+        R_n_c: (3, 3) starting rotation (the two-view fit's; its yaw about y is used).
+        t_n_c: (3,) starting direction of the current centre in the next's frame.
+        config: thresholds (``point_threshold_rad``, ``min_points``, and
+            ``pose_before_resection``'s ``inlier_threshold_rad`` and ``huber_scale_rad``).
+
+    Returns:
+        The pose; ``ok`` is False (an expected outcome) with too few point inliers.
+
+    Raises:
+        ShapeError: the arrays disagree in shape.
+        DegenerateGeometryError: a bearing is not a finite unit vector.
+    """
+    fc = check_bearings("bearings_c", bearings_c)
+    fn = check_bearings("bearings_n", bearings_n, len(fc))
+    X = np.asarray(points_n, dtype=np.float64)
+    check_shape("points_n", X.shape, (len(fc), 3))
+    use_e = np.asarray(initial_inliers, dtype=bool)
+    check_shape("initial_inliers", use_e.shape, (len(fc),))
+    check_shape("R_n_c", np.shape(R_n_c), (3, 3))
+    check_shape("t_n_c", np.shape(t_n_c), (3,))
+    has_point = np.all(np.isfinite(X), axis=1)
+    rows = np.flatnonzero(has_point)
+    bp, Xp = fc[rows], X[rows]
+    R0 = np.asarray(R_n_c, dtype=np.float64)
+    yaw = math.atan2(R0[0, 2], R0[0, 0])
+    t0 = np.array([t_n_c[0], 0.0, t_n_c[2]], dtype=np.float64)
+    t0 /= max(float(np.linalg.norm(t0)), _MIN_CENTRE_M)
+    use_p = use_e[rows]
+    if np.count_nonzero(use_p) < config.min_points:
+        return PlanarResection(
+            T_n_c=np.eye(4), point_inlier_mask=np.zeros(len(fc), dtype=bool),
+            point_residual_rad=np.full(len(fc), np.nan), epipolar_inlier_mask=use_e, ok=False,
+        )
+    scale = _initial_scale(bp[use_p] @ rotation_y(yaw).T, Xp[use_p], t0)
+    x = np.array([yaw, scale * t0[0], scale * t0[2]])
+    k = config.pose_before_resection.huber_scale_rad
+    pairs = EpipolarPairs(fc, fn)
+    for _ in range(_PASSES):
+        if 3 * np.count_nonzero(use_p) + np.count_nonzero(use_e) >= 3:
+            used = partial(_residuals, bp=bp[use_p], points_n=Xp[use_p],
+                           pairs=pairs.subset(use_e))
+            x = minimise_huber(used, x, k)
+        r, _ = _residuals(x, bp, Xp, pairs)
+        chord = np.linalg.norm(r[: 3 * len(bp)].reshape(3, -1), axis=0)
+        point_residual = 2.0 * np.arcsin(np.minimum(chord / 2.0, 1.0))
+        use_p = point_residual < config.point_threshold_rad
+        use_e = np.abs(r[3 * len(bp):]) < config.pose_before_resection.inlier_threshold_rad
+    point_inliers = np.zeros(len(fc), dtype=bool)
+    point_inliers[rows] = use_p
+    residual_all = np.full(len(fc), np.nan)
+    residual_all[rows] = point_residual
+    return PlanarResection(
+        T_n_c=_pose_matrix(x), point_inlier_mask=point_inliers, point_residual_rad=residual_all,
+        epipolar_inlier_mask=use_e, ok=bool(np.count_nonzero(use_p) >= config.min_points),
+    )

@@ -1,0 +1,93 @@
+"""Joining a new path to the memory (robot/memory/junctions.py) on textured synthetic places."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robot.memory.junctions import JunctionAttempt, JunctionOutcome, junction_attempts
+from shared.config import LocalizeConfig
+from shared.memory import VisualMemory
+from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
+from tests.shared.memory.builders import small_camera
+
+CONFIG = LocalizeConfig(candidates=4, min_matches=10)
+MIN_MATCHES = 20  # the synthetic places share at most 15 chance matches
+
+
+@pytest.fixture(scope="module")
+def places() -> list[Place]:
+    return make_places(np.random.default_rng(5), 6, small_camera())
+
+
+def attempts_of(memory: VisualMemory, path_id: int) -> list[JunctionAttempt]:
+    return junction_attempts(memory, path_id, FEATURES, CONFIG, MIN_MATCHES)
+
+
+def accepted_pairs(attempts: list[JunctionAttempt]) -> list[set[int]]:
+    return [{a.end_id, a.best_id} for a in attempts if a.accepted]
+
+
+class TestJunctionAttempts:
+    def test_a_path_starting_where_another_ends_joins_it(self, places: list[Place]) -> None:
+        # Path a: places 0, 1, 2 (ids 0-2). Path b starts at place 2, seen again (ids 3-5).
+        memory = memory_of(
+            {
+                "a": [places[0].key_image, places[1].key_image, places[2].key_image],
+                "b": [places[2].query, places[3].key_image, places[4].key_image],
+            }
+        )
+        attempts = attempts_of(memory, 1)
+        # b's ends 3 and 5 among path a, then a's ends 0 and 2 along path b.
+        assert [a.end_id for a in attempts] == [3, 5, 0, 2]
+        assert attempts[0].best_id == 2 and attempts[0].matches >= MIN_MATCHES
+        assert attempts[3].best_id == 3 and attempts[3].matches >= MIN_MATCHES
+        # The same place found both ways makes one junction.
+        assert accepted_pairs(attempts) == [{2, 3}]
+        assert [a.outcome for a in attempts] == [
+            JunctionOutcome.JOINED,
+            JunctionOutcome.TOO_FEW_MATCHES,
+            JunctionOutcome.TOO_FEW_MATCHES,
+            JunctionOutcome.ALREADY_JOINED,
+        ]
+
+    def test_ends_are_preferred_to_the_best_match(self, places: list[Place]) -> None:
+        # Path a's last two key images show place 2 (the last one noisier); b starts at
+        # place 2 seen again, which matches a's last but one best.
+        noisy = places[2].key_image + np.random.default_rng(1).normal(0.0, 6.0, (120, 160))
+        memory = memory_of(
+            {
+                "a": [
+                    places[0].key_image,
+                    places[2].key_image,
+                    np.clip(noisy, 0, 255).astype(np.uint8),
+                ],
+                "b": [places[2].query, places[5].key_image],
+            }
+        )
+        attempts = attempts_of(memory, 1)
+        assert (attempts[0].end_id, attempts[0].best_id) == (3, 1)  # the best match...
+        assert (attempts[3].end_id, attempts[3].best_id) == (2, 3)
+        assert attempts[0].matches > attempts[3].matches >= MIN_MATCHES
+        # ...is not an end: a's end 2 joins b's start 3 instead, and 3 joins a only once.
+        assert accepted_pairs(attempts) == [{2, 3}]
+
+    def test_junctions_already_made_are_not_made_again(self, places: list[Place]) -> None:
+        memory = memory_of(
+            {"a": [places[0].key_image, places[1].key_image], "b": [places[1].query]}
+        )
+        for attempt in attempts_of(memory, 1):
+            if attempt.accepted:
+                memory.add_junction(attempt.junction())
+        assert [{j.from_id, j.to_id} for j in memory.junctions] == [{1, 2}]
+        again = attempts_of(memory, 1)
+        assert again and not any(a.accepted for a in again)
+        assert JunctionOutcome.ALREADY_JOINED in {a.outcome for a in again}
+        with pytest.raises(ValueError, match="was not accepted"):
+            again[0].junction()
+
+    def test_a_lone_path_has_nothing_to_join(self, places: list[Place]) -> None:
+        memory = memory_of({"a": [places[0].key_image, places[1].key_image]})
+        assert attempts_of(memory, 0) == []
+        with pytest.raises(KeyError):
+            attempts_of(memory, 7)

@@ -1,0 +1,141 @@
+"""Localization in the visual memory (robot/memory/localize.py) on textured synthetic places."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from robot.memory import Localizer, keyframe_features, localize
+from shared.config import LocalizeConfig
+from shared.errors import InputError
+from shared.memory import VisualMemory
+from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
+from tests.shared.memory.builders import small_camera
+
+CONFIG = LocalizeConfig(candidates=4, min_matches=10)
+
+
+@pytest.fixture(scope="module")
+def places() -> list[Place]:
+    return make_places(np.random.default_rng(11), 12, small_camera())
+
+
+@pytest.fixture(scope="module")
+def memory(places: list[Place]) -> VisualMemory:
+    # Key image k is place k, on two paths.
+    return memory_of(
+        {"a": [p.key_image for p in places[:7]], "b": [p.key_image for p in places[7:]]}
+    )
+
+
+@pytest.fixture(scope="module")
+def localizer(memory: VisualMemory) -> Localizer:
+    return Localizer.from_memory(memory, FEATURES, CONFIG)
+
+
+class TestLocalize:
+    def test_each_second_view_finds_its_place(
+        self, places: list[Place], localizer: Localizer
+    ) -> None:
+        for place_id, place in enumerate(places):
+            result = localizer.localize(place.query)
+            assert result.keyframe_id == place_id
+            runner_up = sorted(c.matches for c in result.candidates)[-2]
+            assert result.ok and result.matches >= 2 * runner_up
+            assert len(result.candidates) == CONFIG.candidates
+            similarities = [c.similarity for c in result.candidates]
+            assert similarities == sorted(similarities, reverse=True)
+            assert result.matches == max(c.matches for c in result.candidates)
+
+    def test_a_key_image_is_its_own_best_thumbnail(
+        self, places: list[Place], localizer: Localizer
+    ) -> None:
+        result = localizer.localize(places[3].key_image)
+        assert result.candidates[0].keyframe_id == 3
+        assert result.candidates[0].similarity == pytest.approx(1.0, abs=1e-5)
+
+    def test_exhaustive_agrees_and_verifies_every_key_image(
+        self, places: list[Place], localizer: Localizer
+    ) -> None:
+        result = localizer.localize_exhaustive(places[9].query)
+        assert result.keyframe_id == 9
+        assert [c.keyframe_id for c in result.candidates] == list(range(12))
+        assert all(math.isnan(c.similarity) for c in result.candidates)
+        fast = localizer.localize(places[9].query)
+        assert fast.matches == result.matches
+
+    def test_one_candidate_is_the_prefilter_alone(
+        self, places: list[Place], memory: VisualMemory
+    ) -> None:
+        one = Localizer.from_memory(memory, FEATURES, dataclasses.replace(CONFIG, candidates=1))
+        result = one.localize(places[5].query)
+        assert len(result.candidates) == 1 and result.keyframe_id == 5
+
+    def test_a_subset_of_key_images(self, places: list[Place], memory: VisualMemory) -> None:
+        subset = Localizer.from_memory(memory, FEATURES, CONFIG, keyframe_ids=[0, 1, 2])
+        assert subset.keyframe_ids == (0, 1, 2)
+        result = subset.localize(places[8].query)
+        assert result.keyframe_id in (0, 1, 2)
+        assert not result.ok  # place 8 is none of them: chance matches only
+
+    def test_the_convenience_function(self, places: list[Place], memory: VisualMemory) -> None:
+        assert localize(memory, places[2].query, FEATURES, CONFIG).keyframe_id == 2
+
+    def test_an_empty_set_of_key_images(self, places: list[Place], memory: VisualMemory) -> None:
+        nothing = Localizer.from_memory(memory, FEATURES, CONFIG, keyframe_ids=[])
+        result = nothing.localize(places[0].query)
+        assert result.keyframe_id is None and result.matches == 0 and not result.ok
+        assert nothing.localize_exhaustive(places[0].query).candidates == ()
+
+
+class TestPrefilter:
+    def test_a_sideways_shift_is_forgiven(self, places: list[Place], memory: VisualMemory) -> None:
+        # 8 px of the 160 px image is 4 thumbnail px: within the default 6 px of shifts.
+        shifted = np.roll(places[4].key_image, 8, axis=1)
+        tolerant = Localizer.from_memory(memory, FEATURES, CONFIG)
+        rigid = Localizer.from_memory(
+            memory, FEATURES, dataclasses.replace(CONFIG, prefilter_max_shift_px=0)
+        )
+        best = tolerant.localize(shifted).candidates[0]
+        assert best.keyframe_id == 4 and best.similarity > 0.8
+        rigid_similarity = {c.keyframe_id: c.similarity for c in rigid.localize(shifted).candidates}
+        assert rigid_similarity.get(4, -1.0) < 0.5
+
+
+class TestBadInput:
+    @pytest.mark.parametrize(
+        ("image", "message"),
+        [
+            (np.zeros((60, 80), np.uint8), "expected a 160x120 uint8 grey image, got shape"),
+            (np.zeros((120, 160), np.float64), "dtype float64"),
+            (np.zeros((0, 0), np.uint8), "shape \\(0, 0\\)"),
+            (np.zeros((120, 160, 3), np.uint8), "shape \\(120, 160, 3\\)"),
+        ],
+    )
+    def test_the_query_image(self, localizer: Localizer, image: np.ndarray, message: str) -> None:
+        with pytest.raises(InputError, match=f"query image: .*{message}"):
+            localizer.localize(image)
+        with pytest.raises(InputError, match="query image"):
+            localizer.localize_exhaustive(image)
+
+    def test_inconsistent_inputs(self, memory: VisualMemory) -> None:
+        keyframe = memory.keyframe(0)
+        with pytest.raises(InputError, match="2 key image ids, 1 thumbnails"):
+            Localizer([0, 1], [keyframe.thumbnail], [], memory.camera, FEATURES, CONFIG)
+        features = [keyframe_features(keyframe)]
+        with pytest.raises(InputError, match="thumbnail 0: expected 80x60 uint8, got shape"):
+            Localizer([0], [keyframe.image], features, memory.camera, FEATURES, CONFIG)
+
+
+def test_localize_config_is_validated() -> None:
+    from shared.config import VmnavConfig, from_mapping
+    from shared.errors import ConfigError
+
+    config = from_mapping(VmnavConfig, {"localize": {"candidates": 5}}, "f.toml")
+    assert config.localize.candidates == 5
+    assert config.localize.matching.search_radius_px is None
+    with pytest.raises(ConfigError, match="localize: prefilter_window_px must be odd"):
+        from_mapping(VmnavConfig, {"localize": {"prefilter_window_px": 4}}, "f.toml")

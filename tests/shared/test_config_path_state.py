@@ -1,0 +1,31 @@
+"""Tests of the relative-pose and path-state tables of shared/config.py."""
+
+from __future__ import annotations
+
+import pytest
+
+from shared.config import PathStateConfig, RelativePoseConfig, VmnavConfig, from_mapping
+from shared.errors import ConfigError
+
+
+def test_defaults_and_nested_tables() -> None:
+    config = from_mapping(VmnavConfig, {"path_state": {
+        "min_points": 4, "relative_pose": {"model": "planar", "inlier_threshold_rad": 0.01},
+    }}, "vmnav.toml")
+    assert config.path_state.min_points == 4
+    assert config.path_state.relative_pose.model == "planar"
+    assert config.path_state.pose_before_resection.refine_passes == 1
+    assert PathStateConfig().relative_pose == RelativePoseConfig()
+
+
+@pytest.mark.parametrize(("table", "message"), [
+    ({"relative_pose": {"model": "homography"}}, "model must be one of planar, general, auto"),
+    ({"relative_pose": {"huber_scale_rad": 0.1}}, "huber_scale_rad must be in"),
+    ({"relative_pose": {"refine_passes": -1}}, "refine_passes must be >= 0"),
+    ({"min_points": 1}, "min_points must be >= 2"),
+    ({"max_odometry_disagreement_deg": 0.0}, "max_odometry_disagreement_deg"),
+])
+def test_bad_values_name_the_table(table: dict[str, object], message: str) -> None:
+    with pytest.raises(ConfigError, match=message) as info:
+        from_mapping(VmnavConfig, {"path_state": table}, "vmnav.toml")
+    assert "vmnav.toml" in str(info.value) and "path_state" in str(info.value)

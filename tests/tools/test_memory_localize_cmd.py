@@ -1,0 +1,119 @@
+"""``vmnav memory localize DIR IMAGE`` (tools/memory_cmd.py) on a synthetic memory on disk."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from shared.memory import write_memory
+from tests.robot.memory.textured import Place, make_places, memory_of
+from tests.shared.memory.builders import small_camera
+from tools.cli import main
+
+
+def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def places() -> list[Place]:
+    return make_places(np.random.default_rng(11), 6, small_camera())
+
+
+@pytest.fixture
+def memory_dir(tmp_path: Path, places: list[Place]) -> Path:
+    memory = memory_of(
+        {"west": [p.key_image for p in places[:3]], "east": [p.key_image for p in places[3:]]}
+    )
+    write_memory(tmp_path / "mem", memory)
+    (tmp_path / "vmnav.toml").write_text("[localize]\ncandidates = 3\nmin_matches = 10\n")
+    return tmp_path / "mem"
+
+
+def query_file(folder: Path, image: np.ndarray, name: str = "query.png") -> Path:
+    path = folder / name
+    assert cv2.imwrite(str(path), image)
+    return path
+
+
+class TestLocalize:
+    def test_prints_the_key_image_its_matches_and_the_time(
+        self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        query = query_file(memory_dir.parent, places[4].query)
+        config = str(memory_dir.parent / "vmnav.toml")
+        argv = ["memory", "localize", str(memory_dir), str(query), "--config", config]
+        code, out, err = run(argv, capsys)
+        assert code == 0, err
+        first, second = out.splitlines()
+        assert first.startswith("key image 4 (path 1 'east', index 1, 0.50 m along): ")
+        assert first.endswith(" matches") and "not localized" not in first
+        assert " ms for 6 key images (3 verified; localizer built in " in second
+
+    def test_json_and_the_exhaustive_baseline(
+        self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        query = query_file(memory_dir.parent, places[1].query)
+        code, out, _ = run(
+            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json"], capsys
+        )
+        assert code == 0
+        report = json.loads(out)
+        assert report["keyframe_id"] == 1 and report["keyframes"] == 6
+        assert report["exhaustive"]["keyframe_id"] == 1
+        assert report["exhaustive"]["matches"] == report["matches"]
+        assert report["localize_ms"] > 0 and len(report["candidates"]) == 6
+
+    def test_a_colour_image_is_read_as_grey(
+        self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        colour = cv2.cvtColor(places[2].query, cv2.COLOR_GRAY2BGR)
+        query = query_file(memory_dir.parent, colour)
+        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json"], capsys)
+        assert code == 0 and json.loads(out)["keyframe_id"] == 2
+
+
+class TestBadInput:
+    @pytest.mark.parametrize(
+        ("image", "message"),
+        [
+            (np.zeros((60, 80), np.uint8), "query.png: is 80x60 px; the memory's camera takes "
+             "160x120 px"),
+            (np.zeros((120, 160), np.uint16), "query.png: expected 8-bit pixels, got uint16"),
+        ],
+    )
+    def test_the_wrong_image(
+        self,
+        memory_dir: Path,
+        image: np.ndarray,
+        message: str,
+        capsys: pytest.CaptureFixture[str],
+    ) -> None:
+        query = query_file(memory_dir.parent, image)
+        code, out, err = run(["memory", "localize", str(memory_dir), str(query)], capsys)
+        assert code == 1 and out == ""
+        assert err.startswith("vmnav memory: error: ") and message in err
+
+    def test_a_missing_or_broken_image(
+        self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        missing = memory_dir.parent / "nothing.png"
+        code, _, err = run(["memory", "localize", str(memory_dir), str(missing)], capsys)
+        assert code == 1 and "nothing.png: no such image file" in err
+        broken = memory_dir.parent / "broken.png"
+        broken.write_bytes(b"\x89PNG\r\n\x1a\n truncated")
+        code, _, err = run(["memory", "localize", str(memory_dir), str(broken)], capsys)
+        assert code == 1 and "broken.png: cannot be decoded as an image" in err
+
+    def test_a_missing_memory(
+        self, tmp_path: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        query = query_file(tmp_path, places[0].query)
+        code, _, err = run(["memory", "localize", str(tmp_path / "none"), str(query)], capsys)
+        assert code == 1 and "manifest.json" in err
