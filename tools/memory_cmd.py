@@ -8,6 +8,7 @@ subcommand is one more pair and one more entry.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -170,4 +171,60 @@ def localize_text(memory: VisualMemory, report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-SUBCOMMANDS = (add_info_parser, add_localize_parser)
+def add_route_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav memory route DIR START GOAL``."""
+    route = memory_sub.add_parser(
+        "route",
+        help="plan the visual route from one key image to a goal key image",
+        description="Plan the shortest visual route (by teach odometric distance) through the "
+        "memory's paths and junctions from key image START to key image GOAL, and list it.",
+    )
+    route.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
+    route.add_argument("start", type=int, metavar="START", help="id of the key image to start from")
+    route.add_argument("goal", type=int, metavar="GOAL", help="id of the goal key image")
+    route.add_argument("--json", action="store_true", help="print the route as JSON")
+    route.set_defaults(run=run_route)
+
+
+def run_route(args: argparse.Namespace) -> int:
+    """Print the planned route; exit 1 when the goal cannot be reached."""
+    from shared.errors import InputError
+    from shared.memory import read_memory
+
+    memory = read_memory(args.directory)
+    walk = memory.plan_route(args.start, args.goal)
+    if not walk:
+        raise InputError(
+            args.directory,
+            f"key image {args.goal} cannot be reached from key image {args.start} "
+            "(see 'vmnav memory info' for the memory's connectivity)",
+        )
+    steps = list(itertools.pairwise(walk))
+    lengths = {(e.from_id, e.to_id): e for e in memory.edges()}
+    length_m = sum(lengths[s].length_m for s in steps)
+    junctions = sum(1 for s in steps if lengths[s].kind.name == "JUNCTION")
+    path_names = []
+    for kf in walk:
+        name = memory.paths[memory.keyframes[kf].path_id].name
+        if not path_names or path_names[-1] != name:
+            path_names.append(name)
+    report = {
+        "start": args.start,
+        "goal": args.goal,
+        "keyframe_ids": walk,
+        "length_m": round(length_m, 3),
+        "junctions": junctions,
+        "paths": path_names,
+    }
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(
+            f"route from key image {args.start} to {args.goal}: {len(walk)} key images, "
+            f"{length_m:.2f} m, {junctions} junction(s), along {' -> '.join(path_names)}"
+        )
+        print("  " + " ".join(str(k) for k in walk))
+    return 0
+
+
+SUBCOMMANDS = (add_info_parser, add_localize_parser, add_route_parser)

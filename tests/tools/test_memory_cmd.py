@@ -73,3 +73,34 @@ def test_needs_a_subcommand(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         main(["memory", "--help"])
     assert "    info " in capsys.readouterr().out
+
+
+class TestRoute:
+    def test_plans_across_a_junction(
+        self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        code, out, _ = run(["memory", "route", str(memory_dir), "2", "5"], capsys)
+        assert code == 0
+        # 2 -> 3 along the corridor (0.5 m), junction 3 <-> 4 (0 m), 4 -> 5 along "back" (1 m).
+        assert out.splitlines() == [
+            "route from key image 2 to 5: 4 key images, 1.50 m, 1 junction(s), "
+            "along corridor -> back",
+            "  2 3 4 5",
+        ]
+
+    def test_json(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        code, out, _ = run(["memory", "route", "--json", str(memory_dir), "5", "1"], capsys)
+        assert code == 0
+        report = json.loads(out)
+        assert report["keyframe_ids"] == [5, 6, 0, 1]
+        assert report["paths"] == ["back", "corridor"]
+
+    def test_unknown_goal_id(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        code, _, err = run(["memory", "route", str(memory_dir), "0", "99"], capsys)
+        assert code == 1 and err.count("\n") == 1
+        assert "no key image with id 99" in err
+
+    def test_unreachable_goal(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        code, _, err = run(["memory", "route", str(memory_dir), "8", "0"], capsys)
+        assert code == 1 and err.count("\n") == 1
+        assert "cannot be reached from key image 8" in err
