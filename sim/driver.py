@@ -26,8 +26,9 @@ class PurePursuit:
 
     The robot steers toward the point ``lookahead_m`` ahead of its projection on
     the path; curvature = 2 sin(alpha) / lookahead. Speed drops in sharp turns.
-    When the path's end is within ``goal_tolerance_m`` the command is zero and
-    :attr:`done` becomes true.
+    When the robot is on the path's last stretch and within ``goal_tolerance_m``
+    of its end, the command is zero and :attr:`done` becomes true (a loop that
+    passes near its own end earlier is driven in full).
 
     Args:
         waypoints_xy: (N, 2) float64 path vertices on the floor plan, m (N >= 2).
@@ -68,10 +69,15 @@ class PurePursuit:
         """The command for the robot at ``pose_w`` (x_m, y_m, yaw_rad)."""
         x, y, yaw = pose_w
         end = self._pts[-1]
-        if self.done or math.hypot(end[0] - x, end[1] - y) < self.goal_tolerance_m:
-            self.done = True
+        if not self.done:
+            self._s = self._progress(x, y)
+            # The end counts only once the robot is on the path's last stretch: a path
+            # that passes close to its own end earlier (a loop) is driven in full.
+            on_last_stretch = self._s >= self.length_m - self.lookahead_m - self.goal_tolerance_m
+            near_end = math.hypot(end[0] - x, end[1] - y) < self.goal_tolerance_m
+            self.done = on_last_stretch and near_end
+        if self.done:
             return DriveCommand(0.0, 0.0)
-        self._s = self._progress(x, y)
         tx, ty = self._point_at(min(self._s + self.lookahead_m, self.length_m))
         alpha = math.atan2(ty - y, tx - x) - yaw
         alpha = math.atan2(math.sin(alpha), math.cos(alpha))

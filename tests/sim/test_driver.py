@@ -51,3 +51,14 @@ class TestPurePursuit:
     def test_needs_two_waypoints(self) -> None:
         with pytest.raises(ValueError, match="waypoints_xy"):
             PurePursuit([[0.0, 0.0]])
+
+
+def test_a_loop_passing_its_own_end_is_driven_in_full() -> None:
+    # A 4 m square loop whose end (5 cm before the origin) the robot passes right after starting.
+    loop = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0], [-0.05, 0.0]])
+    loop = np.vstack([[[-0.5, 0.0]], loop])
+    driver = PurePursuit(loop, speed_m_s=0.3, lookahead_m=0.3, goal_tolerance_m=0.1)
+    poses = drive(driver, (-0.5, 0.0, 0.0))
+    assert driver.done
+    travelled = np.sum(np.hypot(*np.diff(poses[:, :2], axis=0).T))
+    assert travelled > 3.5
