@@ -10,6 +10,7 @@ and keeps its traceback::
     │   ├── CalibrationError       a camera calibration file or calibration images
     │   └── MemoryFormatError      a visual memory (on disk or being assembled) breaks its format
     ├── UnknownKeyframeError       a key image id the visual memory does not hold (a LookupError)
+    ├── IllegalEventError          a state machine got an event its table forbids in that state
     ├── GeometryError              a geometric computation cannot proceed
     │   ├── ShapeError             an array has the wrong shape (also a ValueError)
     │   └── DegenerateGeometryError
@@ -72,6 +73,24 @@ class UnknownKeyframeError(VmnavError, LookupError):
         self.keyframe_id = keyframe_id
         self.known = known
         super().__init__(f"no key image with id {keyframe_id} in the memory ({known} key images)")
+
+
+class IllegalEventError(VmnavError):
+    """A state machine got an event that its transition table forbids in the current state.
+
+    A bug in the caller (like h11's ``LocalProtocolError``), not a runtime outcome.
+
+    Args:
+        machine: the state machine's name, e.g. ``"mission"``.
+        state: the current state's name.
+        event: the event's type name.
+    """
+
+    def __init__(self, machine: str, state: str, event: str) -> None:
+        self.machine = machine
+        self.state = state
+        self.event = event
+        super().__init__(f"{machine}: event {event} is not allowed in state {state}")
 
 
 class GeometryError(VmnavError):

@@ -79,6 +79,9 @@ class PathState:
         n_points: key-pair points consistent with the current pose (0 for two views).
         T_next_current: (4, 4) float64 current level camera -> next key image's level
             camera, m (identity when not ok).
+        inlier_mask: (K,) bool over the K matches given, those consistent with the
+            epipolar geometry of the estimate (of the two-view fit when not ok); the
+            paper's image errors are measured on them.
     """
 
     y_m: float
@@ -89,6 +92,7 @@ class PathState:
     n_inliers: int
     n_points: int
     T_next_current: FloatArray = field(default_factory=lambda: np.eye(4))
+    inlier_mask: npt.NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 def path_coordinates(T_next_current: FloatArray, mount: CameraMountConfig) -> PathCoordinates:
@@ -120,13 +124,14 @@ def _pose(R: FloatArray, t: FloatArray) -> FloatArray:
 
 
 def _state(T: FloatArray, mount: CameraMountConfig, ok: bool, source: str, fit: EpipolarFit,
-           n_points: int) -> PathState:
+           n_points: int, inlier_mask: npt.NDArray[np.bool_]) -> PathState:
     if not ok:
         return PathState(0.0, 0.0, 0.0, ok=False, scale_source="none", n_inliers=fit.n_inliers,
-                         n_points=n_points)
+                         n_points=n_points, inlier_mask=inlier_mask)
     c = path_coordinates(T, mount)
     return PathState(y_m=c.y_m, theta_rad=c.theta_rad, s_m=c.s_m, ok=True, scale_source=source,
-                     n_inliers=fit.n_inliers, n_points=n_points, T_next_current=T)
+                     n_inliers=fit.n_inliers, n_points=n_points, T_next_current=T,
+                     inlier_mask=inlier_mask)
 
 
 def state_from_views(
@@ -162,12 +167,12 @@ def state_from_views(
         raise ShapeError(f"feature_idx_next: expected shape ({len(fc)},), got {idx.shape}")
     fit = relative_pose(fc, fn, rng, config.pose_before_resection)
     if not (fit.ok and key_pair.ok):
-        return _state(np.eye(4), mount, False, "none", fit, 0)
+        return _state(np.eye(4), mount, False, "none", fit, 0, fit.inlier_mask)
     rows, found = key_pair.points_for(idx)
     points = np.where(found[:, None], key_pair.points_n[rows], np.nan)
     resection = resect_planar(fc, fn, points, fit.inlier_mask, fit.R_b_a, fit.t_b_a, config)
     return _state(resection.T_n_c, mount, resection.ok, "three-view", fit,
-                  resection.n_point_inliers)
+                  resection.n_point_inliers, resection.epipolar_inlier_mask)
 
 
 def state_from_two_views(
@@ -198,4 +203,5 @@ def state_from_two_views(
     fc = check_bearings("bearings_current", bearings_current)
     fn = check_bearings("bearings_next", bearings_next, len(fc))
     fit = relative_pose(fc, fn, rng, config.relative_pose)
-    return _state(_pose(fit.R_b_a, distance_m * fit.t_b_a), mount, fit.ok, "two-view", fit, 0)
+    return _state(_pose(fit.R_b_a, distance_m * fit.t_b_a), mount, fit.ok, "two-view", fit, 0,
+                  fit.inlier_mask)

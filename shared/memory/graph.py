@@ -16,7 +16,9 @@ Rules kept by :class:`VisualMemory` (it only ever grows):
 
 1. Ids are never reused: a new path's key images get ids above every id so far.
 2. Every key image lies on exactly one path, at position ``index``; within a path
-   ``t_ns`` strictly increases and ``distance_m`` starts at 0 and never decreases.
+   ``t_ns`` strictly increases and ``distance_m`` starts at 0 and never decreases;
+   a key image's ``tracked_from_previous`` refers to corners of the previous key
+   image of its path (the first has none).
 3. All key images have the camera's image size and the same descriptor length.
 4. A junction joins two distinct key images of the memory; at most one junction
    per unordered pair.
@@ -234,6 +236,7 @@ class VisualMemory:
                 pixels_xy=record.pixels_xy,
                 patches=record.patches,
                 thumbnail=thumbnail_from_image(record.image),
+                tracked_from_previous=record.tracked_from_previous,
             )
             for index, record in enumerate(records)
         ]
@@ -397,14 +400,25 @@ class VisualMemory:
 
 
 def _check_step(previous: Keyframe | None, keyframe: Keyframe) -> None:
-    """Time and distance along a path: distances start at 0 and never decrease."""
+    """Time, distance and tracks along a path: distances start at 0 and never decrease."""
     where = f"key image {keyframe.id}"
+    tracks = keyframe.tracked_from_previous
     if previous is None:
         if keyframe.distance_m != 0.0:
             raise MemoryFormatError(
                 where, f"first of its path, must be at distance_m 0, got {keyframe.distance_m}"
             )
+        if len(tracks):
+            raise MemoryFormatError(
+                where, "first of its path, must have no tracked_from_previous"
+            )
         return
+    if len(tracks) and tracks[:, 0].max() >= previous.n_features:
+        raise MemoryFormatError(
+            where,
+            f"tracked_from_previous: corner {int(tracks[:, 0].max())} of the previous key "
+            f"image, which has {previous.n_features}",
+        )
     if keyframe.t_ns <= previous.t_ns:
         raise MemoryFormatError(
             where, f"t_ns {keyframe.t_ns} is not after the previous key image's {previous.t_ns}"

@@ -16,7 +16,7 @@ that the disk reader names the *file* at fault with the same rules.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from numbers import Integral, Real
 from typing import Any
 
@@ -32,6 +32,9 @@ PixelsXY = npt.NDArray[np.float64]
 """(N, 2) float64 pixel coordinates (x right, y down; centre of the top-left pixel is (0, 0))."""
 Patches = npt.NDArray[np.float32]
 """(N, P*P) float32 ZNCC descriptors, zero-mean and unit-norm rows (all zero if flat)."""
+Tracks = npt.NDArray[np.int64]
+"""(K, 2) int64 feature index pairs (previous key image's corner, this key image's corner)
+of the points tracked from one key image to the next while teaching."""
 
 THUMBNAIL_WIDTH_PX = 80
 """Width of every key image thumbnail, px."""
@@ -136,6 +139,36 @@ def check_features(
         )
 
 
+def check_tracks(where: str, tracks: object, n_features: int) -> None:
+    """Fail unless ``tracks`` pairs corners of the previous key image with this one's.
+
+    Args:
+        where: the file or record at fault, for the message.
+        tracks: should be (K, 2) int64, indices >= 0, column 1 below ``n_features``,
+            no index twice in a column (a corner is tracked at most once).
+        n_features: N, the corners of the key image holding ``tracks``.
+
+    Raises:
+        MemoryFormatError: naming ``tracked_from_previous`` and the problem.
+    """
+    name = "tracked_from_previous"
+    tracks = _checked_array(where, name, tracks, np.int64, (None, 2))
+    if tracks.size and tracks.min() < 0:
+        raise MemoryFormatError(where, f"{name}: holds a negative corner index")
+    if tracks.size and tracks[:, 1].max() >= n_features:
+        raise MemoryFormatError(
+            where, f"{name}: corner {int(tracks[:, 1].max())} of this key image, which has "
+            f"{n_features}"
+        )
+    for column, whose in ((0, "the previous key image's"), (1, "this key image's")):
+        if np.unique(tracks[:, column]).size != tracks.shape[0]:
+            raise MemoryFormatError(where, f"{name}: repeats a corner of {whose}")
+
+
+def _no_tracks() -> Tracks:
+    return np.zeros((0, 2), dtype=np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class KeyframeRecord:
     """A key image as teaching produces it, before the memory gives it an id.
@@ -153,6 +186,8 @@ class KeyframeRecord:
         image: (H, W) uint8 grey key image, the camera's size.
         pixels_xy: (N, 2) float64 Harris corners, px.
         patches: (N, P*P) float32 ZNCC descriptors of those corners.
+        tracked_from_previous: (K, 2) int64 corners tracked from the previous key
+            image of the path to this one (:data:`Tracks`); empty for the first.
     """
 
     t_ns: int
@@ -161,6 +196,7 @@ class KeyframeRecord:
     image: GreyImage
     pixels_xy: PixelsXY
     patches: Patches
+    tracked_from_previous: Tracks = field(default_factory=_no_tracks)
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,6 +216,9 @@ class Keyframe:
         pixels_xy: (N, 2) float64 Harris corners, px, inside the image.
         patches: (N, P*P) float32 ZNCC descriptors (zero-mean, unit-norm rows).
         thumbnail: (60, 80) uint8, :func:`thumbnail_from_image` of the image.
+        tracked_from_previous: (K, 2) int64 pairs (corner of the previous key image of
+            the path, corner of this one) tracked while teaching (:data:`Tracks`);
+            empty for a path's first key image, or when the teach did not record them.
 
     Raises:
         MemoryFormatError: a field is missing its type, range or shape; names
@@ -196,6 +235,7 @@ class Keyframe:
     pixels_xy: PixelsXY
     patches: Patches
     thumbnail: GreyImage
+    tracked_from_previous: Tracks = field(default_factory=_no_tracks)
 
     def __post_init__(self) -> None:
         where = f"key image {self.id}"
@@ -223,7 +263,8 @@ class Keyframe:
         check_grey_image(
             where, "thumbnail", self.thumbnail, (THUMBNAIL_HEIGHT_PX, THUMBNAIL_WIDTH_PX)
         )
-        for name in ("image", "pixels_xy", "patches", "thumbnail"):
+        check_tracks(where, self.tracked_from_previous, self.pixels_xy.shape[0])
+        for name in ("image", "pixels_xy", "patches", "thumbnail", "tracked_from_previous"):
             array = np.array(getattr(self, name), copy=True)
             array.setflags(write=False)
             object.__setattr__(self, name, array)

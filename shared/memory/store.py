@@ -4,7 +4,9 @@ Layout::
 
     DIR/manifest.json         the graph, the metadata and the camera (below)
     DIR/images/<id>.png       the key image, 8-bit grey, the camera's size
-    DIR/features/<id>.npz     pixels_xy (N, 2) float64 px, patches (N, P*P) float32; no pickle
+    DIR/features/<id>.npz     pixels_xy (N, 2) float64 px, patches (N, P*P) float32, and
+                              tracked_from_previous (K, 2) int64 (optional when reading:
+                              memories written before it load with none); no pickle
     DIR/thumbnails/<id>.png   80x60 8-bit grey (shared.memory.keyframe.thumbnail_from_image)
 
 Manifest (all fields required, no others allowed)::
@@ -64,9 +66,11 @@ from shared.memory.keyframe import (
     KeyframeRecord,
     Patches,
     PixelsXY,
+    Tracks,
     VisualPath,
     check_features,
     check_grey_image,
+    check_tracks,
 )
 
 FORMAT = "vmnav-memory"
@@ -78,6 +82,7 @@ _PATH_FIELDS = ("id", "name", "keyframe_ids")
 _KEYFRAME_FIELDS = ("id", "path_id", "index", "t_ns", "odom_pose", "distance_m")
 _JUNCTION_FIELDS = ("from_id", "to_id", "matches")
 _FEATURE_ARRAYS = ("pixels_xy", "patches")
+_OPTIONAL_FEATURE_ARRAYS = ("tracked_from_previous",)
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: Every PNG ends with an empty IEND chunk: its type and its (constant) CRC.
 _PNG_END = b"IEND\xaeB`\x82"
@@ -153,7 +158,7 @@ def write_memory(directory: str | Path, memory: VisualMemory) -> None:
         write_bytes_atomic(image_path(directory, keyframe_id), _encode_png(keyframe.image))
         write_bytes_atomic(
             features_path(directory, keyframe_id),
-            _encode_features(keyframe.pixels_xy, keyframe.patches),
+            _encode_features(keyframe.pixels_xy, keyframe.patches, keyframe.tracked_from_previous),
         )
         write_bytes_atomic(thumbnail_path(directory, keyframe_id), _encode_png(keyframe.thumbnail))
     write_text_atomic(manifest_file, _manifest_text(data))
@@ -265,13 +270,16 @@ def _read_keyframe(
     keyframe_id = entry["id"]
     image = _read_png(image_path(directory, keyframe_id), (camera.height, camera.width))
     path = features_path(directory, keyframe_id)
-    pixels_xy, patches = _read_features(path, camera.width, camera.height, descriptor_length)
+    pixels_xy, patches, tracks = _read_features(
+        path, camera.width, camera.height, descriptor_length
+    )
     thumbnail = _read_png(
         thumbnail_path(directory, keyframe_id), (THUMBNAIL_HEIGHT_PX, THUMBNAIL_WIDTH_PX)
     )
     try:
         return Keyframe(
-            image=image, pixels_xy=pixels_xy, patches=patches, thumbnail=thumbnail, **entry
+            image=image, pixels_xy=pixels_xy, patches=patches, thumbnail=thumbnail,
+            tracked_from_previous=tracks, **entry
         )
     except MemoryFormatError as e:
         raise MemoryFormatError(
@@ -309,25 +317,34 @@ def _read_png(path: Path, shape: tuple[int, int]) -> GreyImage:
 
 def _read_features(
     path: Path, width: int, height: int, descriptor_length: int | None
-) -> tuple[PixelsXY, Patches]:
+) -> tuple[PixelsXY, Patches, Tracks]:
     data = _read_bytes(path)
     try:
         archive = np.load(io.BytesIO(data), allow_pickle=False)
         if not isinstance(archive, np.lib.npyio.NpzFile):
             raise MemoryFormatError(path, "expected an .npz archive, got a single .npy array")
         with archive:
-            if sorted(archive.files) != sorted(_FEATURE_ARRAYS):
+            names = set(archive.files)
+            if not set(_FEATURE_ARRAYS) <= names <= {*_FEATURE_ARRAYS, *_OPTIONAL_FEATURE_ARRAYS}:
                 raise MemoryFormatError(
-                    path, f"expected arrays {list(_FEATURE_ARRAYS)}, got {sorted(archive.files)}"
+                    path,
+                    f"expected arrays {list(_FEATURE_ARRAYS)} (and optionally "
+                    f"{list(_OPTIONAL_FEATURE_ARRAYS)}), got {sorted(archive.files)}",
                 )
             pixels_xy, patches = (archive[name] for name in _FEATURE_ARRAYS)
+            tracks = (
+                archive["tracked_from_previous"]
+                if "tracked_from_previous" in names
+                else np.zeros((0, 2), dtype=np.int64)
+            )
     except ValueError as e:
         problem = "holds pickled objects (refused)" if "pickle" in str(e) else f"cannot read: {e}"
         raise MemoryFormatError(path, problem) from None
     except (OSError, EOFError, zipfile.BadZipFile) as e:
         raise MemoryFormatError(path, f"not a valid .npz archive (truncated?): {e}") from None
     check_features(str(path), pixels_xy, patches, width, height, descriptor_length)
-    return pixels_xy, patches
+    check_tracks(str(path), tracks, pixels_xy.shape[0])
+    return pixels_xy, patches, tracks
 
 
 def _encode_png(image: GreyImage) -> bytes:
@@ -337,9 +354,9 @@ def _encode_png(image: GreyImage) -> bytes:
     return buffer.tobytes()
 
 
-def _encode_features(pixels_xy: PixelsXY, patches: Patches) -> bytes:
+def _encode_features(pixels_xy: PixelsXY, patches: Patches, tracks: Tracks) -> bytes:
     buffer = io.BytesIO()
-    np.savez(buffer, pixels_xy=pixels_xy, patches=patches)
+    np.savez(buffer, pixels_xy=pixels_xy, patches=patches, tracked_from_previous=tracks)
     return buffer.getvalue()
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -13,7 +14,7 @@ from hypothesis import strategies as st
 from robot.teach import KeyImageSelector, select_key_images
 from shared.config import FeatureConfig, TeachConfig
 from shared.errors import InputError
-from tests.robot.blob_frames import blob_camera, frames_from_schedule, render
+from tests.robot.blob_frames import blob_camera, cell_centre, frames_from_schedule, render
 
 FEATURES = FeatureConfig()
 
@@ -155,6 +156,21 @@ class TestRecords:
         assert np.array_equal(second.record.image, frames[10][1])
         assert second.record.pixels_xy.shape == (40, 2)
         assert second.record.patches.shape == (40, FEATURES.patch_size_px**2)
+
+    def test_tracks_pair_the_shared_points_of_consecutive_key_images(
+        self, rng: np.random.Generator
+    ) -> None:
+        visible = staggered(55, 40)
+        selected = select(visible, teach_config(30), rng)
+        assert selected[0].record.tracked_from_previous.shape == (0, 2)
+        for previous, current in itertools.pairwise(selected):
+            tracks = current.record.tracked_from_previous
+            assert tracks.dtype == np.int64 and len(tracks) == current.shared_points
+            xy_previous = previous.record.pixels_xy[tracks[:, 0]]
+            xy_current = current.record.pixels_xy[tracks[:, 1]]
+            np.testing.assert_allclose(xy_previous, xy_current, atol=0.5)
+            common = set(visible[previous.frame_index]) & set(visible[current.frame_index])
+            assert {tuple(xy) for xy in np.rint(xy_current)} == {cell_centre(p) for p in common}
 
     def test_distance_sums_the_odometry_steps(self, rng: np.random.Generator) -> None:
         # A square of 1 m sides: 4 m travelled, back at the start.

@@ -18,6 +18,14 @@ def test_defaults_and_nested_tables() -> None:
     assert PathStateConfig().relative_pose == RelativePoseConfig()
 
 
+def test_matching_window_is_wide_and_configurable() -> None:
+    assert PathStateConfig().matching.search_radius_px == 120.0
+    config = from_mapping(VmnavConfig, {"path_state": {"matching": {"search_radius_px": 80.0}}},
+                          "vmnav.toml")
+    assert config.path_state.matching.search_radius_px == 80.0
+    assert config.path_state.matching.min_zncc == PathStateConfig().matching.min_zncc
+
+
 @pytest.mark.parametrize(("table", "message"), [
     ({"relative_pose": {"model": "homography"}}, "model must be one of planar, general, auto"),
     ({"relative_pose": {"huber_scale_rad": 0.1}}, "huber_scale_rad must be in"),

@@ -6,6 +6,7 @@ from shared.errors import (
     CalibrationError,
     ChecksumError,
     ConfigError,
+    IllegalEventError,
     InputError,
     ShapeError,
     VmnavError,
@@ -41,3 +42,10 @@ class TestCheckShape:
     def test_rejects_and_names_both_shapes(self, shape: tuple[int, ...]) -> None:
         with pytest.raises(ShapeError, match=r"points: expected shape \(N, 3\), got"):
             check_shape("points", shape, (None, 3))
+
+
+def test_illegal_event_error_names_machine_state_and_event() -> None:
+    err = IllegalEventError("mission", "IDLE", "Arrived")
+    assert str(err) == "mission: event Arrived is not allowed in state IDLE"
+    assert (err.machine, err.state, err.event) == ("mission", "IDLE", "Arrived")
+    assert isinstance(err, VmnavError)

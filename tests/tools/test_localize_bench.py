@@ -14,12 +14,15 @@ import pytest
 from robot.memory import Localizer
 from shared.camera_model import CameraModel
 from shared.config import SimConfig, VmnavConfig
+from shared.memory import VisualMemory
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world
+from tests.shared.memory.builders import make_records, small_camera
 from tests.tools.short_routes import write_short_routes_world
 from tools.localize_bench import (
     TaughtMemory,
+    acceptable_answers,
     accepted_answers,
     nearest_keyframe,
     rate_summary,
@@ -73,6 +76,29 @@ class TestGroundTruth:
         assert nearest_keyframe(taught, (x + 0.01, y + 0.2, yaw + math.pi)) == ids[2]
         assert accepted_answers(taught.memory, ids[2]) == {ids[1], ids[2], ids[3]}
         assert accepted_answers(taught.memory, ids[0]) == {ids[0], ids[1]}
+
+
+def test_where_paths_overlap_the_other_paths_key_image_at_the_place_is_right(
+    rng: np.random.Generator,
+) -> None:
+    memory = VisualMemory(small_camera())
+    true_poses = {}
+    # A along y = 0 every 0.5 m; B 5 cm beside it, 10 cm ahead; C along A backwards;
+    # D parallel to A but 3 m away.
+    paths = (
+        ("A", [0.0, 0.5, 1.0, 1.5], 0.0, 0.0),
+        ("B", [0.1, 0.6, 1.1], 0.05, 0.0),
+        ("C", [1.5, 1.0, 0.5, 0.0], 0.0, math.pi),
+        ("D", [0.0, 0.5], 3.0, 0.0),
+    )
+    for name, xs, y, yaw in paths:
+        path = memory.add_path(name, make_records(rng, memory.camera, [0.5] * (len(xs) - 1)))
+        true_poses.update({i: (x, y, yaw) for i, x in zip(path.keyframe_ids, xs, strict=True)})
+    taught = TaughtMemory(memory, true_poses, ())
+    a, b = memory.paths[0].keyframe_ids, memory.paths[1].keyframe_ids
+    # Nearest A1 (2 cm); its neighbours A0, A2 are up to 0.52 m away, so B0 (0.42 m) and
+    # B1 (8 cm) are as good; B2 (0.58 m), C (backwards) and D (3 m) are not.
+    assert acceptable_answers(taught, (0.52, 0.0, 0.0)) == {a[0], a[1], a[2], b[0], b[1]}
 
 
 def test_timing_summary_has_the_benchmark_keys(taught: TaughtMemory, world: World) -> None:

@@ -1,6 +1,8 @@
 """The state estimate on simulator frames: render key images and current views from
-known poses in the ``lab`` corridor, detect and match with the robot's front end, and
-compare y and theta with the truth (tests may import sim/)."""
+known poses in the ``lab`` corridor, run the robot's per-frame pipeline
+(:mod:`robot.vision.frame_state`), and compare y and theta with the truth (tests may
+import sim/). ``vmnav bench vision`` measures the same on key images taught in the
+simulator."""
 
 from __future__ import annotations
 
@@ -9,25 +11,20 @@ import math
 import numpy as np
 import pytest
 
-from robot.vision.bearings import level_bearings
 from robot.vision.features import Features, detect_harris
-from robot.vision.key_pair import key_pair_geometry
+from robot.vision.frame_state import key_segment_from_key_images, state_from_frame
 from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
-from robot.vision.path_state import PathState, state_from_views
+from robot.vision.path_state import PathState
 from robot.vision.synthetic_scene import Pose2D, compose
 from shared.camera_model import CameraModel
-from shared.camera_mount import rotation_level_cam
-from shared.config import FeatureConfig, MatchConfig, PathStateConfig, SimConfig
+from shared.config import FeatureConfig, PathStateConfig, SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
 
 CAMERA = CameraModel.default()
-#: Key images about 0.5 m apart (the teach default gives about two per metre); a window
-#: wide enough for 20 degrees of yaw and 0.5 m of offset.
+#: Key images about 0.5 m apart (the teach default gives about two per metre).
 SPACING_M = 0.5
-MATCHING = MatchConfig(search_radius_px=120.0)
 
 
 class _Views:
@@ -50,22 +47,13 @@ def views() -> _Views:
 def _state(views: _Views, previous: Pose2D, next_: Pose2D, current: Pose2D,
            rng: np.random.Generator) -> PathState:
     mount, config = views.config.camera, PathStateConfig()
-    R = rotation_level_cam(mount)
     f_prev, f_next, f_cur = (views.features(p) for p in (previous, next_, current))
-
-    def bearings(f: Features, idx: np.ndarray) -> np.ndarray:
-        lifted = level_bearings(CAMERA, f.pixels_xy[idx], R)
-        assert lifted.valid.all()
-        return lifted.bearings
-
-    m = match_zncc(f_next, f_prev, MATCHING)
-    # Teach odometry: the true poses with a 1 % scale error on the spacing.
+    # Teach odometry: the true poses with a 1 % scale error on the spacing. No teach
+    # tracks: the key images are matched directly.
     odom_next = compose(previous, (1.01 * SPACING_M, 0.0, next_[2] - previous[2]))
-    pair = key_pair_geometry(bearings(f_next, m.idx_a), bearings(f_prev, m.idx_b), m.idx_a,
-                             odom_next, previous, mount, rng, config)
-    c = match_zncc(f_cur, f_next, MATCHING)
-    return state_from_views(bearings(f_cur, c.idx_a), bearings(f_next, c.idx_b), c.idx_b, pair,
-                            mount, rng, config)
+    segment = key_segment_from_key_images(f_next, f_prev, odom_next, previous, CAMERA, mount,
+                                          rng, config)
+    return state_from_frame(f_cur, segment, CAMERA, mount, rng, config).state
 
 
 def lab_state_errors(views: _Views, rng: np.random.Generator, segments: tuple[float, ...],

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -47,12 +49,24 @@ def make_record(
 def make_records(
     rng: np.random.Generator, camera: CameraModel, spacings_m: Sequence[float], t0_ns: int = 0
 ) -> list[KeyframeRecord]:
-    """``len(spacings_m) + 1`` key images, the i-th step ``spacings_m[i]`` metres long."""
+    """``len(spacings_m) + 1`` key images, the i-th step ``spacings_m[i]`` metres long, each
+    with random tracks from the one before."""
     distances_m = np.concatenate([[0.0], np.cumsum(spacings_m)])
-    return [
+    records = [
         make_record(rng, camera, t0_ns + i * 1_000_000_000, float(d))
         for i, d in enumerate(distances_m)
     ]
+    return records[:1] + [
+        replace(record, tracked_from_previous=random_tracks(rng, len(previous.pixels_xy),
+                                                            len(record.pixels_xy)))
+        for previous, record in itertools.pairwise(records)
+    ]
+
+
+def random_tracks(rng: np.random.Generator, n_previous: int, n_current: int) -> np.ndarray:
+    """(K, 2) int64 distinct corner pairs, K about half the smaller corner count."""
+    k = min(n_previous, n_current) // 2
+    return np.column_stack([rng.permutation(n_previous)[:k], rng.permutation(n_current)[:k]])
 
 
 def loop_memory(rng: np.random.Generator, camera: CameraModel | None = None) -> VisualMemory:

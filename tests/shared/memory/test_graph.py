@@ -41,6 +41,8 @@ class TestAddPath:
             ({"t_ns": 0}, "t_ns 0 is not after the previous key image's 1000000000"),
             ({"distance_m": 0.1}, "distance_m 0.1 m is less than the previous key image's 0.5 m"),
             ({"patches": np.zeros((12, 9), np.float32)}, "descriptors have 9 values"),
+            ({"tracked_from_previous": np.array([[12, 0]])},
+             "tracked_from_previous: corner 12 of the previous key image, which has 12"),
         ],
     )
     def test_bad_record_leaves_memory_unchanged(
@@ -53,6 +55,19 @@ class TestAddPath:
             memory.add_path("bad", records)
         assert len(memory.keyframes) == 7 and len(memory.paths) == 2
         assert memory.add_path("good", records[:2]).keyframe_ids == (7, 8)
+
+    def test_keeps_the_tracks_and_refuses_them_on_a_first_key_image(
+        self, rng: np.random.Generator
+    ) -> None:
+        memory = VisualMemory(small_camera())
+        records = make_records(rng, memory.camera, [0.5, 0.5])
+        path = memory.add_path("corridor", records)
+        for keyframe_id, record in zip(path.keyframe_ids, records, strict=True):
+            np.testing.assert_array_equal(
+                memory.keyframes[keyframe_id].tracked_from_previous, record.tracked_from_previous
+            )
+        with pytest.raises(MemoryFormatError, match="must have no tracked_from_previous"):
+            memory.add_path("starts tracked", records[1:])
 
     def test_no_records(self) -> None:
         with pytest.raises(MemoryFormatError, match="has no key images"):

@@ -66,6 +66,16 @@ class TestKeyframe:
         with pytest.raises(ValueError, match="read-only"):
             keyframe.patches[0, 0] = 1.0
 
+    def test_tracks_default_to_none_and_are_kept_read_only(
+        self, rng: np.random.Generator
+    ) -> None:
+        assert Keyframe(**keyframe_fields(rng)).tracked_from_previous.shape == (0, 2)
+        tracks = np.array([[7, 0], [2, 4]])
+        keyframe = Keyframe(**keyframe_fields(rng), tracked_from_previous=tracks)
+        np.testing.assert_array_equal(keyframe.tracked_from_previous, tracks)
+        with pytest.raises(ValueError, match="read-only"):
+            keyframe.tracked_from_previous[0, 0] = 1
+
     def test_numpy_integers_become_ints(self, rng: np.random.Generator) -> None:
         keyframe = Keyframe(**{**keyframe_fields(rng), "id": np.int64(3), "t_ns": np.int64(9)})
         assert type(keyframe.id) is int and type(keyframe.t_ns) is int
@@ -97,6 +107,17 @@ class TestKeyframe:
             ("patches", np.zeros((5, 0), np.float32), "patches: descriptors are empty"),
             ("patches", np.full((5, PATCH_LENGTH), np.inf, np.float32), "patches: holds NaN"),
             ("thumbnail", np.zeros((60, 81), np.uint8), "thumbnail: expected 80x60 px, got 81x60"),
+            ("tracked_from_previous", np.zeros((2, 3), np.int64),
+             r"tracked_from_previous: expected shape \(N, 2\), got \(2, 3\)"),
+            ("tracked_from_previous", np.zeros((1, 2), np.int32),
+             "tracked_from_previous: expected dtype int64, got int32"),
+            ("tracked_from_previous", np.array([[-1, 0]]), "holds a negative corner index"),
+            ("tracked_from_previous", np.array([[0, 5]]),
+             "corner 5 of this key image, which has 5"),
+            ("tracked_from_previous", np.array([[0, 1], [0, 2]]),
+             "repeats a corner of the previous key image's"),
+            ("tracked_from_previous", np.array([[0, 1], [3, 1]]),
+             "repeats a corner of this key image's"),
         ],
     )
     def test_bad_field_names_the_key_image_and_field(

@@ -28,7 +28,7 @@ def assert_same_memory(a: VisualMemory, b: VisualMemory) -> None:
         assert (ka.path_id, ka.index, ka.t_ns, ka.odom_pose, ka.distance_m) == (
             kb.path_id, kb.index, kb.t_ns, kb.odom_pose, kb.distance_m
         )
-        for name in ("image", "pixels_xy", "patches", "thumbnail"):
+        for name in ("image", "pixels_xy", "patches", "thumbnail", "tracked_from_previous"):
             x, y = getattr(ka, name), getattr(kb, name)
             assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
 
@@ -328,6 +328,17 @@ BAD_INPUT: dict[str, tuple[Corruption, str]] = {
         write_file(features3, lambda p: npz(pixels_xy=GOOD_XY[:5], patches=GOOD_PATCHES)),
         "5 corners in pixels_xy but 12 rows in patches",
     ),
+    "unknown feature array": (
+        write_file(
+            features3, lambda p: npz(pixels_xy=GOOD_XY, patches=GOOD_PATCHES, extra=GOOD_XY)
+        ),
+        "optionally \\['tracked_from_previous'\\]\\), got \\['extra', ",
+    ),
+    "tracks out of range": (
+        write_file(features3, lambda p: npz(pixels_xy=GOOD_XY, patches=GOOD_PATCHES,
+                                            tracked_from_previous=np.array([[0, 12]]))),
+        "tracked_from_previous: corner 12 of this key image, which has 12",
+    ),
     "descriptor length differs": (
         write_file(
             features3, lambda p: npz(pixels_xy=GOOD_XY, patches=np.zeros((12, 9), np.float32))
@@ -347,6 +358,15 @@ def test_bad_input_names_the_file_and_the_problem(
         read_memory(stored[0])
     assert error.value.where == str(bad_file)
     assert "\n" not in str(error.value)
+
+
+def test_features_without_tracks_load_with_none(stored: tuple[Path, VisualMemory]) -> None:
+    # Memories written before the tracks were stored hold only pixels_xy and patches.
+    directory, memory = stored
+    keyframe = memory.keyframes[3]
+    features3(directory).write_bytes(npz(pixels_xy=keyframe.pixels_xy, patches=keyframe.patches))
+    assert len(keyframe.tracked_from_previous) > 0
+    assert read_memory(directory).keyframes[3].tracked_from_previous.shape == (0, 2)
 
 
 def test_missing_folder(tmp_path: Path) -> None:

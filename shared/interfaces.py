@@ -1,0 +1,92 @@
+"""The three interfaces the robot application talks through (issue 4, item 1).
+
+* :class:`FrameSource`: camera frames, ``(t_ns, grey H x W uint8)``;
+* :class:`MobileBase`: velocity commands out; odometry, safety and power state in;
+* :class:`shared.clock.Clock`: time as integer ns, and waiting for a deadline.
+
+The simulator provides all three in lock-step, the ARIA driver and a real camera
+on the robot. Units are SI (m, rad, s, V); wire units stop in the adapters.
+Frames: the robot frame has x forward, y left, z up, yaw counter-clockwise; the
+odometry frame is wherever the base's odometry started (DESIGN.md sec. 4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from shared.clock import Clock
+from shared.errors import InputError
+
+__all__ = ["BaseState", "Clock", "FrameSource", "MobileBase"]
+
+
+@runtime_checkable
+class FrameSource(Protocol):
+    """Anything that yields grey camera frames (DESIGN.md sec. 4, "Frame sources")."""
+
+    def read(self) -> tuple[int, npt.NDArray[np.uint8]] | None:
+        """The next frame.
+
+        Returns:
+            ``(t_ns, image)``: the exposure time on the application's clock, ns, and a
+            (H, W) uint8 grey image; None when no frame will come (end of a file,
+            camera closed).
+        """
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class BaseState:
+    """What the mobile base reports.
+
+    Attributes:
+        odom_pose: (x_m, y_m, yaw_rad) of the robot frame in the odometry frame.
+        odom_distance_m: distance driven since the odometry started, m, >= 0 (sums
+            |forward motion|, so it grows when reversing too).
+        bumped: a bumper is pressed now.
+        stalled: a motor is stalled now.
+        battery_v: battery voltage, V.
+        motors_enabled: the motors accept velocity commands.
+    """
+
+    odom_pose: tuple[float, float, float]
+    odom_distance_m: float
+    bumped: bool
+    stalled: bool
+    battery_v: float
+    motors_enabled: bool
+
+    def __post_init__(self) -> None:
+        if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):
+            raise InputError("BaseState", f"odom_pose must be 3 finite numbers (x_m, y_m, "
+                             f"yaw_rad), got {self.odom_pose!r}")
+        if not (math.isfinite(self.odom_distance_m) and self.odom_distance_m >= 0):
+            raise InputError("BaseState", f"odom_distance_m must be finite and >= 0, got "
+                             f"{self.odom_distance_m}")
+
+
+@runtime_checkable
+class MobileBase(Protocol):
+    """A differential or skid-steer base driven by velocity commands."""
+
+    def command(self, v_m_s: float, omega_rad_s: float) -> None:
+        """Drive at a forward speed and turn rate (robot frame) until the next command.
+
+        Args:
+            v_m_s: forward speed, m/s (negative reverses).
+            omega_rad_s: turn rate about z, counter-clockwise positive, rad/s.
+        """
+        ...
+
+    def stop(self) -> None:
+        """Command zero velocity."""
+        ...
+
+    def state(self) -> BaseState:
+        """The latest state the base reported."""
+        ...

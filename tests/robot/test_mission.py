@@ -1,0 +1,217 @@
+"""Tests of robot/mission.py: the mission state machine and its transition table."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from robot import mission as m
+from robot.mission import (
+    FINAL_STATES,
+    REASONS,
+    Arrived,
+    Bumper,
+    Command,
+    LocalizationFailed,
+    Localized,
+    Lost,
+    Mission,
+    MissionState,
+    OperatorAbort,
+    Stall,
+    Start,
+    Tick,
+    Transition,
+)
+from shared.clock import ns_from_s
+from shared.config import MissionConfig
+from shared.errors import IllegalEventError, VmnavError
+
+CONFIG = MissionConfig(localize_attempts=3, localize_timeout_ns=ns_from_s(10),
+                       relocalize_attempts=2, relocalize_timeout_ns=ns_from_s(5))
+
+
+def following(at_s: float = 1.0) -> Mission:
+    mission = Mission(CONFIG)
+    mission.handle(Start(0, goal_id=42))
+    mission.handle(Localized(ns_from_s(at_s), keyframe_id=7, matches=120))
+    return mission
+
+
+def lost(at_s: float = 2.0) -> Mission:
+    mission = following()
+    mission.handle(Lost(ns_from_s(at_s), "no usable vision estimate for 2.00 s"))
+    return mission
+
+
+class TestHandle:
+    def test_happy_path(self) -> None:
+        mission = Mission(CONFIG)
+        assert mission.state is MissionState.IDLE and mission.goal_id is None
+        start = mission.handle(Start(0, goal_id=42))
+        assert start == Transition(0, MissionState.IDLE, MissionState.LOCALIZING, "start",
+                                   "to goal key image 42", Start(0, 42),
+                                   (Command.STOP, Command.LOCALIZE))
+        assert mission.goal_id == 42
+        localized = mission.handle(Localized(5, keyframe_id=7, matches=120))
+        assert (localized.target, localized.reason, localized.detail, localized.commands) == (
+            MissionState.FOLLOWING, "localized", "at key image 7 (120 matches)",
+            (Command.FOLLOW,))
+        arrived = mission.handle(Arrived(9, keyframe_id=42))
+        assert (arrived.target, arrived.reason, arrived.detail, arrived.commands) == (
+            MissionState.ARRIVED, "arrived", "at goal key image 42", (Command.STOP,))
+
+    def test_lost_stops_relocalizes_and_continues(self) -> None:
+        mission = following()
+        lost_transition = mission.handle(Lost(ns_from_s(2), "3 estimates rejected"))
+        assert (lost_transition.target, lost_transition.reason, lost_transition.detail) == (
+            MissionState.LOST, "lost", "3 estimates rejected")
+        assert lost_transition.commands == (Command.STOP, Command.LOCALIZE)
+        back = mission.handle(Localized(ns_from_s(3), keyframe_id=9, matches=80))
+        assert (back.source, back.target, back.reason) == (
+            MissionState.LOST, MissionState.FOLLOWING, "relocalized")
+
+    def test_localization_gives_up_after_the_attempts(self) -> None:
+        mission = Mission(CONFIG)
+        mission.handle(Start(0, 42))
+        assert mission.handle(LocalizationFailed(1, "12 matches (need 25)")) is None
+        assert mission.handle(LocalizationFailed(2, "12 matches (need 25)")) is None
+        failed = mission.handle(LocalizationFailed(3, "12 matches (need 25)"))
+        assert (failed.target, failed.reason, failed.commands) == (
+            MissionState.FAILED, "localization_failed", (Command.STOP,))
+        assert failed.detail == "3 failed attempts in a row (limit 3): 12 matches (need 25)"
+
+    def test_localization_times_out_at_the_limit_not_before(self) -> None:
+        mission = Mission(CONFIG)
+        mission.handle(Start(ns_from_s(1), 42))
+        assert mission.handle(Tick(ns_from_s(11) - 1)) is None
+        failed = mission.handle(Tick(ns_from_s(11)))
+        assert (failed.target, failed.reason, failed.detail) == (
+            MissionState.FAILED, "localization_timeout", "localizing for 10.0 s (limit 10.0 s)")
+
+    def test_relocalization_limits_count_from_entering_lost(self) -> None:
+        mission = lost(at_s=2.0)
+        assert mission.handle(LocalizationFailed(ns_from_s(3), "few matches")) is None
+        mission.handle(Localized(ns_from_s(4), 9, 80))
+        mission.handle(Lost(ns_from_s(6), "again"))
+        assert mission.handle(LocalizationFailed(ns_from_s(7), "few matches")) is None  # 1 of 2
+        assert mission.handle(Tick(ns_from_s(11) - 1)) is None
+        failed = mission.handle(Tick(ns_from_s(11)))
+        assert (failed.target, failed.reason) == (MissionState.FAILED, "relocalization_timeout")
+
+    def test_relocalization_gives_up_after_the_attempts(self) -> None:
+        mission = lost()
+        mission.handle(LocalizationFailed(ns_from_s(3), "few matches"))
+        failed = mission.handle(LocalizationFailed(ns_from_s(4), "few matches"))
+        assert (failed.target, failed.reason) == (MissionState.FAILED, "relocalization_failed")
+
+    @pytest.mark.parametrize(("event", "reason", "detail"), [
+        (Bumper(ns_from_s(5)), "bumper", "bumper pressed"),
+        (Stall(ns_from_s(5)), "stall", "motors stalled"),
+        (OperatorAbort(ns_from_s(5)), "operator_abort", "operator abort"),
+        (OperatorAbort(ns_from_s(5), "ground station: STOP"), "operator_abort",
+         "ground station: STOP"),
+    ])
+    @pytest.mark.parametrize("make", [following, lost])
+    def test_safety_aborts(self, make: Callable[[], Mission], event: m.MissionInput, reason: str,
+                           detail: str) -> None:
+        mission = make()
+        aborted = mission.handle(event)
+        assert (aborted.target, aborted.reason, aborted.detail, aborted.commands) == (
+            MissionState.ABORTED, reason, detail, (Command.STOP,))
+
+    def test_safety_while_localizing(self) -> None:
+        mission = Mission(CONFIG)
+        mission.handle(Start(0, 42))
+        assert mission.handle(Bumper(1)).target is MissionState.ABORTED
+
+    @pytest.mark.parametrize("event", [Bumper(1), Stall(1), OperatorAbort(1), Tick(1),
+                                       Lost(1, "late")])
+    def test_ignored_when_idle_or_final(self, event: m.MissionInput) -> None:
+        idle = Mission(CONFIG)
+        assert idle.handle(event) is None and idle.state is MissionState.IDLE
+        done = following(at_s=0.0)
+        done.handle(Arrived(1, 42))
+        assert done.handle(event) is None and done.state is MissionState.ARRIVED
+
+    @pytest.mark.parametrize(("make", "event", "state"), [
+        (lambda: Mission(CONFIG), Localized(1, 7, 99), "IDLE"),
+        (lambda: Mission(CONFIG), Arrived(1, 7), "IDLE"),
+        (following, Start(ns_from_s(2), 3), "FOLLOWING"),
+        (following, Localized(ns_from_s(2), 7, 99), "FOLLOWING"),
+        (following, LocalizationFailed(ns_from_s(2), "x"), "FOLLOWING"),
+        (lost, Arrived(ns_from_s(3), 42), "LOST"),
+    ])
+    def test_illegal_inputs_raise(self, make: Callable[[], Mission], event: m.MissionInput,
+                                  state: str) -> None:
+        mission = make()
+        with pytest.raises(IllegalEventError) as info:
+            mission.handle(event)
+        name = type(event).__name__
+        assert str(info.value) == f"mission: event {name} is not allowed in state {state}"
+        assert (info.value.state, info.value.event) == (state, name)
+        assert mission.state is MissionState[state]  # unchanged
+
+    def test_time_must_not_go_backwards(self) -> None:
+        mission = following(at_s=1.0)
+        with pytest.raises(ValueError, match="earlier than the previous input"):
+            mission.handle(Tick(ns_from_s(0.5)))
+
+
+class TestTransitionTable:
+    def test_every_state_has_a_row_and_every_edge_is_well_formed(self) -> None:
+        assert set(m._TRANSITIONS) == set(MissionState)
+        for row in m._TRANSITIONS.values():
+            for edge in row.values():
+                if edge is not None:
+                    assert edge.reason in REASONS
+                    assert edge.target in m._ENTRY_COMMANDS
+
+    def test_final_states_are_absorbing(self) -> None:
+        for state in FINAL_STATES:
+            assert all(edge is None for edge in m._TRANSITIONS[state].values())
+
+    def test_every_reason_is_reachable(self) -> None:
+        used = {edge.reason for row in m._TRANSITIONS.values() for edge in row.values() if edge}
+        assert used == set(REASONS)
+
+
+inputs = st.one_of(
+    st.builds(Start, st.just(0), st.integers(0, 9)),
+    st.builds(Localized, st.just(0), st.integers(0, 9), st.integers(0, 300)),
+    st.builds(LocalizationFailed, st.just(0), st.just("few matches")),
+    st.builds(Lost, st.just(0), st.just("no estimate")),
+    st.builds(Arrived, st.just(0), st.integers(0, 9)),
+    st.builds(Bumper, st.just(0)), st.builds(Stall, st.just(0)),
+    st.builds(OperatorAbort, st.just(0)), st.builds(Tick, st.just(0)),
+)
+
+
+@given(steps=st.lists(st.tuples(inputs, st.integers(0, ns_from_s(4))), max_size=40))
+def test_random_inputs_never_reach_an_undefined_state(
+    steps: list[tuple[m.MissionInput, int]],
+) -> None:
+    mission = Mission(CONFIG)
+    t_ns = 0
+    for template, dt_ns in steps:
+        t_ns += dt_ns
+        event = type(template)(t_ns, *[getattr(template, f) for f in template.__slots__[1:]])
+        before = mission.state
+        try:
+            transition = mission.handle(event)
+        except IllegalEventError as e:
+            assert isinstance(e, VmnavError) and mission.state is before
+            continue
+        assert mission.state in MissionState
+        if transition is None:
+            assert mission.state is before
+            continue
+        assert before not in FINAL_STATES
+        assert (transition.source, transition.target) == (before, mission.state)
+        assert transition.reason in REASONS and transition.detail and transition.cause is event
+        assert transition.t_ns == t_ns
+        if transition.target is not MissionState.FOLLOWING:
+            assert Command.STOP in transition.commands
