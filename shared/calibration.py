@@ -62,6 +62,7 @@ from typing import Any
 from shared.atomic_file import write_text_atomic
 from shared.camera_model import CameraModel
 from shared.errors import CalibrationError
+from shared.json_file import parse_json
 
 FORMAT = "vmnav-camera"
 FORMAT_VERSION = 1
@@ -102,15 +103,7 @@ def read_camera(path: str | Path) -> CameraModel:
         raise CalibrationError(path, "file not found") from None
     except (OSError, UnicodeDecodeError) as e:
         raise CalibrationError(path, f"cannot read: {e}") from None
-    try:
-        data = json.loads(text, parse_constant=_refuse_constant)
-    except json.JSONDecodeError as e:
-        raise CalibrationError(
-            path, f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}"
-        ) from None
-    except ValueError as e:
-        raise CalibrationError(path, f"not valid JSON: {e}") from None
-    return camera_from_dict(data, path)
+    return camera_from_dict(parse_json(path, text, CalibrationError), path)
 
 
 def write_camera(
@@ -260,10 +253,6 @@ def check_image_size(camera: CameraModel, width: int, height: int, where: str | 
             where,
             f"calibration is for {camera.width}x{camera.height} but images are {width}x{height}",
         )
-
-
-def _refuse_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a JSON number")
 
 
 def _is_int(value: Any) -> bool:

@@ -56,6 +56,7 @@ from shared.atomic_file import write_bytes_atomic, write_text_atomic
 from shared.calibration import camera_from_dict, camera_to_dict
 from shared.camera_model import CameraModel
 from shared.errors import CalibrationError, InputError, MemoryFormatError
+from shared.json_file import parse_json
 from shared.memory.graph import VisualMemory
 from shared.memory.keyframe import (
     THUMBNAIL_HEIGHT_PX,
@@ -220,14 +221,7 @@ def _read_manifest(directory: Path) -> _Manifest:
         raise MemoryFormatError(path, f"{problem}: not a visual memory") from None
     except (OSError, UnicodeDecodeError) as e:
         raise MemoryFormatError(path, f"cannot read: {e}") from None
-    try:
-        data = json.loads(text, parse_constant=_refuse_constant)
-    except json.JSONDecodeError as e:
-        raise MemoryFormatError(
-            path, f"invalid JSON (truncated?): {e.msg} at line {e.lineno} column {e.colno}"
-        ) from None
-    except ValueError as e:
-        raise MemoryFormatError(path, f"invalid JSON: {e}") from None
+    data = parse_json(path, text, MemoryFormatError)
     if not isinstance(data, dict):
         raise MemoryFormatError(path, f"expected a JSON object, got {_json_type(data)}")
     if data.get("format") != FORMAT:
@@ -445,10 +439,6 @@ def _record(path: Path, prefix: str, cls: type[Any], entry: Any, fields: tuple[s
         return cls(**entry)
     except MemoryFormatError as e:
         raise MemoryFormatError(path, f"{prefix}: {e.where}: {e.problem}") from None
-
-
-def _refuse_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a JSON number")
 
 
 def _json_type(value: Any) -> str:

@@ -167,7 +167,7 @@ def _with_k(row: int, col: int, value: Any) -> dict[str, Any]:
 
 BAD_FILES: dict[str, tuple[str, str]] = {
     # name: (file text, expected message fragment)
-    "not json": ("{", "not valid JSON: Expecting property name"),
+    "not json": ("{", "not valid JSON (truncated?): Expecting property name"),
     "empty": ("", "not valid JSON"),
     "nan constant": (
         json.dumps(valid_data()).replace('"xi": 1.6', '"xi": NaN'),

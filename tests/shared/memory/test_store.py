@@ -222,7 +222,7 @@ GOOD_PATCHES = np.zeros((12, 25), np.float32)
 BAD_INPUT: dict[str, tuple[Corruption, str]] = {
     "no manifest": (remove(manifest), "file not found: not a visual memory"),
     "truncated manifest": (
-        write_file(manifest, lambda p: p.read_bytes()[:200]), r"invalid JSON \(truncated\?\)"
+        write_file(manifest, lambda p: p.read_bytes()[:200]), r"not valid JSON \(truncated\?\)"
     ),
     "NaN in manifest": (
         write_file(
@@ -377,6 +377,6 @@ def test_missing_folder(tmp_path: Path) -> None:
 def test_write_refuses_to_replace_an_unreadable_memory(stored: tuple[Path, VisualMemory]) -> None:
     directory, memory = stored
     (directory / "manifest.json").write_text("{")
-    with pytest.raises(MemoryFormatError, match="invalid JSON"):
+    with pytest.raises(MemoryFormatError, match="not valid JSON"):
         write_memory(directory, memory)
     assert (directory / "manifest.json").read_text() == "{"
