@@ -17,8 +17,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/vmnav sim snapshot --world lab --seed 1 --x 8 --y 10 --yaw 0 --out $(OUT)/lab
-	$(BIN)/vmnav sim snapshot --world campus --seed 1 --x 26 --y 7 --yaw 30 --out $(OUT)/campus
+	$(BIN)/vmnav demo --out $(OUT)
 
 test: $(STAMP) lint
 	$(BIN)/python -m pytest -q

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from pathlib import Path
 
 from tools.sim_args import add_sim_arguments, sim_config_from_args
 
@@ -41,6 +42,28 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                         help="views for the localization rate [default: 200]")
     vision.add_argument("--query-seed", type=int, default=0, help="seed of the query poses")
     vision.set_defaults(run=run_vision)
+    follow = bench_sub.add_parser(
+        "follow",
+        help="route following: seeded demos without video, laws side by side",
+        description="For each seed, teach the demo's routes (cached in OUT/seed<N>) and repeat "
+        "the demo's mission once per control law; print per-seed rows and an aggregate per "
+        "law (goal reached, final position error, lateral and heading errors on ground truth).",
+    )
+    add_sim_arguments(follow)
+    follow.add_argument("--seeds", type=int, default=20, metavar="N",
+                        help="number of seeds, from --seed on [default: 20]")
+    follow.add_argument("--laws", nargs="+", default=["paper", "paper+ff"], metavar="LAW",
+                        help="control laws to compare [default: paper paper+ff]")
+    follow.add_argument("--max-omega-deg", type=float, default=None, metavar="DEG",
+                        help="turn-rate bound, deg/s [default: the demo's]")
+    follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
+    follow.add_argument("--goal", type=int, metavar="ID",
+                        help="goal key image [default: the demo's]")
+    follow.add_argument("--landmark-dropout", type=float, default=0.0, metavar="F",
+                        help="fraction of landmarks removed before each repeat [default: 0]")
+    follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
+                        help="where the seeds' memories are cached [default: out/bench_follow]")
+    follow.set_defaults(run=run_follow)
 
 
 def pin_to_one_core() -> list[int]:
@@ -99,4 +122,30 @@ def run_vision(args: argparse.Namespace) -> int:
     result = bench_vision(config, sim_config, camera, plan)
     print(json.dumps({"benchmark": "vision", "cpus": cpus, "load_average_at_start": load,
                       **result}, indent=2))
+    return 0
+
+
+def run_follow(args: argparse.Namespace) -> int:
+    """Print the route-following benchmark's JSON."""
+    from shared.config import CONTROL_LAWS, load_config
+    from shared.errors import InputError
+    from tools.demo import DEMO_MAX_OMEGA_DEG
+    from tools.follow_bench import FollowBenchPlan, bench_follow
+
+    if args.seeds < 1:
+        raise InputError("--seeds", f"must be >= 1, got {args.seeds}")
+    for law in args.laws:
+        if law not in CONTROL_LAWS:
+            raise InputError("--laws", f"unknown law {law!r} (known: {', '.join(CONTROL_LAWS)})")
+    if not 0.0 <= args.landmark_dropout <= 1.0:
+        raise InputError("--landmark-dropout", f"must be in [0, 1], got {args.landmark_dropout}")
+    sim_config, camera = sim_config_from_args(args)
+    config = load_config(args.config)
+    plan = FollowBenchPlan(
+        seeds=tuple(range(sim_config.seed, sim_config.seed + args.seeds)), laws=tuple(args.laws),
+        max_omega_deg=DEMO_MAX_OMEGA_DEG if args.max_omega_deg is None else args.max_omega_deg,
+        routes=tuple(args.routes) if args.routes else None, goal_id=args.goal,
+        landmark_dropout=args.landmark_dropout)
+    result = bench_follow(plan, args.out, config, sim_config, camera)
+    print(json.dumps({"benchmark": "follow", **result}, indent=2))
     return 0

@@ -1,0 +1,284 @@
+"""The robot application: a mission to a goal key image, run by one loop on three interfaces.
+
+The application talks to the world only through a
+:class:`shared.interfaces.FrameSource`, a :class:`shared.interfaces.MobileBase`
+and a :class:`shared.clock.Clock` (the simulator's in lock-step, the camera, the
+ARIA driver and the wall clock on the robot). It owns the mission state machine
+(:class:`robot.mission.Mission`) and, while following, the
+:class:`robot.follower.RouteFollower`.
+
+Rules of the loop (:meth:`RobotApp.run`), once per ``period_ns`` scheduled by
+deadline on the clock (STYLE.md sec. 3):
+
+1. Read a frame and the base's state. A pressed bumper or a stall goes to the
+   mission first (ABORTED).
+2. LOCALIZING or LOST: localize the frame in the memory
+   (:class:`robot.memory.localize.Localizer`); a localization plans the route to
+   the goal and starts (or restarts) the follower. A goal the memory does not
+   reach from there ends the mission as ABORTED with reason ``operator_abort``
+   and the detail "no route ..." (the mission table has no planning edge).
+3. FOLLOWING: one servo cycle, its command to the base; the estimator's LOST and
+   the final key image switch go to the mission.
+4. A ``Tick`` drives the give-up timers. A transition whose commands include STOP
+   stops the base at once.
+5. The loop ends in a final state, when the frame source ends (operator abort),
+   or after ``max_duration_ns`` (operator abort, "time limit"); the base is
+   stopped on the way out.
+
+Every transition, key image switch and localization attempt is an :class:`AppEvent`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from robot.follower import FollowerConfig, FollowStep, RouteFollower
+from robot.memory.localize import Localization, Localizer
+from robot.mission import (
+    FINAL_STATES,
+    Bumper,
+    Command,
+    LocalizationFailed,
+    Localized,
+    Mission,
+    MissionInput,
+    MissionState,
+    OperatorAbort,
+    Stall,
+    Start,
+    Tick,
+    Transition,
+)
+from robot.mission import Arrived as ArrivedInput
+from robot.mission import Lost as LostInput
+from shared.clock import Clock
+from shared.config import VmnavConfig
+from shared.interfaces import BaseState, FrameSource, MobileBase
+from shared.memory import VisualMemory
+
+
+@dataclass(frozen=True, slots=True)
+class AppEvent:
+    """Something that happened, for the report, telemetry and logs.
+
+    Attributes:
+        t_ns: when, ns, on the application's clock.
+        kind: "transition", "key_image", "localization" or "lost".
+        reason: a short code (a mission reason, a switch reason, "ok"/"failed").
+        detail: one human line.
+    """
+
+    t_ns: int
+    kind: str
+    reason: str
+    detail: str
+
+
+@dataclass(frozen=True, eq=False)
+class CycleRecord:
+    """One loop cycle, for observers (plots, video, telemetry).
+
+    Attributes:
+        t_ns: the frame's time, ns.
+        state: the mission state after the cycle.
+        base: the base's state at the frame.
+        follow: the servo cycle, when following.
+        localization: the localization, when localizing.
+        route: the planned route (key image ids), once planned.
+        compute_ns: processing time of the cycle (frame in to command out), ns of
+            the stopwatch (wall time on any clock).
+    """
+
+    t_ns: int
+    state: MissionState
+    base: BaseState
+    follow: FollowStep | None
+    localization: Localization | None
+    route: tuple[int, ...]
+    compute_ns: int
+
+
+@dataclass(frozen=True, eq=False)
+class MissionResult:
+    """How a mission ended.
+
+    Attributes:
+        state: the final mission state (or the state when the loop stopped).
+        reason: the reason of the last transition.
+        detail: its detail line.
+        route: the last planned route (empty when never planned).
+        key_images_reached: targets of the route reached (a junction crossing counts once).
+        targets: targets of the route.
+        events: everything that happened, in order.
+    """
+
+    state: MissionState
+    reason: str
+    detail: str
+    route: tuple[int, ...]
+    key_images_reached: int
+    targets: int
+    events: tuple[AppEvent, ...] = field(default_factory=tuple)
+
+    @property
+    def reached_goal(self) -> bool:
+        """The goal key image was reached."""
+        return self.state is MissionState.ARRIVED
+
+
+class RobotApp:
+    """The robot's application (see the module docstring).
+
+    Args:
+        memory: the visual memory.
+        config: all component configs (features, localize, path state, estimator,
+            switching, control, mission; the camera mount from ``config.sim.camera``).
+        frames: the camera.
+        base: the mobile base.
+        clock: time and waiting.
+        period_ns: the servo period, ns (the camera's frame period).
+        rng: draws the RANSAC samples.
+        stopwatch: wall-time counter for ``compute_ns``, ns (default ``time.perf_counter_ns``).
+    """
+
+    def __init__(self, memory: VisualMemory, config: VmnavConfig, frames: FrameSource,
+                 base: MobileBase, clock: Clock, period_ns: int, rng: np.random.Generator,
+                 stopwatch: Callable[[], int] = time.perf_counter_ns) -> None:
+        self._memory = memory
+        self._config = config
+        self._frames = frames
+        self._base = base
+        self._clock = clock
+        self._period_ns = period_ns
+        self._rng = rng
+        self._stopwatch = stopwatch
+        self._localizer = Localizer.from_memory(memory, config.features, config.localize)
+        self._follower_config = FollowerConfig(
+            features=config.features, path_state=config.path_state,
+            estimator=config.estimator, switching=config.switching, control=config.control,
+            mount=config.sim.camera)
+        self._mission = Mission(config.mission)
+        self._events: list[AppEvent] = []
+        self._follower: RouteFollower | None = None
+        self._route: tuple[int, ...] = ()
+        self._last: Transition | None = None
+        self._reached = 0
+
+    def run(self, goal_id: int, max_duration_ns: int,
+            observer: Callable[[CycleRecord], None] | None = None) -> MissionResult:
+        """Run a mission to ``goal_id`` until it ends (see the module rules).
+
+        Args:
+            goal_id: the goal key image.
+            max_duration_ns: give up (operator abort) after this long, ns.
+            observer: called after every cycle.
+
+        Raises:
+            UnknownKeyframeError: ``goal_id`` is not in the memory (the robot never moved).
+        """
+        self._memory.keyframe(goal_id)
+        start_ns = self._clock.now_ns()
+        self._feed(Start(start_ns, goal_id))
+        deadline_ns = start_ns
+        while self._mission.state not in FINAL_STATES:
+            if self._clock.now_ns() - start_ns >= max_duration_ns:
+                self._feed(OperatorAbort(self._clock.now_ns(), "time limit "
+                                         f"{max_duration_ns / 1e9:.0f} s reached"))
+                break
+            frame = self._frames.read()
+            if frame is None:
+                self._feed(OperatorAbort(self._clock.now_ns(), "the camera ended"))
+                break
+            record = self._cycle(*frame)
+            if observer is not None:
+                observer(record)
+            deadline_ns += self._period_ns
+            self._clock.sleep_until_ns(deadline_ns)
+        self._base.stop()
+        last = self._last
+        return MissionResult(
+            state=self._mission.state,
+            reason="" if last is None else last.reason,
+            detail="" if last is None else last.detail,
+            route=self._route, key_images_reached=self._reached,
+            targets=0 if self._follower is None else len(self._follower.targets),
+            events=tuple(self._events))
+
+    def _cycle(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
+        started = self._stopwatch()
+        base = self._base.state()
+        if base.bumped:
+            self._feed(Bumper(t_ns))
+        elif base.stalled:
+            self._feed(Stall(t_ns))
+        follow: FollowStep | None = None
+        localization: Localization | None = None
+        state = self._mission.state
+        if state in (MissionState.LOCALIZING, MissionState.LOST):
+            localization = self._localize(t_ns, image, base)
+        elif state is MissionState.FOLLOWING and self._follower is not None:
+            follow = self._follow(t_ns, image, base, self._follower)
+        if self._mission.state not in FINAL_STATES:
+            self._feed(Tick(t_ns))
+        return CycleRecord(t_ns=t_ns, state=self._mission.state, base=base,
+                           follow=follow, localization=localization, route=self._route,
+                           compute_ns=self._stopwatch() - started)
+
+    def _localize(self, t_ns: int, image: npt.NDArray[np.uint8],
+                  base: BaseState) -> Localization:
+        found = self._localizer.localize(image)
+        if not found.ok or found.keyframe_id is None:
+            detail = (f"best key image {found.keyframe_id} with {found.matches} matches "
+                      f"(need {self._config.localize.min_matches})")
+            self._events.append(AppEvent(t_ns, "localization", "failed", detail))
+            self._feed(LocalizationFailed(t_ns, detail))
+            return found
+        self._events.append(AppEvent(t_ns, "localization", "ok",
+                                     f"key image {found.keyframe_id}, {found.matches} matches"))
+        goal_id = self._mission.goal_id
+        assert goal_id is not None  # set by Start
+        route = self._memory.plan_route(found.keyframe_id, goal_id)
+        if not route:
+            self._feed(OperatorAbort(t_ns, f"no route from key image {found.keyframe_id} to "
+                                           f"goal key image {goal_id} in the memory graph"))
+            return found
+        self._route = tuple(route)
+        self._follower = RouteFollower(self._memory, route, self._follower_config, self._rng,
+                                       t_ns, base)
+        self._reached = 0
+        self._feed(Localized(t_ns, found.keyframe_id, found.matches))
+        return found
+
+    def _follow(self, t_ns: int, image: npt.NDArray[np.uint8], base: BaseState,
+                follower: RouteFollower) -> FollowStep:
+        step = follower.step(t_ns, image, base)
+        self._base.command(step.twist.v_m_s, step.twist.omega_rad_s)
+        if step.switch is not None:
+            switch = step.switch
+            self._reached += 1
+            key = follower.targets[switch.reached_index]
+            self._events.append(AppEvent(
+                t_ns, "key_image", switch.reason,
+                f"reached key image {key} ({switch.reached_index + 1}/{len(follower.targets)})"))
+            if switch.final:
+                self._feed(ArrivedInput(t_ns, key))
+        if step.lost is not None:
+            self._events.append(AppEvent(t_ns, "lost", step.lost.reason, step.lost.message))
+            self._feed(LostInput(t_ns, step.lost.message))
+        return step
+
+    def _feed(self, event: MissionInput) -> None:
+        transition = self._mission.handle(event)
+        if transition is None:
+            return
+        self._last = transition
+        self._events.append(AppEvent(
+            transition.t_ns, "transition", transition.reason,
+            f"{transition.source.name} -> {transition.target.name}: {transition.detail}"))
+        if Command.STOP in transition.commands:
+            self._base.stop()

@@ -1,0 +1,288 @@
+"""The route follower: one servo cycle per frame, from the image to the velocity command.
+
+Courbon et al. 2008, sec. III; DESIGN.md sec. 5.5-5.7. Per frame
+(:meth:`RouteFollower.step`):
+
+1. the base's odometry since the previous frame predicts the state
+   (:meth:`robot.estimator.Estimator.predict`);
+2. the frame's Harris corners are matched with the next key image's and give
+   (s, y, theta) and the image errors (:func:`robot.vision.frame_state.state_from_frame`);
+   a usable estimate updates the filter;
+3. key image switching (:func:`robot.switching.observe_frame`) on errImageMax and
+   the filtered s; a switch moves the filter to the next key image's frame
+   (:meth:`robot.estimator.Estimator.switch_segment`) and prepares its segment.
+   The goal, the last key image, is reached on the filtered s alone ("passed"):
+   errImageMax falls under 20 px some 20 cm before a key image (measured in the
+   lab), early for intermediate key images but a stop that far from the goal;
+4. the control law (:func:`robot.control_law.steer`) on the filtered (y, theta);
+   before the first estimate the robot drives straight on.
+
+The route is a list of key image ids from :meth:`shared.memory.VisualMemory.plan_route`.
+A junction crossing (ids of different paths, the same place) is one target: the
+key image on the path the route continues on (:func:`targets_from_route`). The
+teach odometry of two paths shares no frame, and a junction joins key images
+only up to about one key image spacing, so switching onto another path restarts
+the estimator (its first vision estimate there initialises it, ungated) instead
+of moving the state across.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from robot.control_law import Twist, steer
+from robot.estimator import Estimate, Estimator, EstimatorLost
+from robot.memory.localize import keyframe_features
+from robot.segment_frame import Pose2, arc_coordinates, relative_pose, segment_curvature_1_m
+from robot.switching import FrameEvidence, KeyImageSwitch, SwitchState, observe_frame
+from robot.vision.features import Features, detect_harris
+from robot.vision.frame_state import (
+    FrameState,
+    KeySegment,
+    key_segment_from_key_images,
+    state_from_frame,
+)
+from robot.vision.lens_mask import lens_mask
+from robot.vision.path_state import PathCoordinates
+from shared.config import (
+    CameraMountConfig,
+    ControlConfig,
+    EstimatorConfig,
+    FeatureConfig,
+    PathStateConfig,
+    SwitchingConfig,
+)
+from shared.errors import DegenerateGeometryError, InputError
+from shared.interfaces import BaseState
+from shared.memory import Keyframe, VisualMemory
+
+
+@dataclass(frozen=True, slots=True)
+class FollowerConfig:
+    """The configs one servo cycle uses (all from :class:`shared.config.VmnavConfig`)."""
+
+    features: FeatureConfig
+    path_state: PathStateConfig
+    estimator: EstimatorConfig
+    switching: SwitchingConfig
+    control: ControlConfig
+    mount: CameraMountConfig
+
+
+@dataclass(frozen=True, eq=False)
+class FollowStep:
+    """What one servo cycle did.
+
+    Attributes:
+        t_ns: the frame's time, ns.
+        target_index: index into :attr:`RouteFollower.targets` headed for during the frame.
+        twist: the command sent to the base.
+        vision: the vision's answer (None when the segment has no usable key pair).
+        corners_xy: (N, 2) float64 the frame's corners, px (for display).
+        y_m, theta_rad, s_m: the filtered state used by the law (None before the first
+            estimate).
+        switch: the key image switch this frame completed, if any.
+        lost: the estimator's LOST event, if this frame declared it.
+    """
+
+    t_ns: int
+    target_index: int
+    twist: Twist
+    vision: FrameState | None
+    corners_xy: npt.NDArray[np.float64]
+    y_m: float | None
+    theta_rad: float | None
+    s_m: float | None
+    switch: KeyImageSwitch | None
+    lost: EstimatorLost | None
+
+    @property
+    def arrived(self) -> bool:
+        """The route's last key image was reached on this frame."""
+        return self.switch is not None and self.switch.final
+
+
+def targets_from_route(memory: VisualMemory, route: list[int]) -> tuple[int, ...]:
+    """The key images to head for along a planned route, junction crossings merged.
+
+    A run of junction crossings (consecutive ids on different paths) is one place;
+    its last key image, on the path the route continues on, is the target.
+
+    Raises:
+        InputError: the route is empty (no route from the start to the goal).
+    """
+    if not route:
+        raise InputError("route", "is empty: the memory does not connect start and goal")
+    path_of = [memory.keyframe(k).path_id for k in route]
+    return tuple(k for i, k in enumerate(route)
+                 if i + 1 == len(route) or path_of[i + 1] == path_of[i])
+
+
+def odometry_increment(before: Pose2, after: Pose2, distance_m: float) -> tuple[float, float]:
+    """Forward distance (m, negative when reversing) and heading change (rad) between poses.
+
+    Args:
+        before: odometry pose (x_m, y_m, yaw_rad) at the previous frame.
+        after: odometry pose now, same frame.
+        distance_m: |path length| driven in between, m (odometry's distance counter).
+    """
+    dx, _, dpsi = relative_pose(before, after)
+    return math.copysign(distance_m, dx), dpsi
+
+
+class RouteFollower:
+    """Follows one planned route key image after key image (see the module docstring).
+
+    Args:
+        memory: the visual memory.
+        route: key image ids from the start to the goal (``plan_route``), not empty.
+        config: the cycle's configs.
+        rng: draws the RANSAC samples.
+        now_ns: the current time, ns (starts the estimator's LOST timer).
+        base: the base's state now (odometry origin of the first increment).
+
+    Raises:
+        InputError: the route is empty.
+        UnknownKeyframeError: a route id is not in the memory.
+    """
+
+    def __init__(self, memory: VisualMemory, route: list[int], config: FollowerConfig,
+                 rng: np.random.Generator, now_ns: int, base: BaseState) -> None:
+        self._memory = memory
+        self._config = config
+        self._rng = rng
+        self.targets = targets_from_route(memory, route)
+        self._mask = lens_mask(memory.camera)
+        self._estimator = Estimator(config.estimator, now_ns)
+        self._switching = SwitchState(route_length=len(self.targets))
+        self._segments: dict[int, KeySegment | None] = {}
+        self._odom = base.odom_pose
+        self._distance_m = base.odom_distance_m
+
+    @property
+    def target_index(self) -> int:
+        """Index of the target headed for (``len(targets)`` once arrived)."""
+        return self._switching.next_index
+
+    @property
+    def finished(self) -> bool:
+        """The goal key image was reached."""
+        return self._switching.finished
+
+    def step(self, t_ns: int, image: npt.NDArray[np.uint8], base: BaseState) -> FollowStep:
+        """One servo cycle on a frame.
+
+        Args:
+            t_ns: the frame's time, ns.
+            image: (H, W) uint8 grey frame of the memory's camera.
+            base: the base's state at the frame.
+
+        Raises:
+            InputError: the route was already finished.
+        """
+        if self.finished:
+            raise InputError("RouteFollower.step", "the route's goal was already reached")
+        ds, dpsi = odometry_increment(self._odom, base.odom_pose,
+                                      base.odom_distance_m - self._distance_m)
+        self._odom, self._distance_m = base.odom_pose, base.odom_distance_m
+        self._estimator.predict(ds, dpsi)
+        index = self.target_index
+        corners = detect_harris(image, self._config.features, self._mask)
+        vision = self._vision(index, corners)
+        if vision is not None and vision.state.ok:
+            self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
+                                   vision.state.theta_rad)
+        lost = self._estimator.poll(t_ns)
+        estimate = self._estimator.estimate
+        final = index == len(self.targets) - 1
+        evidence = FrameEvidence(
+            t_ns=t_ns,
+            err_image_max_px=None if vision is None or final
+            else vision.image_errors.err_image_max_px,
+            s_m=None if estimate is None else estimate.s_m,
+        )
+        self._switching, switch = observe_frame(self._switching, evidence,
+                                                self._config.switching)
+        if switch is not None and not switch.final:
+            self._switch_estimator(t_ns, switch.next_index)
+        twist = self._command(index, estimate)
+        return FollowStep(
+            t_ns=t_ns, target_index=index, twist=twist, vision=vision,
+            corners_xy=corners.pixels_xy,
+            y_m=None if estimate is None else estimate.y_m,
+            theta_rad=None if estimate is None else estimate.theta_rad,
+            s_m=None if estimate is None else estimate.s_m,
+            switch=switch, lost=lost,
+        )
+
+    def _keyframe(self, index: int) -> Keyframe:
+        return self._memory.keyframe(self.targets[index])
+
+    def _vision(self, index: int, corners: Features) -> FrameState | None:
+        segment = self._segment(index)
+        if segment is None:
+            return None
+        cfg = self._config
+        return state_from_frame(corners, segment, self._memory.camera, cfg.mount, self._rng,
+                                cfg.path_state)
+
+    def _segment(self, index: int) -> KeySegment | None:
+        """The target's segment, prepared once: with the previous key image of its path,
+        or on a path's first key image with the one after it."""
+        if index not in self._segments:
+            self._segments[index] = self._prepare(self._keyframe(index))
+        return self._segments[index]
+
+    def _prepare(self, key: Keyframe) -> KeySegment | None:
+        path = self._memory.paths[key.path_id].keyframe_ids
+        if key.index > 0:
+            other = self._memory.keyframe(path[key.index - 1])
+            tracks = key.tracked_from_previous[:, ::-1]
+        elif len(path) > 1:
+            other = self._memory.keyframe(path[1])
+            tracks = other.tracked_from_previous
+        else:
+            return None
+        cfg = self._config
+        try:
+            segment = key_segment_from_key_images(
+                keyframe_features(key), keyframe_features(other), key.odom_pose, other.odom_pose,
+                self._memory.camera, cfg.mount, self._rng, cfg.path_state, tracks)
+        except DegenerateGeometryError:
+            return None
+        return segment if segment.key_pair.ok else None
+
+    def _switch_estimator(self, t_ns: int, next_index: int) -> None:
+        """Move the filter to the next target's frame (teach odometry), or restart it when
+        the route changes paths there."""
+        current, following = self._keyframe(next_index - 1), self._keyframe(next_index)
+        if current.path_id == following.path_id:
+            self._estimator.switch_segment(relative_pose(current.odom_pose, following.odom_pose))
+        else:
+            self._estimator.reset(t_ns)
+
+    def _command(self, index: int, estimate: Estimate | None) -> Twist:
+        cfg = self._config.control
+        if estimate is None:
+            return Twist(v_m_s=cfg.speed_m_s, omega_rad_s=0.0)
+        coords = PathCoordinates(estimate.s_m, estimate.y_m, estimate.theta_rad)
+        curvature = self._curvature(index) if cfg.law == "paper+ff" else 0.0
+        if curvature != 0.0:
+            coords = arc_coordinates(coords, curvature)
+        return steer(coords.y_m, coords.theta_rad, cfg, curvature)
+
+    def _curvature(self, index: int) -> float:
+        """Teach-path curvature into the target from its path predecessor, 1/m (0 if none)."""
+        key = self._keyframe(index)
+        if key.index == 0:
+            return 0.0
+        path = self._memory.paths[key.path_id].keyframe_ids
+        previous = self._memory.keyframe(path[key.index - 1])
+        length = key.distance_m - previous.distance_m
+        if length <= 0:
+            return 0.0
+        return segment_curvature_1_m(previous.odom_pose, key.odom_pose, length)

@@ -1,0 +1,107 @@
+"""RobotApp against fake interfaces: bad goals, failed localization, safety, the camera ending.
+
+The lock-step end-to-end run (teach in the simulator, repeat from an offset) is in
+tests/tools/test_demo.py, which drives RobotApp on the simulator's adapters.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robot.app import RobotApp
+from robot.mission import MissionState
+from shared.clock import ManualClock
+from shared.config import FeatureConfig, MissionConfig, VmnavConfig
+from shared.errors import UnknownKeyframeError
+from shared.interfaces import BaseState
+from tests.shared.memory.builders import PATCH_LENGTH, loop_memory
+
+PERIOD_NS = 100_000_000
+
+
+class FakeFrames:
+    """Random-noise frames (nothing localizes), optionally ending after ``count``."""
+
+    def __init__(self, shape: tuple[int, int], clock: ManualClock, count: int | None = None):
+        self._rng = np.random.default_rng(0)
+        self._shape, self._clock, self._left = shape, clock, count
+
+    def read(self):
+        if self._left is not None:
+            if self._left == 0:
+                return None
+            self._left -= 1
+        return self._clock.now_ns(), self._rng.integers(0, 256, self._shape, dtype=np.uint8)
+
+
+class FakeBase:
+    def __init__(self, bumped: bool = False) -> None:
+        self.commands: list[tuple[float, float]] = []
+        self.bumped = bumped
+
+    def command(self, v_m_s: float, omega_rad_s: float) -> None:
+        self.commands.append((v_m_s, omega_rad_s))
+
+    def stop(self) -> None:
+        self.commands.append((0.0, 0.0))
+
+    def state(self) -> BaseState:
+        return BaseState((0.0, 0.0, 0.0), 0.0, self.bumped, False, 12.5, True)
+
+
+@pytest.fixture
+def memory():
+    return loop_memory(np.random.default_rng(5))
+
+
+def make_app(memory, base: FakeBase, count: int | None = None) -> tuple[RobotApp, ManualClock]:
+    clock = ManualClock()
+    config = VmnavConfig(features=FeatureConfig(patch_size_px=int(PATCH_LENGTH**0.5)),
+                         mission=MissionConfig(localize_attempts=3))
+    frames = FakeFrames((memory.camera.height, memory.camera.width), clock, count)
+    return RobotApp(memory, config, frames, base, clock, PERIOD_NS,
+                    np.random.default_rng(0)), clock
+
+
+def test_a_goal_not_in_memory_is_refused_before_moving(memory) -> None:
+    base = FakeBase()
+    app, _ = make_app(memory, base)
+    with pytest.raises(UnknownKeyframeError, match="99"):
+        app.run(99, 10**10)
+    assert base.commands == []
+
+
+def test_failed_localization_gives_up_stopped_with_events(memory) -> None:
+    base = FakeBase()
+    app, clock = make_app(memory, base)
+    records = []
+    result = app.run(5, 10**11, records.append)
+    assert result.state is MissionState.FAILED and not result.reached_goal
+    assert result.reason == "localization_failed" and "3 failed attempts" in result.detail
+    assert [r.state for r in records] == [MissionState.LOCALIZING] * 2 + [MissionState.FAILED]
+    assert all(c == (0.0, 0.0) for c in base.commands) and base.commands
+    kinds = [(e.kind, e.reason) for e in result.events]
+    assert kinds == [("transition", "start")] + [("localization", "failed")] * 3 + [
+        ("transition", "localization_failed")]
+    assert clock.now_ns() == 3 * PERIOD_NS
+
+
+def test_a_pressed_bumper_aborts(memory) -> None:
+    base = FakeBase(bumped=True)
+    app, _ = make_app(memory, base)
+    result = app.run(5, 10**11)
+    assert result.state is MissionState.ABORTED and result.reason == "bumper"
+    assert base.commands[-1] == (0.0, 0.0)
+
+
+def test_the_camera_ending_aborts(memory) -> None:
+    app, _ = make_app(memory, FakeBase(), count=1)
+    result = app.run(5, 10**11)
+    assert result.state is MissionState.ABORTED and result.detail.endswith("the camera ended")
+
+
+def test_the_time_limit_aborts(memory) -> None:
+    app, _ = make_app(memory, FakeBase())
+    result = app.run(5, PERIOD_NS)
+    assert result.state is MissionState.ABORTED and "time limit" in result.detail

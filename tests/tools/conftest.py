@@ -1,0 +1,20 @@
+"""A short lock-step demo shared by the demo and follow-benchmark tests (taught once)."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from tools.cli import main
+
+
+@pytest.fixture(scope="session")
+def short_demo(tmp_path_factory):
+    """The corridor taught (seed 1), then repeated from 0.3 m / 10 degrees off to its key
+    image 12. Returns (exit code, output folder ``.../seed1``, wall time s)."""
+    out = tmp_path_factory.mktemp("follow") / "seed1"
+    started = time.perf_counter()
+    code = main(["demo", "--routes", "corridor", "--goal", "12", "--out", str(out),
+                 "--no-video"])
+    return code, out, time.perf_counter() - started

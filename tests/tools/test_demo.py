@@ -1,0 +1,115 @@
+"""``vmnav demo`` end to end (lock-step: teach a short route, repeat it from an offset), its
+bad input, and the error measure against the taught path."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+
+from tools.cli import main
+from tools.demo_report import track_errors
+
+REPORT_KEYS = ("reached_goal", "final_position_error_m", "lateral_rms_m", "lateral_max_m",
+               "heading_rms_deg", "key_images_route", "key_images_reached", "distance_m",
+               "sim_time_s", "wall_time_s", "mean_matches", "loop_ms_p50", "loop_ms_p95",
+               "lost_events", "events")
+
+
+def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
+    code, out, _ = short_demo
+    report = json.loads((out / "report.json").read_text())
+    assert code == 0
+    assert all(key in report for key in REPORT_KEYS)
+    assert report["reached_goal"] and report["state"] == "arrived"
+    assert report["key_images_reached"] == report["key_images_route"] >= 5
+    assert report["final_position_error_m"] < 0.15
+    assert report["lateral_rms_m"] < 0.05 and report["lateral_max_m"] < 0.10
+    assert report["lost_events"] == 0
+    assert report["sim_time_s"] > report["wall_time_s"]  # faster than real time
+    assert [e["reason"] for e in report["events"] if e["kind"] == "transition"] == [
+        "start", "localized", "arrived"]
+
+
+def test_it_writes_the_plots(short_demo) -> None:
+    _, out, _ = short_demo
+    for name in ("topdown.png", "errors_vs_distance.png", "image_errors.png", "matches.png"):
+        assert (out / name).stat().st_size > 10_000
+    assert not (out / "demo.mp4").exists()
+
+
+def test_a_goal_not_in_memory_is_one_line_and_reuses_the_memory(short_demo, capsys) -> None:
+    _, out, _ = short_demo
+    started = time.perf_counter()
+    code = main(["demo", "--routes", "corridor", "--goal", "999", "--out", str(out),
+                 "--no-video"])
+    err = capsys.readouterr().err
+    assert code == 1 and time.perf_counter() - started < 5.0
+    assert err.count("\n") == 1 and "key image 999 is not in the memory" in err
+
+
+def test_a_memory_taught_otherwise_is_refused_before_teaching(short_demo, capsys) -> None:
+    _, out, _ = short_demo
+    code = main(["demo", "--routes", "corridor", "--seed", "7", "--out", str(out), "--no-video"])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and "taught with another world, seed" in err
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--world", "atlantis"], "atlantis"),
+    (["--routes", "nowhere"], "unknown route 'nowhere'"),
+    (["--landmark-dropout", "2"], "--landmark-dropout"),
+])
+def test_bad_input_is_one_line(tmp_path, capsys, args, message) -> None:
+    code = main(["demo", "--out", str(tmp_path / "out"), "--no-video", *args])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and message in err
+
+
+class TestTrackErrors:
+    def test_left_is_positive_and_heading_is_relative(self) -> None:
+        reference = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+        poses = np.array([[0.5, 0.1, 0.2], [1.5, -0.05, -0.1]])
+        errors = track_errors(poses, reference)
+        assert errors.lateral_m == pytest.approx([0.1, -0.05])
+        assert errors.heading_rad == pytest.approx([0.2, -0.1])
+        assert errors.distance_m == pytest.approx([0.0, math.hypot(1.0, 0.15)])
+
+    def test_a_route_that_comes_back_is_measured_against_the_right_pass(self) -> None:
+        # East along y = 0, a U-turn, west along y = 0.4 (0.1 m steps). Both passes'
+        # samples lie nearer the other pass; progress along the route picks the right one.
+        xs = np.arange(0.0, 2.01, 0.1)
+        out = np.column_stack([xs, np.zeros_like(xs), np.zeros_like(xs)])
+        turn = np.array([[2.2, 0.2, math.pi / 2]])
+        back = np.column_stack([xs[::-1], np.full_like(xs, 0.4), np.full_like(xs, math.pi)])
+        reference = np.vstack([out, turn, back])
+        shift = np.array([0.0, 0.25, 0.0])
+        poses = np.vstack([out + shift, [[2.2, 0.2, math.pi / 2]], back - shift])
+        errors = track_errors(poses, reference)
+        k = len(xs) - 6  # away from the turn (the search window spans 8 segments)
+        assert errors.lateral_m[:k] == pytest.approx(np.full(k, 0.25))
+        assert errors.lateral_m[-k:] == pytest.approx(np.full(k, 0.25))
+        assert errors.heading_rad[-k:] == pytest.approx(np.zeros(k), abs=1e-9)
+
+
+def test_the_summary_rounds_for_people() -> None:
+    from tools.demo_report import summary_text
+
+    report = {"reached_goal": True, "goal_key_image": 66, "state": "arrived",
+              "detail": "at goal key image 66", "key_images_reached": 35,
+              "key_images_route": 35, "distance_m": 17.6703, "sim_time_s": 88.76,
+              "wall_time_s": 35.5579, "settling_distance_m": 2.1568, "lateral_rms_m": 0.0181,
+              "lateral_max_m": 0.0552, "heading_rms_deg": 0.8466,
+              "final_position_error_m": 0.016, "mean_matches": 74.4014, "loop_ms_p50": 8.537,
+              "loop_ms_p95": 10.8702, "lost_events": 0}
+    text = summary_text(report)
+    assert "35/35 key images, 17.67 m in 88.8 s simulated, 35.6 s wall" in text
+    assert "lateral RMS 1.8 cm, max 5.5 cm; heading RMS 0.85 deg" in text
+    assert "final position error 1.6 cm" in text and "8.5 ms median" in text
+    failed = summary_text({**report, "reached_goal": False, "lateral_rms_m": None,
+                           "mean_matches": None})
+    assert "did NOT reach the goal" in failed and "lateral RMS" not in failed
+    assert "n/a matches" in failed

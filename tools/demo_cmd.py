@@ -1,0 +1,102 @@
+"""``vmnav demo``: teach routes, then repeat one to a goal on another path; report, plots, video.
+
+See :mod:`tools.demo` for the story, :mod:`tools.demo_report` for what is measured
+and :mod:`tools.demo_plots` for the figures and the video.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+from shared.config import CONTROL_LAWS
+from shared.errors import InputError
+from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
+from tools.sim_args import add_sim_arguments, sim_config_from_args
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav demo``."""
+    demo = subparsers.add_parser(
+        "demo",
+        help="teach routes, then repeat one to a goal (simulator)",
+        description="In one lock-step process: teach the routes into one visual memory (or "
+        "reuse the one in OUT), place the robot 0.3 m and 10 degrees off the first route, "
+        "localize, plan to a goal key image on another path and follow it there. Prints a "
+        "summary and writes report.json, plots and a video into OUT.",
+    )
+    add_sim_arguments(demo)
+    demo.add_argument("--out", type=Path, default=Path("out/demo"), metavar="DIR",
+                      help="output folder [default: out/demo]")
+    demo.add_argument("--routes", default=None, metavar="A,B,...",
+                      help="routes to teach, in order [default: all the world's, in its order]")
+    demo.add_argument("--goal", type=int, default=None, metavar="ID",
+                      help="goal key image [default: the middle of the second route]")
+    demo.add_argument("--landmark-dropout", type=float, default=0.0, metavar="F",
+                      help="fraction of landmarks removed between teach and repeat [default: 0]")
+    demo.add_argument("--max-omega-deg", type=float, default=DEMO_MAX_OMEGA_DEG, metavar="DEG",
+                      help="bound on the turn rate, deg/s [default: %(default)s; the paper's "
+                      "10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
+    demo.add_argument("--law", choices=CONTROL_LAWS, default=DEMO_LAW,
+                      help="control law: the paper's eq. (2), or with the teach path's "
+                      "curvature fed forward [default: %(default)s]")
+    demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
+    demo.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Teach (or reuse), repeat, write the outputs and print the summary."""
+    from shared.config import load_config
+    from tools.demo import (
+        default_goal,
+        follow_config,
+        repeat_in_sim,
+        taught_memory,
+    )
+    from tools.demo_plots import VideoWriter, write_plots
+    from tools.demo_report import build_report, summary_text
+
+    if not 0.0 <= args.landmark_dropout <= 1.0:
+        raise InputError("--landmark-dropout", f"must be in [0, 1], got {args.landmark_dropout}")
+    routes = None if args.routes is None else tuple(
+        name.strip() for name in args.routes.split(",") if name.strip())
+    if routes is not None and not routes:
+        raise InputError("--routes", "names no route")
+    sim_config, camera = sim_config_from_args(args)
+    config = load_config(args.config)
+    config = follow_config(dataclasses.replace(config, sim=sim_config), args.law,
+                           args.max_omega_deg)
+    out: Path = args.out
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    taught = taught_memory(out, routes, config, sim_config, camera)
+    teach_s = time.perf_counter() - started
+    goal = default_goal(taught) if args.goal is None else args.goal
+    video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
+    repeat_started = time.perf_counter()
+    try:
+        repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout,
+                               None if video is None else video.add)
+    finally:
+        if video is not None:
+            video.close()
+    report = build_report(repeat, taught, config.control, time.perf_counter() - repeat_started)
+    report["teach_wall_time_s"] = round(teach_s, 2)
+    report["memory_reused"] = taught.reused
+    report["people"] = sim_config.people.count
+    report["landmark_dropout"] = args.landmark_dropout
+    report["max_omega_deg"] = args.max_omega_deg
+    report["control_law"] = config.control.law
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    write_plots(out, repeat, taught)
+    memory = taught.memory
+    print(f"memory {out / 'memory'}: {len(memory.paths)} paths, {len(memory.keyframes)} key "
+          f"images, {'reused' if taught.reused else f'taught in {teach_s:.1f} s'}")
+    print(summary_text(report))
+    print(f"wrote {out / 'report.json'}, plots{'' if video is None else ' and demo.mp4'}")
+    return 0 if report["reached_goal"] else 1
