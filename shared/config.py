@@ -325,12 +325,23 @@ class PeopleConfig:
     """Body radius (a vertical cylinder), m."""
     height_m: float = 1.75
     """Body height, m."""
+    avoid_robot: bool = True
+    """Whether people yield to the robot (False: they walk into it, for bump scenarios)."""
+    clearance_m: float = 0.8
+    """Look-ahead: a person yields when moving this far on, relative to the robot, touches it, m."""
+    yield_patience_s: float = 3.0
+    """Time a person stands yielding before walking off to another goal, s."""
 
     def __post_init__(self) -> None:
         require(self.count >= 0, f"count must be >= 0, got {self.count}")
         require(self.speed_m_s >= 0, f"speed_m_s must be >= 0, got {self.speed_m_s}")
         require(self.radius_m > 0, f"radius_m must be > 0, got {self.radius_m}")
         require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
+        require(self.clearance_m > 0, f"clearance_m must be > 0, got {self.clearance_m}")
+        require(
+            self.yield_patience_s >= 0,
+            f"yield_patience_s must be >= 0, got {self.yield_patience_s}",
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -467,10 +478,13 @@ class TeachConfig:
 
     min_tracked_points: int = 50
     """M: a key image shares at least this many points tracked from the previous one."""
-    min_tracked_fraction: float = 0.5
+    min_tracked_fraction: float = 0.35
     """In (0, 1]. A key image with few corners needs only this fraction of them tracked
     (the threshold is min(M, ceil(fraction * corners))): in a sparse scene a fixed M
-    would force a key image at every frame."""
+    would force a key image at every frame. It must stay well below the share of
+    the live points a single frame matches, 0.46-0.77 in the ``lab`` and ``campus``
+    worlds: at 0.5 the ``campus`` corridor got key images 2 cm apart, too close for a
+    key pair (see :mod:`robot.teach`, rule 3)."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
     tracking: MatchConfig = field(default_factory=_tracking_match_config)

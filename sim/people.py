@@ -13,16 +13,26 @@ Rules:
    current position closely is refused too, unless it leads away from the robot.
    With no acceptable goal among :data:`GOAL_TRIES` draws the person waits
    half a second and tries again.
-3. People are kinematic: nothing stops them, and a person who walks into the
-   robot pushes it (that is how people bump the robot). On that contact the
-   person stops, waits :data:`BUMP_PAUSE_S` and walks off elsewhere.
-4. People pass through each other (kinematic bodies do not collide).
+3. People yield to the robot (``config.avoid_robot``). Each step a person looks
+   along their motion relative to the robot (their walk minus the robot's
+   velocity): if their body, swept ``config.clearance_m`` that way, would touch
+   the robot's box while closing in, they
+
+   - stop and wait, when standing still is safe (the robot is not coming at
+     them); after ``config.yield_patience_s`` of waiting they walk off to
+     another goal (rule 2 refuses goals towards the robot);
+   - otherwise step aside: walk square to the robot's motion, away from its
+     line (the other side if that way is not clear), until their body is
+     :data:`SIDESTEP_MARGIN_M` beyond the robot's half-diagonal from that line,
+     then pick a new goal. With nowhere clear to go they stand still.
+4. People are kinematic: nothing stops them, and a person who walks into the
+   robot pushes it (that is how people bump the robot; with ``avoid_robot``
+   False, or a robot turning into them). On that contact the person stops,
+   waits :data:`BUMP_PAUSE_S` and walks off elsewhere.
+5. People pass through each other (kinematic bodies do not collide).
 """
 
 from __future__ import annotations
-
-import math
-from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -44,11 +54,14 @@ GOAL_TRIES = 8
 """Goals drawn per attempt."""
 RETRY_S = 0.5
 """Wait before trying again when no goal was acceptable, s."""
+SIDESTEP_MARGIN_M = 0.3
+"""Room a sidestepping person leaves between their body and the robot's half-diagonal, m."""
 
 _BODY_CLEARANCE_M = 0.1  # room left between a person and walls or furniture
 _START_CLEARANCE_M = 1.5  # people start at least this far from the robot
 _ROBOT_PASS_M = 0.5  # a goal path passes the robot's centre no closer than radius + this
 _MIN_WALK_M = 1.0  # goals nearer than this are not worth walking to
+_STILL_M_S = 1e-3  # relative speeds below this are standing still
 
 
 class People:
@@ -59,7 +72,7 @@ class People:
         free_space: where people may go.
         config: count, speed, radius and height.
         rng: source of start places, goals and pauses.
-        robot_xy: returns the robot's current (x, y), m.
+        robot: the robot's shape in ``space`` (its body gives position and velocity).
     """
 
     def __init__(
@@ -68,17 +81,20 @@ class People:
         free_space: FreeSpaceMap,
         config: PeopleConfig,
         rng: np.random.Generator,
-        robot_xy: Callable[[], tuple[float, float]],
+        robot: pymunk.Poly,
     ) -> None:
         self.config = config
         self._space = space
         self._free_space = free_space
         self._rng = rng
-        self._robot_xy = robot_xy
+        self._robot = robot
+        self._robot_half_diagonal_m = max(v.length for v in robot.get_vertices())
         self._bodies: list[pymunk.Body] = []
         self._index: dict[pymunk.Shape, int] = {}
         self._goals: list[tuple[float, float] | None] = [None] * config.count
         self._wait_s = [0.0] * config.count
+        self._blocked_s = [0.0] * config.count
+        self._sidestepping = [False] * config.count
         for i, (x, y) in enumerate(self._start_places()):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
             body.position = (float(x), float(y))
@@ -113,39 +129,104 @@ class People:
         self._space.reindex_shapes_for_body(body)
         self._goals[index] = (float(goal_xy[0]), float(goal_xy[1]))
         self._wait_s[index] = 0.0
+        self._blocked_s[index] = 0.0
+        self._sidestepping[index] = False
 
     # -- the step ---------------------------------------------------------------------
 
     def before_step(self, dt_s: float) -> None:
         """Set each person's velocity for the coming step."""
-        speed = self.config.speed_m_s
         for i, body in enumerate(self._bodies):
-            if self._wait_s[i] > 0:
-                self._wait_s[i] -= dt_s
-                body.velocity = (0.0, 0.0)
-                continue
-            goal = self._goals[i]
+            velocity = self._walk(i, body.position, dt_s)
+            if self.config.avoid_robot and not self._sidestepping[i]:
+                velocity = self._yield(i, body.position, velocity, dt_s)
+            body.velocity = velocity
+
+    def _walk(self, i: int, position: pymunk.Vec2d, dt_s: float) -> pymunk.Vec2d:
+        """Person ``i``'s velocity by rules 1-2 (pauses, goals), world frame, m/s."""
+        if self._wait_s[i] > 0:
+            self._wait_s[i] -= dt_s
+            return pymunk.Vec2d(0.0, 0.0)
+        goal = self._goals[i]
+        if goal is None:
+            goal = self._goals[i] = self._pick_goal(position)
             if goal is None:
-                goal = self._goals[i] = self._pick_goal(body.position)
-                if goal is None:
-                    self._wait_s[i] = RETRY_S
-                    body.velocity = (0.0, 0.0)
-                    continue
-            x, y = body.position
-            dx, dy = goal[0] - x, goal[1] - y
-            distance = math.hypot(dx, dy)
-            if distance <= speed * dt_s:  # arrive exactly at the end of this step
-                body.velocity = (dx / dt_s, dy / dt_s)
+                self._wait_s[i] = RETRY_S
+                return pymunk.Vec2d(0.0, 0.0)
+        to_goal = pymunk.Vec2d(*goal) - position
+        distance = to_goal.length
+        speed = self.config.speed_m_s
+        if distance <= speed * dt_s:  # arrive exactly at the end of this step
+            self._goals[i] = None
+            self._sidestepping[i] = False
+            if self._rng.random() < PAUSE_PROBABILITY:
+                self._wait_s[i] = float(self._rng.uniform(*PAUSE_S))
+            return to_goal / dt_s
+        return to_goal * (speed / distance)
+
+    # -- yielding to the robot ----------------------------------------------------------
+
+    def _yield(
+        self, i: int, position: pymunk.Vec2d, velocity: pymunk.Vec2d, dt_s: float
+    ) -> pymunk.Vec2d:
+        """Rule 3: ``velocity`` (world frame, m/s) if it keeps clear of the robot, else a yield."""
+        robot_velocity = self._robot.body.velocity
+        if not self._closing_in(position, velocity - robot_velocity):
+            self._blocked_s[i] = 0.0
+            return velocity
+        if not self._closing_in(position, -robot_velocity):  # standing still is safe
+            self._blocked_s[i] += dt_s
+            if self._blocked_s[i] >= self.config.yield_patience_s:
                 self._goals[i] = None
-                if self._rng.random() < PAUSE_PROBABILITY:
-                    self._wait_s[i] = float(self._rng.uniform(*PAUSE_S))
-            else:
-                body.velocity = (dx * speed / distance, dy * speed / distance)
+                self._blocked_s[i] = 0.0
+            return pymunk.Vec2d(0.0, 0.0)
+        self._blocked_s[i] = 0.0
+        speed = self.config.speed_m_s
+        aside = self._sidestep_goal(position, robot_velocity) if speed > 0 else None
+        if aside is None:
+            return pymunk.Vec2d(0.0, 0.0)
+        self._goals[i] = aside
+        self._wait_s[i] = 0.0
+        self._sidestepping[i] = True
+        return (pymunk.Vec2d(*aside) - position).scale_to_length(speed)
+
+    def _closing_in(self, position: pymunk.Vec2d, relative_velocity: pymunk.Vec2d) -> bool:
+        """Whether moving at ``relative_velocity`` (person minus robot, m/s) nears the robot.
+
+        True when the person's body, swept ``clearance_m`` along that direction,
+        touches the robot's box, and the motion shortens the gap between them.
+        """
+        if relative_velocity.length < _STILL_M_S:
+            return False
+        nearest = self._robot.point_query(position)
+        if relative_velocity.dot(nearest.gradient) >= 0:  # moving away from the box
+            return False
+        ahead = position + relative_velocity.scale_to_length(self.config.clearance_m)
+        hit = self._robot.segment_query(position, ahead, self.config.radius_m)
+        return hit is not None
+
+    def _sidestep_goal(
+        self, position: pymunk.Vec2d, robot_velocity: pymunk.Vec2d
+    ) -> tuple[float, float] | None:
+        """Where to step, square to the robot's motion and clear of its path, or None."""
+        left = robot_velocity.perpendicular_normal()
+        lateral = (position - self._robot.body.position).dot(left)
+        reach = self._robot_half_diagonal_m + self.config.radius_m + SIDESTEP_MARGIN_M
+        side = 1.0 if lateral >= 0 else -1.0
+        for sign in (side, -side):
+            goal = position + left * (sign * reach - lateral)
+            start, end = (position.x, position.y), (goal.x, goal.y)
+            if self._free_space.path_is_clear(
+                start, end, self.config.radius_m + 0.5 * _BODY_CLEARANCE_M
+            ):
+                return end
+        return None
 
     def _on_bump(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         i = self._index.get(arbiter.shapes[0])
         if i is not None:
             self._goals[i] = None
+            self._sidestepping[i] = False
             self._wait_s[i] = BUMP_PAUSE_S
             self._bodies[i].velocity = (0.0, 0.0)
 
@@ -154,7 +235,7 @@ class People:
     def _start_places(self) -> npt.NDArray[np.float64]:
         """Start positions: clear of walls, furniture, the robot and each other."""
         r = self.config.radius_m
-        robot = np.asarray(self._robot_xy(), dtype=float)
+        robot = np.array(self._robot.body.position, dtype=float)
         places: list[npt.NDArray[np.float64]] = []
         for _ in range(100 * self.config.count):
             p = self._sample(1)[0]
@@ -180,7 +261,7 @@ class People:
 
     def _pick_goal(self, position: pymunk.Vec2d) -> tuple[float, float] | None:
         here = np.array([position.x, position.y])
-        robot = np.asarray(self._robot_xy(), dtype=float)
+        robot = np.array(self._robot.body.position, dtype=float)
         keep_off = self.config.radius_m + _ROBOT_PASS_M
         for goal in self._sample(GOAL_TRIES):
             if np.hypot(*(goal - here)) < _MIN_WALK_M:

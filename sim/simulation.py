@@ -75,7 +75,9 @@ class Simulation:
             self.free_space,
         )
         self.body = PioneerBody(self.space, config.body, config.odometry, world.start, odometry_rng)
-        self.people = People(self.space, self.free_space, config.people, people_rng, self._robot_xy)
+        self.people = People(
+            self.space, self.free_space, config.people, people_rng, self.body.shape
+        )
         self._now_ns = 0
         self._dt_s = config.physics_dt_ns / 1e9
 
@@ -91,10 +93,6 @@ class Simulation:
             poly.friction = _WALL_FRICTION
             tag(poly, Category.FURNITURE, box.height_m)
             self.space.add(poly)
-
-    def _robot_xy(self) -> tuple[float, float]:
-        x, y, _ = self.body.pose_w
-        return x, y
 
     # -- time -------------------------------------------------------------------------
 

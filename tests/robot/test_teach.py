@@ -112,6 +112,17 @@ class TestKeyImageSelection:
         selected = select(staggered(45, 40), config, rng)
         assert [s.frame_index for s in selected] == [0, 20, 40, 44]
 
+    def test_the_default_fraction_is_below_the_per_frame_match_rate(
+        self, rng: np.random.Generator
+    ) -> None:
+        # A sparse key image of 40 corners; every later frame matches 45 % of them (18),
+        # the lowest frame-to-frame rate measured in the campus corridor. The default
+        # threshold (ceil(0.35 * 40) = 14) keeps them in one segment; a threshold of 20
+        # (fraction 0.5) would force a key image at frame 1.
+        visible = [list(range(40)), *[list(range(18))] * 10]
+        selected = select(visible, TeachConfig(), rng)
+        assert [(s.frame_index, s.shared_points) for s in selected] == [(0, 0), (10, 18)]
+
     @settings(max_examples=12, deadline=None)
     @given(
         seed=st.integers(0, 2**32 - 1),

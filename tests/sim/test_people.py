@@ -7,16 +7,24 @@ from shared.config import PeopleConfig, SimConfig
 from shared.errors import ConfigError
 from sim._geometry import point_segment_distances, points_in_polygons
 from sim.free_space import WALL_HALF_THICKNESS_M
+from sim.people import SIDESTEP_MARGIN_M
 from sim.simulation import Simulation
 from sim.world import World, load_world
 from tests.sim.rooms import box_room
 
 
-def people_sim(world: World, count: int, seed: int = 1, speed: float = 1.0) -> Simulation:
-    config = SimConfig(
-        seed=seed, landmark_density_scale=0.0, people=PeopleConfig(count=count, speed_m_s=speed)
-    )
+def people_sim(
+    world: World, count: int, seed: int = 1, speed: float = 1.0, avoid_robot: bool = True
+) -> Simulation:
+    people = PeopleConfig(count=count, speed_m_s=speed, avoid_robot=avoid_robot)
+    config = SimConfig(seed=seed, landmark_density_scale=0.0, people=people)
     return Simulation(world, config)
+
+
+def gap_to_robot(sim: Simulation) -> float:
+    """Distance between person 0's body and the robot's box, m (negative: overlapping)."""
+    person = tuple(sim.people.positions()[0])
+    return sim.body.shape.point_query(person).distance - sim.config.people.radius_m
 
 
 class TestWalking:
@@ -68,7 +76,7 @@ class TestWalking:
 
 class TestBumping:
     def test_a_person_walking_into_the_robot_bumps_and_pushes_it(self) -> None:
-        sim = people_sim(box_room(), count=1)
+        sim = people_sim(box_room(), count=1, avoid_robot=False)
         sim.people.place(0, (8.0, 3.0), (2.0, 3.0))  # straight at the robot's front
         bumped = []
         for _ in range(400):
@@ -81,7 +89,7 @@ class TestBumping:
         assert np.linalg.norm(sim.people.positions()[0] - sim.body.pose_w[:2]) > 0.5
 
     def test_the_robot_driving_into_a_standing_person_stalls(self) -> None:
-        sim = people_sim(box_room(), count=1, speed=0.0)
+        sim = people_sim(box_room(), count=1, speed=0.0, avoid_robot=False)
         sim.people.place(0, (6.5, 3.0), (6.5, 3.0))
         sim.body.command(0.3, 0.0)
         sim.step_until(4_000_000_000)
@@ -89,3 +97,83 @@ class TestBumping:
         assert sim.body.pose_w[0] == pytest.approx(
             6.5 - 0.25 - sim.config.body.length_m / 2, abs=0.01
         )
+
+
+class TestYielding:
+    def test_a_person_walking_at_a_parked_robot_stops_short_waits_and_walks_off(self) -> None:
+        sim = people_sim(box_room(), count=1)
+        sim.people.place(0, (8.0, 3.0), (2.0, 3.0))  # straight at the robot's front
+        track, gaps = [], []
+        for _ in range(600):  # 6 s
+            sim.step()
+            track.append(sim.people.positions()[0])
+            gaps.append(gap_to_robot(sim))
+            assert not (sim.body.bumped_front or sim.body.bumped_rear)
+        assert sim.body.pose_w[:2] == pytest.approx((5.0, 3.0), abs=1e-9)  # not pushed
+        # Stopped within one walking step of the clearance...
+        positions = np.array(track)
+        stop = int(np.argmax(np.all(positions[1:] == positions[:-1], axis=1)))
+        clearance, step_m = sim.config.people.clearance_m, 1.0 * 0.01
+        assert clearance - step_m - 1e-9 <= gaps[stop] <= clearance
+        # ...stood there for the patience, then walked off elsewhere.
+        standing_s = np.all(positions == positions[stop], axis=1).sum() * 0.01
+        assert standing_s == pytest.approx(sim.config.people.yield_patience_s, abs=0.03)
+        assert np.linalg.norm(positions[-1] - positions[stop]) > 0.5
+
+    def test_a_person_meeting_the_robot_head_on_steps_aside(self) -> None:
+        sim = people_sim(box_room(), count=1)
+        sim.people.place(0, (8.0, 3.0), (2.0, 3.0))
+        sim.body.command(0.3, 0.0)
+        gaps, track = [], []
+        while sim.body.pose_w[0] < 7.0:  # they meet near x = 6.6
+            sim.step()
+            gaps.append(gap_to_robot(sim))
+            track.append(sim.people.positions()[0])
+            assert not (sim.body.bumped_front or sim.body.bumped_rear)
+            assert sim.now_ns < 20_000_000_000
+        assert not sim.body.stalled and min(gaps) > 0.5
+        # Stepped square to the robot's path (to its left, x fixed), out to the robot's
+        # half-diagonal plus body and margin.
+        positions = np.array(track)
+        first_aside = int(np.argmax(positions[:, 1] > 3.0))
+        aside = positions[positions[:, 0] == positions[first_aside, 0]]
+        half_diagonal = np.hypot(sim.config.body.length_m, sim.config.body.width_m) / 2
+        reach = half_diagonal + sim.config.people.radius_m + SIDESTEP_MARGIN_M
+        assert aside[:, 1].max() == pytest.approx(3.0 + reach, abs=1e-6)
+
+    @pytest.mark.parametrize("seed", [1, 2, 3])
+    def test_people_never_bump_a_robot_driving_circles(self, seed: int) -> None:
+        sim = people_sim(box_room((6.0, 4.0)), count=4, seed=seed)
+        sim.body.command(0.2, 0.3)
+        for _ in range(3000):  # 30 s in a small room
+            sim.step()
+            assert not (sim.body.bumped_front or sim.body.bumped_rear)
+
+    def test_without_avoid_robot_people_do_bump_a_robot_driving_circles(self) -> None:
+        sim = people_sim(box_room((6.0, 4.0)), count=4, seed=1, avoid_robot=False)
+        sim.body.command(0.2, 0.3)
+        bumps = 0
+        for _ in range(3000):
+            sim.step()
+            bumps += sim.body.bumped_front or sim.body.bumped_rear
+        assert bumps > 0
+
+    def test_same_seed_same_yields(self) -> None:
+        def walk() -> np.ndarray:
+            sim = people_sim(box_room((6.0, 4.0)), count=4, seed=4)
+            sim.body.command(0.2, 0.3)
+            sim.step_until(10_000_000_000)
+            return sim.people.positions()
+
+        assert np.array_equal(walk(), walk())
+
+    @pytest.mark.parametrize(
+        ("field", "value", "message"),
+        [
+            ("clearance_m", 0.0, "clearance_m must be > 0"),
+            ("yield_patience_s", -1.0, "yield_patience_s must be >= 0"),
+        ],
+    )
+    def test_bad_yield_settings(self, field: str, value: float, message: str) -> None:
+        with pytest.raises(ValueError, match=message):
+            PeopleConfig(**{field: value})
