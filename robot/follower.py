@@ -15,7 +15,8 @@ Courbon et al. 2008, sec. III; DESIGN.md sec. 5.5-5.7. Per frame
    errImageMax falls under 20 px some 20 cm before a key image (measured in the
    lab), early for intermediate key images but a stop that far from the goal;
 4. the control law (:func:`robot.control_law.steer`) on the filtered (y, theta);
-   before the first estimate the robot drives straight on.
+   before the first estimate (after a start, a relocalization or a junction
+   crossing) the robot stands still: it never drives blind.
 
 The route is a list of key image ids from :meth:`shared.memory.VisualMemory.plan_route`.
 A junction crossing (ids of different paths, the same place) is one target: the
@@ -29,6 +30,7 @@ of moving the state across.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -238,23 +240,22 @@ class RouteFollower:
         return self._segments[index]
 
     def _prepare(self, key: Keyframe) -> KeySegment | None:
-        path = self._memory.paths[key.path_id].keyframe_ids
-        if key.index > 0:
-            other = self._memory.keyframe(path[key.index - 1])
-            tracks = key.tracked_from_previous[:, ::-1]
-        elif len(path) > 1:
-            other = self._memory.keyframe(path[1])
-            tracks = other.tracked_from_previous
-        else:
-            return None
+        """The key image's segment with the nearest key image of its path that gives a
+        trustworthy key pair: the previous one, else up to ``_PARTNERS`` back (on a path's
+        first key image: forward). Close key images in a turn, seeing only distant
+        landmarks (the ``campus`` courtyard), can triangulate too few points."""
         cfg = self._config
-        try:
-            segment = key_segment_from_key_images(
-                keyframe_features(key), keyframe_features(other), key.odom_pose, other.odom_pose,
-                self._memory.camera, cfg.mount, self._rng, cfg.path_state, tracks)
-        except DegenerateGeometryError:
-            return None
-        return segment if segment.key_pair.ok else None
+        for other, tracks in _partners(self._memory, key):
+            try:
+                segment = key_segment_from_key_images(
+                    keyframe_features(key), keyframe_features(other), key.odom_pose,
+                    other.odom_pose, self._memory.camera, cfg.mount, self._rng, cfg.path_state,
+                    tracks)
+            except DegenerateGeometryError:
+                continue
+            if segment.key_pair.ok:
+                return segment
+        return None
 
     def _switch_estimator(self, t_ns: int, next_index: int) -> None:
         """Move the filter to the next target's frame (teach odometry), or restart it when
@@ -268,7 +269,7 @@ class RouteFollower:
     def _command(self, index: int, estimate: Estimate | None) -> Twist:
         cfg = self._config.control
         if estimate is None:
-            return Twist(v_m_s=cfg.speed_m_s, omega_rad_s=0.0)
+            return Twist(v_m_s=0.0, omega_rad_s=0.0)
         coords = PathCoordinates(estimate.s_m, estimate.y_m, estimate.theta_rad)
         curvature = self._curvature(index) if cfg.law == "paper+ff" else 0.0
         if curvature != 0.0:
@@ -286,3 +287,47 @@ class RouteFollower:
         if length <= 0:
             return 0.0
         return segment_curvature_1_m(previous.odom_pose, key.odom_pose, length)
+
+
+#: Key images of a path tried as a target's partner in its key pair.
+_PARTNERS = 3
+
+
+def _partners(memory: VisualMemory,
+              key: Keyframe) -> Iterator[tuple[Keyframe, npt.NDArray[np.int64]]]:
+    """Key images of ``key``'s path to pair it with, nearest first, each with the teach
+    tracks (key's corner, partner's corner) chained through the key images between."""
+    path = memory.paths[key.path_id].keyframe_ids
+    backward = key.index > 0
+    step = -1 if backward else 1
+    tracks = np.column_stack([np.arange(len(key.pixels_xy))] * 2).astype(np.int64)
+    current = key
+    for n in range(1, _PARTNERS + 1):
+        index = key.index + step * n
+        if not 0 <= index < len(path):
+            return
+        partner = memory.keyframe(path[index])
+        # tracked_from_previous pairs (earlier key image's corner, later's); link pairs
+        # (current's corner, partner's).
+        later = current if backward else partner
+        link = later.tracked_from_previous[:, ::-1] if backward else later.tracked_from_previous
+        tracks = chain_tracks(tracks, link)
+        current = partner
+        yield partner, tracks
+
+
+def chain_tracks(a_b: npt.ArrayLike, b_c: npt.ArrayLike) -> npt.NDArray[np.int64]:
+    """Compose two track lists through their shared middle image.
+
+    Args:
+        a_b: (K, 2) int (corner in image a, corner in image b).
+        b_c: (L, 2) int (corner in image b, corner in image c).
+
+    Returns:
+        (M, 2) int64 (corner in a, corner in c) for every b corner in both lists, in
+        ``a_b``'s order.
+    """
+    a_b, b_c = np.asarray(a_b, dtype=np.int64), np.asarray(b_c, dtype=np.int64)
+    to_c = dict(zip(b_c[:, 0].tolist(), b_c[:, 1].tolist(), strict=True))
+    rows = [(a, to_c[b]) for a, b in a_b.tolist() if b in to_c]
+    return np.array(rows, dtype=np.int64).reshape(-1, 2)

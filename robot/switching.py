@@ -4,7 +4,10 @@ Two rules (DESIGN.md sec. 5.7; reference visual-navigation.md sec. 1.3):
 
 * ``"image_error"``: errImageMax, the longest distance between a matched point and
   its position in the key image, falls below a threshold (Courbon et al. 2008,
-  sec. IV: 20 px; :func:`robot.vision.image_errors.image_errors`);
+  sec. IV: 20 px; :func:`robot.vision.image_errors.image_errors`) while the
+  robot is near the key image: a frame with an along-track estimate s must have
+  s >= -``image_error_within_m`` (distant landmarks keep the image error small
+  well before the key image; this guard adds to the paper's rule);
 * ``"passed"``: the along-track coordinate s of the robot in the key image's frame
   (negative before it, :attr:`robot.vision.path_state.PathState.s_m`) reaches a
   margin: the robot has crossed the plane through the key image perpendicular to
@@ -133,7 +136,8 @@ def observe_frame(
         raise InputError("observe_frame", f"the route's last key image (index "
                          f"{state.route_length - 1}) was already reached")
     err, s = evidence.err_image_max_px, evidence.s_m
-    image_frames = _count(None if err is None else err < config.err_image_max_px,
+    near = s is None or s >= -config.image_error_within_m
+    image_frames = _count(None if err is None else err < config.err_image_max_px and near,
                           state.image_frames)
     passed_frames = _count(None if s is None else s >= config.pass_margin_m, state.passed_frames)
     reasons = [reason for reason, frames in zip(SWITCH_REASONS, (image_frames, passed_frames),

@@ -485,6 +485,11 @@ class TeachConfig:
     the live points a single frame matches, 0.46-0.77 in the ``lab`` and ``campus``
     worlds: at 0.5 the ``campus`` corridor got key images 2 cm apart, too close for a
     key pair (see :mod:`robot.teach`, rule 3)."""
+    max_turn_deg: float = 15.0
+    """A key image is at most this far turned (odometric yaw) from the previous one, deg:
+    the repeat matches the next key image in a window of ``PathStateConfig.matching``'s
+    radius (120 px; a yaw of 1 deg moves the image centre by about 4 px), so a long
+    gap in a turn leaves nothing to match (the ``campus`` U-turn had a 50 deg gap)."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
     tracking: MatchConfig = field(default_factory=_tracking_match_config)
@@ -502,6 +507,8 @@ class TeachConfig:
             self.max_missed_frames >= 0,
             f"max_missed_frames must be >= 0, got {self.max_missed_frames}",
         )
+        require(0 < self.max_turn_deg <= 180,
+                f"max_turn_deg must be in (0, 180], got {self.max_turn_deg}")
         require(
             self.junction_min_matches >= 1,
             f"junction_min_matches must be >= 1, got {self.junction_min_matches}",
@@ -809,6 +816,11 @@ class SwitchingConfig:
 
     err_image_max_px: float = 20.0
     """Reached when errImageMax is below this, px (paper: 20 px)."""
+    image_error_within_m: float = 0.25
+    """...and, when the frame has an along-track estimate s, the robot is at most this far
+    before the key image, m (``inf`` is the paper's rule). Far landmarks (the ``campus``
+    courtyard's facades) keep errImageMax under 20 px up to 0.75 m before a key image:
+    the switch came early and the next key image, turned 15 deg, looked 30 cm off."""
     pass_margin_m: float = 0.0
     """Reached when the along-track coordinate s (relative to the key image, negative
     before it) is at least this, m."""
@@ -819,6 +831,8 @@ class SwitchingConfig:
     def __post_init__(self) -> None:
         require(self.err_image_max_px > 0,
                 f"err_image_max_px must be > 0, got {self.err_image_max_px}")
+        require(self.image_error_within_m > 0,
+                f"image_error_within_m must be > 0, got {self.image_error_within_m}")
         require(self.pass_margin_m >= 0, f"pass_margin_m must be >= 0, got {self.pass_margin_m}")
         require(self.hold_frames >= 1, f"hold_frames must be >= 1, got {self.hold_frames}")
 

@@ -14,10 +14,11 @@ and keeps its traceback::
     ├── GeometryError              a geometric computation cannot proceed
     │   ├── ShapeError             an array has the wrong shape (also a ValueError)
     │   └── DegenerateGeometryError
-    └── ProtocolError              a byte-level protocol was violated
-        ├── LocalProtocolError     we tried to send something illegal in this state
-        └── RemoteProtocolError    the peer sent something illegal
-            └── ChecksumError      a single frame failed its checksum
+    ├── ProtocolError              a byte-level protocol was violated
+    │   ├── LocalProtocolError     we tried to send something illegal in this state
+    │   └── RemoteProtocolError    the peer sent something illegal
+    │       └── ChecksumError      a single frame failed its checksum
+    └── TransportError             a port, socket or pipe cannot be opened or is gone
 
 Expected outcomes (no match, link lost, mission rejected) are results or events,
 never exceptions.
@@ -151,3 +152,17 @@ def check_shape(name: str, array_shape: tuple[int, ...], expected: tuple[int | N
         dims = ["N" if e is None else str(e) for e in expected]
         want = "(" + ", ".join(dims) + ("," if len(dims) == 1 else "") + ")"
         raise ShapeError(f"{name}: expected shape {want}, got {tuple(array_shape)}")
+
+
+class TransportError(VmnavError):
+    """A byte transport cannot be opened, or went away (port unplugged, socket closed).
+
+    Args:
+        where: the transport (a pyserial URL, a pty path, ``tcp:8101``, ``pipe``).
+        problem: what went wrong.
+    """
+
+    def __init__(self, where: str, problem: str) -> None:
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")

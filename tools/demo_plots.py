@@ -20,7 +20,7 @@ import numpy as np
 
 from shared.config import SimConfig
 from tools.demo import CycleSample, RepeatRun, TaughtMemory
-from tools.demo_report import following_poses, route_reference, track_errors
+from tools.demo_report import following_errors, plan_references
 
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
@@ -49,10 +49,9 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
         ids = taught.memory.paths[path_id].keyframe_ids
         xy = np.array([taught.true_poses[k][:2] for k in ids])
         ax.plot(xy[:, 0], xy[:, 1], ".-", color="0.75", lw=1, ms=3)
-    if run.result.route:
-        reference = route_reference(run, taught)
+    for i, reference in enumerate(plan_references(run, taught)):
         ax.plot(reference[:, 0], reference[:, 1], "o-", color="tab:blue", lw=1.5, ms=3,
-                label="taught (route key images)")
+                label="taught (route key images)" if i == 0 else None)
     repeated = np.array([s.pose_w for s in run.samples]).reshape(-1, 3)
     ax.plot(repeated[:, 0], repeated[:, 1], color="tab:red", lw=1.2, label="repeated")
     ax.plot(*run.start_pose[:2], "g^", ms=10, label="start")
@@ -67,9 +66,8 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
 
 def _plot_errors(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     fig, (ax_y, ax_t) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    poses = following_poses(run)
-    if run.result.route and len(poses) >= 2:
-        errors = track_errors(poses, route_reference(run, taught))
+    errors = following_errors(run, taught)
+    if errors is not None:
         ax_y.plot(errors.distance_m, 100 * errors.lateral_m, label="true")
         ax_t.plot(errors.distance_m, np.degrees(errors.heading_rad), label="true")
         estimated = [s for s in run.samples if s.record.follow is not None]

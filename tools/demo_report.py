@@ -6,7 +6,8 @@ sample is its signed distance to that polyline (left positive), the heading erro
 its yaw minus the polyline's yaw interpolated at the closest point. The closest
 segment is searched a few segments ahead of the previous one (progress is
 monotonic; the first sample near the route's start), so a route that passes a
-place twice is measured against the right pass. Errors count after the first settling distance
+place twice is measured against the right pass; after a relocalization, samples are
+measured against the route planned then. Errors count after the first settling distance
 (:func:`robot.control_law.settling_distance_m` of the start offset down to 5 cm).
 """
 
@@ -21,7 +22,7 @@ import numpy.typing as npt
 from robot.control_law import settling_distance_m
 from robot.mission import MissionState
 from shared.config import ControlConfig
-from tools.demo import START_OFFSET_M, RepeatRun, TaughtMemory
+from tools.demo import START_OFFSET_M, RepeatRun, TaughtMemory, TruePose
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -83,23 +84,49 @@ def track_errors(poses_w: FloatArray, reference_w: FloatArray) -> TrackErrors:
                        distance_m=np.concatenate([[0.0], np.cumsum(steps)]))
 
 
-def route_reference(run: RepeatRun, taught: TaughtMemory) -> FloatArray:
-    """(M, 3) true poses of the route's key images, in route order."""
-    return np.array([taught.true_poses[k] for k in run.result.route], dtype=np.float64)
+def plan_references(run: RepeatRun, taught: TaughtMemory) -> list[FloatArray]:
+    """(M, 3) true poses of each planned route's key images, in route order, one per plan
+    (a relocalization plans again)."""
+    routes: list[tuple[int, ...]] = []
+    for sample in run.samples:
+        route = sample.record.route
+        if route and (not routes or routes[-1] != route):
+            routes.append(route)
+    return [np.array([taught.true_poses[k] for k in route], dtype=np.float64)
+            for route in routes]
 
 
-def following_poses(run: RepeatRun) -> FloatArray:
-    """(N, 3) true poses of the cycles spent following (and the arrival)."""
+def following_errors(run: RepeatRun, taught: TaughtMemory) -> TrackErrors | None:
+    """Errors of the cycles spent following (and the arrival), each against the route
+    planned when it ran; None when nothing was followed.
+
+    The distance runs on across plans (the true distance driven while following).
+    """
     moving = (MissionState.FOLLOWING, MissionState.ARRIVED)
-    return np.array([s.pose_w for s in run.samples if s.record.state in moving],
-                    dtype=np.float64).reshape(-1, 3)
+    blocks: list[tuple[tuple[int, ...], list[TruePose]]] = []
+    for sample in run.samples:
+        record = sample.record
+        if record.state not in moving or len(record.route) < 2:
+            continue
+        if not blocks or blocks[-1][0] != record.route:
+            blocks.append((record.route, []))
+        blocks[-1][1].append(sample.pose_w)
+    parts = [track_errors(np.array(poses, dtype=np.float64),
+                          np.array([taught.true_poses[k] for k in route], dtype=np.float64))
+             for route, poses in blocks if len(poses) >= 2]
+    if not parts:
+        return None
+    offsets = np.cumsum([0.0] + [p.distance_m[-1] for p in parts[:-1]])
+    return TrackErrors(
+        lateral_m=np.concatenate([p.lateral_m for p in parts]),
+        heading_rad=np.concatenate([p.heading_rad for p in parts]),
+        distance_m=np.concatenate([p.distance_m + o for p, o in zip(parts, offsets, strict=True)]))
 
 
 def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
                  wall_time_s: float) -> dict[str, object]:
     """The ``report.json`` content (issue 4, item 7)."""
     result = run.result
-    poses = following_poses(run)
     settle_m = settling_distance_m(control.pole_1_m, START_OFFSET_M, _SETTLED_M)
     follow = [s.record for s in run.samples if s.record.follow is not None]
     matches = [r.follow.vision.matches for r in follow
@@ -128,18 +155,16 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
         "events": [{"t_s": round(e.t_ns / 1e9, 3), "kind": e.kind, "reason": e.reason,
                     "detail": e.detail} for e in result.events],
     }
-    report.update(_track_metrics(poses, route_reference(run, taught) if result.route else None,
-                                 settle_m))
+    report["plans"] = len(plan_references(run, taught))
+    report.update(_track_metrics(following_errors(run, taught), settle_m))
     return report
 
 
-def _track_metrics(poses: FloatArray, reference: FloatArray | None,
-                   settle_m: float) -> dict[str, object]:
+def _track_metrics(errors: TrackErrors | None, settle_m: float) -> dict[str, object]:
     empty: dict[str, object] = {"distance_m": 0.0, "lateral_rms_m": None,
                                 "lateral_max_m": None, "heading_rms_deg": None}
-    if reference is None or len(reference) < 2 or len(poses) < 2:
+    if errors is None:
         return empty
-    errors = track_errors(poses, reference)
     settled = errors.distance_m >= settle_m
     if not settled.any():
         return {**empty, "distance_m": _round(float(errors.distance_m[-1]))}

@@ -9,9 +9,17 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from robot.follower import odometry_increment, targets_from_route
+from robot.follower import (
+    FollowerConfig,
+    RouteFollower,
+    chain_tracks,
+    odometry_increment,
+    targets_from_route,
+)
 from robot.segment_frame import relative_pose
+from shared.config import VmnavConfig
 from shared.errors import InputError
+from shared.interfaces import BaseState
 from tests.shared.memory.builders import loop_memory
 
 
@@ -59,3 +67,33 @@ class TestOdometryIncrement:
         step, turn = odometry_increment((x, y, yaw), after, ds)
         assert step == pytest.approx(ds)
         assert turn == pytest.approx(relative_pose((x, y, yaw), after)[2], abs=1e-12)
+
+
+class TestChainTracks:
+    def test_composes_through_the_shared_middle_image_in_the_first_lists_order(self) -> None:
+        a_b = [[0, 5], [1, 7], [2, 9]]
+        b_c = [[9, 30], [5, 10], [8, 40]]
+        assert chain_tracks(a_b, b_c).tolist() == [[0, 10], [2, 30]]
+
+    def test_nothing_shared_gives_an_empty_list(self) -> None:
+        chained = chain_tracks([[0, 1]], np.zeros((0, 2), dtype=np.int64))
+        assert chained.shape == (0, 2) and chained.dtype == np.int64
+
+
+class TestNoEstimate:
+    def test_the_robot_stands_still_until_its_first_estimate(self, memory) -> None:
+        config = VmnavConfig()
+        follower_config = FollowerConfig(
+            features=config.features, path_state=config.path_state,
+            estimator=config.estimator, switching=config.switching, control=config.control,
+            mount=config.sim.camera)
+        base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
+                         stalled=False, battery_v=13.0, motors_enabled=True)
+        route = memory.paths[0].keyframe_ids[:3]
+        follower = RouteFollower(memory, list(route), follower_config,
+                                 np.random.default_rng(0), 0, base)
+        camera = memory.camera
+        blank = np.full((camera.height, camera.width), 128, dtype=np.uint8)
+        step = follower.step(66_000_000, blank, base)
+        assert step.y_m is None
+        assert (step.twist.v_m_s, step.twist.omega_rad_s) == (0.0, 0.0)

@@ -40,6 +40,16 @@ class TestObserveFrame:
                                            s_m=-0.1, final=False)
         assert state == SwitchState(route_length=3, next_index=1)
 
+    def test_a_small_image_error_far_before_the_key_image_does_not_switch(self) -> None:
+        # Distant landmarks: errImageMax is tiny 0.75 m before the key image.
+        _, events = run(SwitchState(route_length=3), [(8.0, -0.75), (8.0, -0.7),
+                                                      (8.0, -0.24), (8.0, -0.2)])
+        assert events[:3] == [None, None, None]
+        assert events[3] is not None and events[3].reason == "image_error"
+        paper = SwitchingConfig(image_error_within_m=math.inf)
+        _, events = run(SwitchState(route_length=3), [(8.0, -0.75), (8.0, -0.7)], paper)
+        assert events[1] is not None and events[1].reason == "image_error"
+
     def test_passed_after_the_hold(self) -> None:
         state, events = run(SwitchState(route_length=3), [(40.0, -0.01), (40.0, 0.0),
                                                           (40.0, 0.02)])

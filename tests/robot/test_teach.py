@@ -71,6 +71,29 @@ class TestKeyImageSelection:
         assert [s.frame_index for s in selected] == [0, 10, 20, 30, 40, 50, 54]
         assert [s.shared_points for s in selected] == [0, 30, 30, 30, 30, 30, 36]
 
+    def test_a_turn_closes_the_segment_before_the_points_run_out(
+        self, rng: np.random.Generator
+    ) -> None:
+        # The same 40 points in every frame (M = 30 is never short), turning 4 deg per frame:
+        # the key image is the last frame within 15 deg of the previous one.
+        frames = [(t, image, (x, y, math.radians(4.0 * k)))
+                  for k, (t, image, (x, y, _)) in enumerate(
+                      frames_from_schedule([list(range(40))] * 13, rng))]
+        selected = select_key_images(frames, blob_camera(), FEATURES,
+                                     teach_config(30, max_turn_deg=15.0))
+        assert [s.frame_index for s in selected] == [0, 3, 6, 9, 12]
+
+    def test_turning_the_other_way_across_pi_counts_the_short_way(
+        self, rng: np.random.Generator
+    ) -> None:
+        wrapped = [math.remainder(math.radians(170.0 + 4.0 * k), math.tau) for k in range(7)]
+        frames = [(t, image, (x, y, wrapped[k]))
+                  for k, (t, image, (x, y, _)) in enumerate(
+                      frames_from_schedule([list(range(40))] * 7, rng))]
+        selected = select_key_images(frames, blob_camera(), FEATURES,
+                                     teach_config(30, max_turn_deg=15.0))
+        assert [s.frame_index for s in selected] == [0, 3, 6]
+
     @pytest.mark.parametrize("max_missed", [0, 1, 3])
     def test_the_gap_tolerance_does_not_move_the_key_images(
         self, rng: np.random.Generator, max_missed: int

@@ -6,12 +6,17 @@ from __future__ import annotations
 import json
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from robot.app import CycleRecord
+from robot.mission import MissionState
+from shared.interfaces import BaseState
 from tools.cli import main
-from tools.demo_report import track_errors
+from tools.demo import CycleSample
+from tools.demo_report import following_errors, plan_references, track_errors
 
 REPORT_KEYS = ("reached_goal", "final_position_error_m", "lateral_rms_m", "lateral_max_m",
                "heading_rms_deg", "key_images_route", "key_images_reached", "distance_m",
@@ -93,6 +98,36 @@ class TestTrackErrors:
         assert errors.lateral_m[:k] == pytest.approx(np.full(k, 0.25))
         assert errors.lateral_m[-k:] == pytest.approx(np.full(k, 0.25))
         assert errors.heading_rad[-k:] == pytest.approx(np.zeros(k), abs=1e-9)
+
+
+def test_after_a_relocalization_samples_are_measured_against_the_new_plan() -> None:
+    # Plan 1 runs east along y = 0 (key images 0-2); the robot is lost at x = 1 and
+    # relocalizes onto plan 2, east along y = 1 (key images 10-12). Against plan 1
+    # alone, the second block would be 1 m off.
+    true_poses = {0: (0.0, 0.0, 0.0), 1: (1.0, 0.0, 0.0), 2: (2.0, 0.0, 0.0),
+                  10: (0.0, 1.0, 0.0), 11: (1.0, 1.0, 0.0), 12: (2.0, 1.0, 0.0)}
+    base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
+                     stalled=False, battery_v=13.0, motors_enabled=True)
+
+    def sample(t: int, state: MissionState, route: tuple[int, ...],
+               pose: tuple[float, float, float]) -> CycleSample:
+        record = CycleRecord(t_ns=t, state=state, base=base, follow=None, localization=None,
+                             route=route, compute_ns=0)
+        return CycleSample(record=record, pose_w=pose)
+
+    following, lost = MissionState.FOLLOWING, MissionState.LOST
+    samples = [sample(0, following, (0, 1, 2), (0.0, 0.02, 0.0)),
+               sample(1, following, (0, 1, 2), (1.0, 0.02, 0.0)),
+               sample(2, lost, (0, 1, 2), (1.0, 0.5, 0.0)),
+               sample(3, following, (10, 11, 12), (1.0, 0.97, 0.0)),
+               sample(4, following, (10, 11, 12), (2.0, 0.97, 0.0))]
+    run = SimpleNamespace(samples=samples)
+    taught = SimpleNamespace(true_poses=true_poses)
+    errors = following_errors(run, taught)  # type: ignore[arg-type]
+    assert errors is not None
+    assert errors.lateral_m == pytest.approx([0.02, 0.02, -0.03, -0.03])
+    assert errors.distance_m == pytest.approx([0.0, 1.0, 1.0, 2.0])
+    assert len(plan_references(run, taught)) == 2  # type: ignore[arg-type]
 
 
 def test_the_summary_rounds_for_people() -> None:
