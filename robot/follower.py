@@ -15,8 +15,12 @@ Courbon et al. 2008, sec. III; DESIGN.md sec. 5.5-5.7. Per frame
    errImageMax falls under 20 px some 20 cm before a key image (measured in the
    lab), early for intermediate key images but a stop that far from the goal;
 4. the control law (:func:`robot.control_law.steer`) on the filtered (y, theta);
-   before the first estimate (after a start, a relocalization or a junction
-   crossing) the robot stands still: it never drives blind.
+   without an estimate the last command holds: zero before the first estimate
+   (a start or a relocalization: the robot waits), the command before a junction
+   crossing while the filter restarts there (the robot keeps its arc for the few
+   frames it takes). An estimate that initialises the filter, which is not gated,
+   must rest on at least ``EstimatorConfig.init_min_points`` triangulated points:
+   three points past a junction once gave y = 1.05 m for a robot on the path.
 
 The route is a list of key image ids from :meth:`shared.memory.VisualMemory.plan_route`.
 A junction crossing (ids of different paths, the same place) is one target: the
@@ -164,6 +168,7 @@ class RouteFollower:
         self._segments: dict[int, KeySegment | None] = {}
         self._odom = base.odom_pose
         self._distance_m = base.odom_distance_m
+        self._twist = Twist(v_m_s=0.0, omega_rad_s=0.0)  # the last command
 
     @property
     def target_index(self) -> int:
@@ -195,7 +200,7 @@ class RouteFollower:
         index = self.target_index
         corners = detect_harris(image, self._config.features, self._mask)
         vision = self._vision(index, corners)
-        if vision is not None and vision.state.ok:
+        if vision is not None and vision.state.ok and self._trusted(vision):
             self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
                                    vision.state.theta_rad)
         lost = self._estimator.poll(t_ns)
@@ -211,7 +216,7 @@ class RouteFollower:
                                                 self._config.switching)
         if switch is not None and not switch.final:
             self._switch_estimator(t_ns, switch.next_index)
-        twist = self._command(index, estimate)
+        twist = self._twist = self._command(index, estimate)
         return FollowStep(
             t_ns=t_ns, target_index=index, twist=twist, vision=vision,
             corners_xy=corners.pixels_xy,
@@ -266,10 +271,17 @@ class RouteFollower:
         else:
             self._estimator.reset(t_ns)
 
+    def _trusted(self, vision: FrameState) -> bool:
+        """Whether a usable estimate may update the filter: always once it runs (the
+        gate judges), but to initialise it only with enough points behind it."""
+        if self._estimator.estimate is not None and not self._estimator.lost:
+            return True
+        return vision.state.n_points >= self._config.estimator.init_min_points
+
     def _command(self, index: int, estimate: Estimate | None) -> Twist:
         cfg = self._config.control
         if estimate is None:
-            return Twist(v_m_s=0.0, omega_rad_s=0.0)
+            return self._twist
         coords = PathCoordinates(estimate.s_m, estimate.y_m, estimate.theta_rad)
         curvature = self._curvature(index) if cfg.law == "paper+ff" else 0.0
         if curvature != 0.0:

@@ -207,6 +207,67 @@ class AriaLinkConfig:
         require(self.sync_attempts >= 1, f"sync_attempts must be >= 1, got {self.sync_attempts}")
 
 
+@dataclass(frozen=True, slots=True)
+class PioneerDriverConfig:
+    """The robot-side ARIA driver (robot.pioneer): transport, connect sequence, reconnection.
+
+    Motion limits are pushed to the robot after connect as ARIA does (SETV, SETA, SETRV,
+    SETRA; aria-protocol.md §3), capped by the tops the robot's CONFIG reply announces.
+    Defaults: MobileSim's p3at model (0.6 m/s, 0.75 rad/s, accel 0.3 / decel 0.6 m/s²,
+    1.74 rad/s², rounded to whole wire units).
+    """
+
+    url: str = "/dev/ttyUSB0"
+    """pyserial URL of the robot: a device or pty path, ``socket://host:8101`` or ``loop://``."""
+    baud: int = 38400
+    """Configured serial rate, baud. Connect attempts on a device alternate 9600 (ARCOS
+    after power-up) and this rate (aria-protocol.md §9); URLs with a scheme ignore it."""
+    write_timeout_s: float = 0.5
+    """A write that cannot finish in this long means the link is gone, s."""
+    link: AriaLinkConfig = field(default_factory=AriaLinkConfig)
+    """Session timers: SYNC retries, PULSE, link-loss timeout."""
+    service_period_ns: int = 10_000_000
+    """The driver's I/O thread services the link this often, ns."""
+    config_retry_ns: int = 200_000_000
+    """Re-request CONFIG this often until the reply comes, ns (ARIA: about 200 ms)."""
+    config_wait_ns: int = 1_000_000_000
+    """Go on without a CONFIG reply after this long, ns (ARIA: 1000 ms)."""
+    command_refresh_ns: int = 500_000_000
+    """Re-send VEL/RVEL this often while moving or until the robot reports it stopped, ns
+    (ARIA's state reflection: 500 ms); covers packets lost on a noisy line."""
+    reconnect_initial_ns: int = 500_000_000
+    """First wait before re-opening a lost link, ns; doubles per failure in a row."""
+    reconnect_max_ns: int = 8_000_000_000
+    """Longest wait between re-open attempts, ns."""
+    noise_report_period_ns: int = 1_000_000_000
+    """Report corrupt and unexpected input at most this often, ns."""
+    max_speed_m_s: float = 0.6
+    """SETV: translational speed limit, m/s."""
+    max_omega_rad_s: float = math.radians(43)
+    """SETRV: rotational speed limit, rad/s."""
+    accel_m_s2: float = 0.3
+    """SETA: translational acceleration, m/s²."""
+    decel_m_s2: float = 0.6
+    """SETA (negative): translational deceleration, m/s²."""
+    rot_accel_rad_s2: float = math.radians(100)
+    """SETRA: rotational acceleration, rad/s²."""
+    rot_decel_rad_s2: float = math.radians(100)
+    """SETRA (negative): rotational deceleration, rad/s²."""
+
+    def __post_init__(self) -> None:
+        require(bool(self.url.strip()), "url must not be empty")
+        for name in (
+            "baud", "write_timeout_s", "service_period_ns", "config_retry_ns", "config_wait_ns",
+            "command_refresh_ns", "reconnect_initial_ns", "reconnect_max_ns",
+            "noise_report_period_ns", "max_speed_m_s", "max_omega_rad_s", "accel_m_s2",
+            "decel_m_s2", "rot_accel_rad_s2", "rot_decel_rad_s2",
+        ):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.reconnect_max_ns >= self.reconnect_initial_ns,
+                f"reconnect_max_ns ({self.reconnect_max_ns}) must be >= reconnect_initial_ns "
+                f"({self.reconnect_initial_ns})")
+
+
 # ---------------------------------------------------------------------------
 # Simulator components.
 # ---------------------------------------------------------------------------
@@ -345,6 +406,54 @@ class PeopleConfig:
 
 
 @dataclass(frozen=True, slots=True)
+class EmulatorConfig:
+    """The emulated Pioneer 3-AT-SH (ARIA server, ``sim.pioneer``); aria-protocol.md §11."""
+
+    name: str = "vmnav"
+    """Robot name in the SYNC2 reply and the CONFIG packet ("MobileSim" would make ARIA
+    treat the server as MobileSim)."""
+    watchdog_stops: bool = True
+    """Whether the watchdog (``link.watchdog_timeout_ns`` without a client packet) stops
+    the robot until packets return (ARCOS) or only counts (MobileSim)."""
+    battery_full_v: float = 13.0
+    """Battery voltage at the start, V (a charged P3-AT pack)."""
+    battery_empty_v: float = 11.0
+    """The battery never reports less than this, V."""
+    battery_drain_v_per_m: float = 0.0005
+    """Voltage lost per metre of mean wheel travel, V/m (0.5 V per km)."""
+    sonar_max_range_m: float = 5.0
+    """Sonar range when nothing echoes, m (MobileSim reports 5000 mm)."""
+    sonar_noise_m: float = 0.01
+    """Std of Gaussian noise on each sonar range, m."""
+    sonar_cycle_ns: int = 40_000_000
+    """Each sonar array fires its next transducer this often, ns (both arrays together)."""
+    link: AriaLinkConfig = field(default_factory=AriaLinkConfig)
+    """The robot end's timing: SIP cycle, watchdog, frame timeout."""
+
+    def __post_init__(self) -> None:
+        require(
+            0 < len(self.name) <= 20 and self.name.isascii() and self.name.isprintable(),
+            f"name must be 1-20 printable ASCII characters, got {self.name!r}",
+        )
+        require(
+            0 < self.battery_empty_v <= self.battery_full_v,
+            f"battery_empty_v must be in (0, battery_full_v], got {self.battery_empty_v} "
+            f"(battery_full_v {self.battery_full_v})",
+        )
+        require(
+            self.battery_full_v < 25.5,
+            f"battery_full_v must be < 25.5 V (one byte of decivolts), got {self.battery_full_v}",
+        )
+        for name in ("battery_drain_v_per_m", "sonar_noise_m"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(
+            0 < self.sonar_max_range_m <= 65.0,
+            f"sonar_max_range_m must be in (0, 65] (u16 mm), got {self.sonar_max_range_m}",
+        )
+        require(self.sonar_cycle_ns > 0, f"sonar_cycle_ns must be > 0, got {self.sonar_cycle_ns}")
+
+
+@dataclass(frozen=True, slots=True)
 class SimConfig:
     """The simulated world and everything in it."""
 
@@ -365,6 +474,7 @@ class SimConfig:
     camera: CameraMountConfig = field(default_factory=CameraMountConfig)
     render: RenderConfig = field(default_factory=RenderConfig)
     people: PeopleConfig = field(default_factory=PeopleConfig)
+    emulator: EmulatorConfig = field(default_factory=EmulatorConfig)
 
     def __post_init__(self) -> None:
         require(self.physics_dt_ns > 0, f"physics_dt_ns must be > 0, got {self.physics_dt_ns}")
@@ -795,6 +905,10 @@ class EstimatorConfig:
     """A vision estimate (s, y, theta) whose squared Mahalanobis distance to the prediction
     exceeds this is rejected (16.3 = chi-square, 3 degrees of freedom, p = 0.999); None
     accepts all (code only: TOML cannot write None)."""
+    init_min_points: int = 10
+    """A vision estimate initialises the filter (ungated: at a start, after a junction
+    crossing or LOST) only with at least this many triangulated key-pair points behind it;
+    three points once gave y = 1.05 m for a robot on the path."""
     lost_timeout_ns: int = 2_000_000_000
     """No accepted vision estimate for this long means LOST, ns (30 frames at 15 Hz, 0.4 m
     of odometry alone at 0.2 m/s)."""
@@ -807,6 +921,8 @@ class EstimatorConfig:
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         require(self.gate_chi2 is None or self.gate_chi2 > 0,
                 f"gate_chi2 must be > 0 or None, got {self.gate_chi2}")
+        require(self.init_min_points >= 0,
+                f"init_min_points must be >= 0, got {self.init_min_points}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -818,7 +934,7 @@ class SwitchingConfig:
     """Reached when errImageMax is below this, px (paper: 20 px)."""
     image_error_within_m: float = 0.25
     """...and, when the frame has an along-track estimate s, the robot is at most this far
-    before the key image, m (``inf`` is the paper's rule). Far landmarks (the ``campus``
+    before the key image, m (a large value is the paper's rule). Far landmarks (the ``campus``
     courtyard's facades) keep errImageMax under 20 px up to 0.75 m before a key image:
     the switch came early and the next key image, turned 15 deg, looked 30 cm off."""
     pass_margin_m: float = 0.0
@@ -857,6 +973,88 @@ class MissionConfig:
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
 
 
+#: What the vehicle does when the ground station's heartbeat stops
+#: (:attr:`MavlinkConfig.gcs_lost_action`): "hold" stops and waits, "continue" carries on
+#: with the mission in force.
+GCS_LOST_ACTIONS = ("hold", "continue")
+
+
+@dataclass(frozen=True, slots=True)
+class MavlinkConfig:
+    """MAVLink protocol timing (``shared.mavlink``) and the vehicle's ground-link policy.
+
+    Mission timeouts and the retry count are the devguide's recommendations
+    (mission.md, "Timeouts and Retries": 1500 ms, 250 ms for items, 5 retries).
+    """
+
+    mission_timeout_ns: int = 1_500_000_000
+    """Wait this long for a mission reply (request, count, ack) before resending, ns."""
+    mission_item_timeout_ns: int = 250_000_000
+    """Wait this long for a requested mission item before re-requesting it, ns."""
+    mission_retries: int = 5
+    """Resend a mission message this many times without an answer, then give up."""
+    mission_max_items: int = 1000
+    """A mission upload with more items is refused with MAV_MISSION_NO_SPACE."""
+    param_timeout_ns: int = 1_000_000_000
+    """Wait this long for a parameter reply, or for progress of a full download, ns."""
+    param_retries: int = 5
+    """Resend a parameter request this many times without progress, then give up."""
+    param_stream_period_ns: int = 20_000_000
+    """Gap between PARAM_VALUEs streamed after PARAM_REQUEST_LIST, ns (50 per second)."""
+    gcs_lost_action: str = "hold"
+    """One of ``GCS_LOST_ACTIONS``: what the robot does when the ground heartbeat stops."""
+
+    def __post_init__(self) -> None:
+        for name in ("mission_timeout_ns", "mission_item_timeout_ns", "mission_max_items",
+                     "param_timeout_ns", "param_stream_period_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        for name in ("mission_retries", "param_retries"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(self.mission_max_items <= 65535,
+                f"mission_max_items must be <= 65535 (uint16 seq), got {self.mission_max_items}")
+        require(self.gcs_lost_action in GCS_LOST_ACTIONS,
+                f"gcs_lost_action must be one of {', '.join(GCS_LOST_ACTIONS)}, "
+                f"got {self.gcs_lost_action!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class FtpConfig:
+    """MAVLink FTP (``shared.mavlink.ftp``): client retries and pacing, server limits.
+
+    Client defaults follow pymavlink's mavftp (retry 0.5 s, write queue 5) with the
+    devguide's 6 retries (mavlink-vehicle.md §1.6); packets carry the full 239 bytes.
+    """
+
+    ack_timeout_ns: int = 500_000_000
+    """Client: resend a request after this long without its reply, ns."""
+    retries: int = 6
+    """Client: resend a request this many times without a reply, then give up."""
+    burst_size_bytes: int = 239
+    """Client: data bytes asked for per burst-read and read packet (1..239)."""
+    write_size_bytes: int = 239
+    """Client: data bytes per WriteFile packet (1..239)."""
+    max_in_flight: int = 5
+    """Client: ReadFile (gap) or WriteFile requests outstanding at once."""
+    max_sessions: int = 5
+    """Server: open file sessions at once (MAVProxy's max_sessions default)."""
+    burst_packets: int = 32
+    """Server: packets per BurstReadFile reply; the client asks again for the rest."""
+    session_timeout_ns: int = 30_000_000_000
+    """Server: a session unused this long is closed (an unfinished upload dropped), ns."""
+    upload_limit_bytes: int = 8 * 1024 * 1024
+    """Server: largest file accepted in the upload area, bytes (the goal photo)."""
+
+    def __post_init__(self) -> None:
+        for name in ("ack_timeout_ns", "max_in_flight", "max_sessions", "burst_packets",
+                     "session_timeout_ns", "upload_limit_bytes"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.retries >= 0, f"retries must be >= 0, got {self.retries}")
+        require(self.max_sessions <= 256, f"max_sessions must be <= 256, got {self.max_sessions}")
+        for name in ("burst_size_bytes", "write_size_bytes"):
+            value = getattr(self, name)
+            require(1 <= value <= 239, f"{name} must be in 1..239, got {value}")
+
+
 @dataclass(frozen=True, slots=True)
 class VmnavConfig:
     """The whole configuration file: one table per component."""
@@ -872,6 +1070,8 @@ class VmnavConfig:
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     switching: SwitchingConfig = field(default_factory=SwitchingConfig)
     mission: MissionConfig = field(default_factory=MissionConfig)
+    pioneer: PioneerDriverConfig = field(default_factory=PioneerDriverConfig)
+    mavlink: MavlinkConfig = field(default_factory=MavlinkConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

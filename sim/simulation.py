@@ -10,9 +10,10 @@ Rules:
    by :meth:`Simulation.step`. :meth:`Simulation.step_until` takes fixed steps of
    ``config.physics_dt_ns`` until the deadline is reached or passed (time stays
    on the step grid; no float accumulation).
-3. **A step**: the body ramps its set-points and sets its velocity, the people
-   set theirs, pymunk integrates, then the body reads its actual motion (truth,
-   bumpers, stall, odometry).
+3. **A step**: the step hooks run (:meth:`Simulation.add_step_hook`: a controller
+   such as the emulated Pioneer's firmware commands the body here), the body ramps
+   its set-points and sets its velocity, the people set theirs, pymunk integrates,
+   then the body reads its actual motion (truth, bumpers, stall, odometry).
 4. **Shapes.** Walls are static segments (radius
    :data:`~sim.free_space.WALL_HALF_THICKNESS_M`), furniture static boxes, people
    kinematic circles, the robot a dynamic box. Each carries its height
@@ -21,6 +22,8 @@ Rules:
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -80,6 +83,7 @@ class Simulation:
         )
         self._now_ns = 0
         self._dt_s = config.physics_dt_ns / 1e9
+        self._step_hooks: list[Callable[[int, int], None]] = []
 
     def _add_walls_and_furniture(self) -> None:
         static = self.space.static_body
@@ -113,11 +117,21 @@ class Simulation:
             if isinstance(dt_ns, bool) or not isinstance(dt_ns, int | np.integer) or dt_ns <= 0:
                 raise ValueError(f"dt_ns must be a positive integer, got {dt_ns!r}")
             dt_ns, dt_s = int(dt_ns), dt_ns / 1e9
+        for hook in self._step_hooks:
+            hook(self._now_ns, dt_ns)
         self.body.before_step(dt_s)
         self.people.before_step(dt_s)
         self.space.step(dt_s)
         self.body.after_step(dt_s)
         self._now_ns += dt_ns
+
+    def add_step_hook(self, hook: Callable[[int, int], None]) -> None:
+        """Call ``hook(now_ns, dt_ns)`` at the start of every physics step (rule 3).
+
+        Hooks run in the order they were added, with the time the step starts from
+        and its length, ns; they may command the body.
+        """
+        self._step_hooks.append(hook)
 
     def step_until(self, deadline_ns: int) -> int:
         """Take fixed steps until ``now_ns >= deadline_ns``; returns the number of steps."""

@@ -212,10 +212,10 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     """
     from robot.app import RobotApp
     from sim.landmark_dropout import drop_landmarks
-    from sim.sim_base import SimBase
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
     from sim.world import Pose2, load_world
+    from tools.lockstep_pioneer import lockstep_pioneer
 
     memory = taught.memory
     if goal_id not in memory.keyframes:
@@ -231,8 +231,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     start = start_pose(taught)
     sim.place_robot(Pose2(start[0], start[1], math.degrees(start[2])))
     clock = SimClock(sim)
+    base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    app = RobotApp(memory, config, frames, SimBase(sim), clock, sim_config.frame_period_ns, rng)
+    app = RobotApp(memory, config, frames, base, clock, sim_config.frame_period_ns, rng)
     samples: list[CycleSample] = []
 
     def observe(record: CycleRecord) -> None:

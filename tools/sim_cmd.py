@@ -5,12 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tools import sim_serve
 from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav sim`` and its subcommands."""
-    sim = subparsers.add_parser("sim", help="the simulator: snapshot a world")
+    sim = subparsers.add_parser(
+        "sim", help="the simulator: snapshot a world, serve an emulated Pioneer"
+    )
     sim_sub = sim.add_subparsers(dest="sim_command", metavar="SUBCOMMAND", required=True)
 
     snap = sim_sub.add_parser(
@@ -36,6 +39,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="robot heading, degrees CCW from +x [default: 0 with --x/--y]",
     )
     snap.set_defaults(run=run_snapshot)
+    sim_serve.add_parser(sim_sub)
 
 
 def run_snapshot(args: argparse.Namespace) -> int:

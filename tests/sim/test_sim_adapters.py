@@ -1,4 +1,4 @@
-"""SimFrameSource and SimBase: the shared interfaces on the lock-step simulation."""
+"""SimFrameSource: the frame source interface on the lock-step simulation."""
 
 from __future__ import annotations
 
@@ -9,12 +9,11 @@ import pytest
 
 from shared.camera_model import CameraModel
 from shared.config import SimConfig
-from shared.interfaces import FrameSource, MobileBase
-from sim.sim_base import BATTERY_V, SimBase
+from shared.interfaces import FrameSource
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 
 
 @pytest.fixture(scope="module")
@@ -54,36 +53,3 @@ class TestSimFrameSource:
         now = sim.now_ns
         t_ns, _ = source.read()
         assert t_ns == now
-
-
-class TestSimBase:
-    def test_implements_mobile_base(self, sim: Simulation) -> None:
-        assert isinstance(SimBase(sim), MobileBase)
-
-    def test_command_moves_odometry_and_stop_stops(self, sim: Simulation) -> None:
-        sim.place_robot(Pose2(8.0, 10.0, 0.0))
-        base = SimBase(sim)
-        base.command(0.3, 0.0)
-        sim.step_until(2_000_000_000)
-        state = base.state()
-        assert 0.4 < state.odom_distance_m < 0.65
-        assert 0.4 < state.odom_pose[0] < 0.65 and abs(state.odom_pose[1]) < 0.05
-        assert state.battery_v == BATTERY_V and state.motors_enabled
-        assert not state.bumped and not state.stalled
-        base.stop()
-        sim.step_until(4_000_000_000)
-        assert sim.body.setpoint == (0.0, 0.0)
-        travelled = base.state().odom_distance_m
-        sim.step_until(5_000_000_000)
-        assert base.state().odom_distance_m == pytest.approx(travelled, abs=1e-3)
-
-    def test_driving_into_a_wall_bumps_or_stalls(self, sim: Simulation) -> None:
-        sim.place_robot(Pose2(8.0, 10.0, 90.0))  # the corridor's north wall ahead
-        base = SimBase(sim)
-        base.command(0.4, 0.0)
-        seen = False
-        for k in range(1, 80):
-            sim.step_until(k * 100_000_000)
-            state = base.state()
-            seen = seen or state.bumped or state.stalled
-        assert seen

@@ -1,0 +1,202 @@
+"""The files the robot serves over MAVLink FTP: its visual memory (read-only) and an upload area.
+
+Tree seen by the ground station::
+
+    /memory/          the memory directory, read-only (layout: shared.memory.store)
+        manifest.json
+        images/<id>.png  features/<id>.npz  thumbnails/<id>.png
+    /upload/<name>    writable and flat (the goal photo), at most ``upload_limit_bytes``
+
+Rules:
+
+1. A path is split on ``/``; empty parts and ``.`` are dropped. A part starting with
+   ``.`` (``..``, and the hidden temporary files of atomic writes) is refused.
+2. No symlinks: the real path must be the path built from the parts, so nothing
+   outside the two directories can be reached (a swap between the check and the
+   ``open`` is not guarded against; the directories belong to the robot).
+3. An upload is kept in RAM until TerminateSession commits it; the commit writes
+   it with :func:`shared.atomic_file.write_bytes_atomic`, so a reader sees the whole
+   file or none. A commit after a failed write, or with bytes never written, keeps
+   nothing. A client that gives up mid-way and still terminates the session
+   commits the prefix it sent if that prefix has no hole: FTP does not announce
+   an upload's length.
+4. Refusals are ``OSError``\\ s, which the server turns into NAKs: rules 1 and 2,
+   and writes or removals outside ``/upload/``, are PermissionError (FileProtected);
+   an upload too large is EFBIG (FailErrno).
+"""
+
+from __future__ import annotations
+
+import errno
+import io
+import os
+import stat
+from pathlib import Path
+
+from shared.atomic_file import write_bytes_atomic
+from shared.config import FtpConfig
+from shared.errors import InputError
+from shared.mavlink.ftp import DirEntry
+
+_AREAS = ("memory", "upload")
+
+
+class FileReader:
+    """A served file, open for reading (the open descriptor pins the version read).
+
+    Args:
+        fd: an open descriptor of a regular file; the reader owns it.
+    """
+
+    def __init__(self, fd: int) -> None:
+        self._file = io.FileIO(fd, "rb")
+        self.size = os.fstat(fd).st_size
+        """File length when opened, bytes."""
+
+    def read(self, offset: int, size: int) -> bytes:
+        """Up to ``size`` bytes from byte ``offset``."""
+        return os.pread(self._file.fileno(), size, offset)
+
+    def close(self) -> None:
+        self._file.close()
+
+
+class Upload:
+    """A file being uploaded to ``target``: in RAM until :meth:`commit` (rule 3).
+
+    Args:
+        target: where the file goes.
+        exclusive: refuse at commit time if ``target`` exists by then (CreateFile).
+        limit_bytes: the largest file accepted.
+    """
+
+    def __init__(self, target: Path, exclusive: bool, limit_bytes: int) -> None:
+        self.target = target
+        self.exclusive = exclusive
+        self.limit_bytes = limit_bytes
+        self._data = bytearray()
+        self._written: list[tuple[int, int]] = []  # [start, end) byte ranges, as written
+        self._failed: str | None = None
+
+    def write(self, offset: int, data: bytes) -> None:
+        """Store ``data`` at byte ``offset``.
+
+        Raises:
+            OSError: EFBIG past ``limit_bytes`` (the upload is then failed for good).
+        """
+        end = offset + len(data)
+        if end > self.limit_bytes:
+            self._failed = f"bytes up to {end} written, limit {self.limit_bytes}"
+            raise OSError(errno.EFBIG, f"upload larger than {self.limit_bytes} bytes")
+        if end > len(self._data):
+            self._data.extend(bytes(end - len(self._data)))
+        self._data[offset:end] = data
+        self._written.append((offset, end))
+
+    def commit(self) -> None:
+        """Write the file atomically.
+
+        Raises:
+            OSError: EIO after a failed write or for bytes never written;
+                FileExistsError (exclusive); EIO if the file cannot be written.
+                Nothing is kept then.
+        """
+        data, written, failed = bytes(self._data), sorted(self._written), self._failed
+        self.discard()
+        covered = 0
+        for start, end in written:
+            if start > covered:
+                raise OSError(errno.EIO, f"upload has no bytes {covered}..{start - 1}")
+            covered = max(covered, end)
+        if failed is not None:
+            raise OSError(errno.EIO, f"upload failed earlier ({failed})")
+        if self.exclusive and os.path.lexists(self.target):
+            raise FileExistsError(errno.EEXIST, "file exists", str(self.target))
+        try:
+            write_bytes_atomic(self.target, data)
+        except InputError as e:
+            raise OSError(errno.EIO, str(e)) from None
+
+    def discard(self) -> None:
+        self._data, self._written = bytearray(), []
+
+
+class MemoryFileSystem:
+    """The :class:`~shared.mavlink.ftp.FtpFileSystem` the robot serves (module rules).
+
+    Args:
+        memory_dir: the visual memory directory (need not exist yet).
+        upload_dir: where uploads land; created if missing.
+        upload_limit_bytes: the largest upload accepted, bytes.
+    """
+
+    def __init__(self, memory_dir: str | Path, upload_dir: str | Path,
+                 upload_limit_bytes: int = FtpConfig().upload_limit_bytes) -> None:
+        self.memory_dir = Path(memory_dir)
+        self.upload_dir = Path(upload_dir)
+        self.upload_limit_bytes = upload_limit_bytes
+        self.upload_dir.mkdir(parents=True, exist_ok=True)
+
+    def list_directory(self, path: str) -> list[DirEntry]:
+        """Entries of ``path`` sorted by name; hidden files and symlinks left out."""
+        parts = _parts(path)
+        if not parts:
+            return [DirEntry(area, True) for area in _AREAS]
+        entries = []
+        with os.scandir(self._resolve(path, parts)) as it:
+            for entry in it:
+                if entry.name.startswith(".") or entry.is_symlink():
+                    continue
+                if entry.is_dir():
+                    entries.append(DirEntry(entry.name, True))
+                elif entry.is_file():
+                    entries.append(DirEntry(entry.name, False, entry.stat().st_size))
+        return sorted(entries, key=lambda e: e.name)
+
+    def open_read(self, path: str) -> FileReader:
+        """Open a file under ``/memory/`` or ``/upload/``."""
+        parts = _parts(path)
+        if not parts:
+            raise IsADirectoryError(errno.EISDIR, "is a directory", path)
+        fd = os.open(self._resolve(path, parts), os.O_RDONLY | os.O_NOFOLLOW)
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            os.close(fd)
+            raise IsADirectoryError(errno.EISDIR, "not a regular file", path)
+        return FileReader(fd)
+
+    def open_write(self, path: str, exclusive: bool) -> Upload:
+        """Start an upload to ``/upload/<name>``."""
+        return Upload(self._upload_target(path), exclusive, self.upload_limit_bytes)
+
+    def remove(self, path: str) -> None:
+        """Delete ``/upload/<name>``."""
+        os.unlink(self._upload_target(path))
+
+    def _upload_target(self, path: str) -> Path:
+        parts = _parts(path)
+        if len(parts) != 2 or parts[0] != "upload":
+            raise PermissionError(errno.EACCES, "writable only as /upload/<name>", path)
+        return self._resolve(path, parts)
+
+    def _resolve(self, path: str, parts: list[str]) -> Path:
+        """The local path of ``parts`` (rule 2)."""
+        roots = {"memory": self.memory_dir, "upload": self.upload_dir}
+        if parts[0] not in roots:
+            raise FileNotFoundError(errno.ENOENT, "no such file or directory", path)
+        root = roots[parts[0]]
+        local = root.joinpath(*parts[1:])
+        if os.path.realpath(local) != os.path.join(os.path.realpath(root), *parts[1:]):
+            raise PermissionError(errno.EACCES, "symlinks are not served", path)
+        return local
+
+
+def _parts(path: str) -> list[str]:
+    """``path`` split on ``/`` (rule 1).
+
+    Raises:
+        PermissionError: a part starts with ``.`` or holds a NUL or backslash.
+    """
+    parts = [p for p in path.split("/") if p not in ("", ".")]
+    if any(p.startswith(".") or "\0" in p or "\\" in p for p in parts):
+        raise PermissionError(errno.EACCES, "path refused", path)
+    return parts

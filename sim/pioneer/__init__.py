@@ -1,0 +1,24 @@
+"""The emulated Pioneer 3-AT: an ARIA server on the simulated body (issue 5).
+
+Modules:
+
+* ``p3at``: the robot as ARIA knows it (subclass, conversion factors, sonar geometry).
+* ``motion``: the firmware's motion controller (targets, limits, velocity profile).
+* ``sonar``: the two sonar arrays (firing schedule, pymunk rays).
+* ``emulator``: :class:`EmulatedPioneer`, the sans-I/O ARIA server.
+* ``links``: pty and TCP byte links; ``server``: :class:`PioneerServer`, one client at
+  a time, tick by tick or in real time (``vmnav sim serve``).
+"""
+
+from sim.pioneer.emulator import EmulatedPioneer, EmulatorStats
+from sim.pioneer.links import PtyLink, StreamLink, TcpListener
+from sim.pioneer.server import PioneerServer
+
+__all__ = [
+    "EmulatedPioneer",
+    "EmulatorStats",
+    "PioneerServer",
+    "PtyLink",
+    "StreamLink",
+    "TcpListener",
+]

@@ -1,0 +1,139 @@
+"""``vmnav sim serve``: the emulated Pioneer 3-AT on a pty and/or TCP, in real time.
+
+Registered under ``vmnav sim`` by :mod:`tools.sim_cmd`. The simulation steps to the
+wall clock and the ARIA server answers one client at a time (``sim.pioneer.server``)
+until Ctrl-C, SIGTERM or ``--duration``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, closing, contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from shared.errors import InputError
+from tools.sim_args import add_sim_arguments, sim_config_from_args
+
+DEFAULT_ARIA = "tcp:8101"
+EMULATOR_SEED_CHILD = 3
+"""The emulator's sonar noise draws from child 3 of the seed (the simulation uses 0-2)."""
+
+
+@dataclass(frozen=True, slots=True)
+class PtySpec:
+    """Serve on a new pseudo-terminal, optionally symlinked."""
+
+    symlink: Path | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class TcpSpec:
+    """Serve on a TCP port (0: any free port)."""
+
+    host: str
+    port: int
+
+
+def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
+    """An ``--aria`` value: ``pty``, ``pty:LINK``, ``tcp``, ``tcp:PORT`` or ``tcp:HOST:PORT``.
+
+    Raises:
+        InputError: anything else (the message names ``--aria`` and the value).
+    """
+    kind, _, rest = text.partition(":")
+    if kind == "pty":
+        return PtySpec(Path(rest) if rest else None)
+    if kind == "tcp":
+        host, _, port_text = rest.rpartition(":")
+        port_text = port_text or DEFAULT_ARIA.split(":")[1]
+        if port_text.isdigit() and 0 <= int(port_text) <= 65535:
+            return TcpSpec(host or "127.0.0.1", int(port_text))
+        raise InputError("--aria", f"{text!r}: the TCP port must be 0-65535")
+    raise InputError(
+        "--aria", f"{text!r} is not pty, pty:LINK, tcp:PORT or tcp:HOST:PORT"
+    )
+
+
+def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav sim serve``."""
+    serve = sim_sub.add_parser(
+        "serve",
+        help="serve an emulated Pioneer 3-AT (ARIA server) on a pty and/or TCP, in real time",
+        description="Run a simulated world in real time with its robot as an emulated "
+        "Pioneer 3-AT-SH that ARIA clients (stock ARIA, vmnav's driver) connect to over a "
+        "serial pty or TCP. One client at a time; stop with Ctrl-C.",
+    )
+    add_sim_arguments(serve)
+    serve.add_argument(
+        "--aria",
+        action="append",
+        metavar="SPEC",
+        help="where to serve ARIA, repeatable: pty, pty:LINK (also symlink LINK to the pty), "
+        f"tcp:PORT, tcp:HOST:PORT (default host 127.0.0.1) [default: {DEFAULT_ARIA}]",
+    )
+    serve.add_argument(
+        "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
+    )
+    serve.set_defaults(run=run_serve)
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    """Open the transports, print where they are, serve until stopped, print the counts."""
+    specs = [parse_aria_spec(text) for text in args.aria or [DEFAULT_ARIA]]
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    config, _ = sim_config_from_args(args)
+
+    import numpy as np
+
+    from shared.clock import WallClock
+    from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
+    from sim.simulation import Simulation
+    from sim.world import load_world
+
+    with ExitStack() as opened:  # closes what was opened if a later step fails
+        links, listeners = [], []
+        for spec in specs:  # first: a port in use fails before the world is built
+            if isinstance(spec, PtySpec):
+                links.append(opened.enter_context(closing(PtyLink(spec.symlink))))
+            else:
+                listener = TcpListener(spec.host, spec.port)
+                listeners.append(opened.enter_context(closing(listener)))
+        sim = Simulation(load_world(config.world), config)
+        seed = np.random.SeedSequence(config.seed).spawn(EMULATOR_SEED_CHILD + 1)[-1]
+        emulator = EmulatedPioneer(sim, config.emulator, np.random.default_rng(seed))
+        server = PioneerServer(emulator, links, listeners)
+        opened.pop_all()
+    with server:
+        print(f"vmnav sim serve: world {config.world} (seed {config.seed}), robot "
+              f"'{emulator.identity.name}' ({emulator.identity.subclass})")
+        for link in links:
+            also = f" (also {link.symlink})" if link.symlink else ""
+            print(f"  ARIA on pty {link.path}{also}")
+        for listener in listeners:
+            print(f"  ARIA on tcp {listener.host}:{listener.port}")
+        print("  Ctrl-C stops", flush=True)
+        duration_ns = None if args.duration is None else round(args.duration * 1e9)
+        with _stopped_by_signals(server.stop):
+            server.run(WallClock(), duration_ns)
+    s = emulator.stats
+    print(f"stopped after {sim.now_ns / 1e9:.1f} s of simulation: {s.sessions} session(s), "
+          f"{s.sips_sent} SIPs, {s.commands} commands, {s.unknown_commands} unknown, "
+          f"{s.bad_checksums} bad checksums, {server.refused_clients} client(s) refused")
+    return 0
+
+
+@contextmanager
+def _stopped_by_signals(stop: Callable[[], None]) -> Iterator[None]:
+    """SIGINT and SIGTERM call ``stop`` while inside (a clean shutdown); old handlers after."""
+    handlers = {sig: signal.signal(sig, lambda *_: stop())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
