@@ -1,0 +1,105 @@
+"""``vmnav pioneer``: connect to a Pioneer (or ``vmnav sim serve``), report it, optionally drive.
+
+The link check a user runs first with a real robot: it opens the ARIA link through
+:class:`robot.pioneer.driver.PioneerDriver` (serial device, pty or
+``socket://host:port``), waits until the motors are enabled, prints the robot's
+identity and state, optionally drives at a fixed speed and turn rate for a while
+(printing the odometry every second), then stops and closes the link with CLOSE
+(also on Ctrl-C and SIGTERM). Exit status: 0 when connected (and the drive done),
+1 with a one-line error otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+
+from shared.errors import InputError, TransportError
+
+#: Wall time allowed to connect, s (ARIA's own connect gives up after about 6.4 s of SYNCs).
+CONNECT_TIMEOUT_S = 10.0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav pioneer``."""
+    parser = sub.add_parser(
+        "pioneer",
+        help="connect to a Pioneer over ARIA, report it, optionally drive",
+        description="Connect to a Pioneer 3-AT (or vmnav sim serve, or MobileSim) with "
+        "vmnav's ARIA driver, print its identity, battery and odometry, optionally drive "
+        "at a fixed speed and turn rate, then stop and close the link.",
+    )
+    parser.add_argument("--config", metavar="FILE", help="vmnav TOML config file ([pioneer])")
+    parser.add_argument("--aria", metavar="URL",
+                        help="pyserial URL: /dev/ttyUSB0, a pty path, socket://HOST:8101 "
+                             "[default: the config's pioneer.url]")
+    parser.add_argument("--baud", type=int, metavar="N",
+                        help="serial rate after the 9600 baud attempt [default: 38400]")
+    parser.add_argument("--drive", nargs=2, type=float, metavar=("V_M_S", "OMEGA_DEG_S"),
+                        help="drive at this speed (m/s) and turn rate (deg/s, left +)")
+    parser.add_argument("--duration", type=float, default=2.0, metavar="S",
+                        help="how long to drive, s [default: 2]")
+    parser.set_defaults(run=run_pioneer)
+
+
+def run_pioneer(args: argparse.Namespace) -> int:
+    """Connect, report, drive, close (see the module docstring)."""
+    from robot.pioneer.driver import PioneerDriver
+    from robot.pioneer.shutdown import close_on_sigterm
+    from shared.clock import WallClock
+    from shared.config import load_config
+
+    config = load_config(args.config).pioneer
+    overrides: dict[str, object] = {}
+    if args.aria is not None:
+        overrides["url"] = args.aria
+    if args.baud is not None:
+        overrides["baud"] = args.baud
+    config = dataclasses.replace(config, **overrides)
+    if args.drive is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    clock = WallClock()
+    driver = PioneerDriver.from_config(config, clock)
+    restore = close_on_sigterm(driver)
+    try:
+        driver.start_thread()
+        if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
+            status = driver.status()
+            raise TransportError(config.url, f"no Pioneer ready within {CONNECT_TIMEOUT_S:.0f} s "
+                                             f"(link {status.link.value}, motors "
+                                             f"{'on' if status.motors_enabled else 'off'})")
+        identity = driver.status().identity
+        assert identity is not None  # set by the handshake
+        print(f"connected to {identity.name!r} ({identity.robot_class} {identity.subclass}) "
+              f"on {config.url}")
+        _print_state(driver, 0.0)
+        if args.drive is not None:
+            v_m_s, omega_deg_s = args.drive
+            start_ns = clock.now_ns()
+            for second in range(1, math.ceil(args.duration) + 1):
+                end_ns = start_ns + round(min(second, args.duration) * 1e9)
+                while clock.now_ns() < end_ns:
+                    driver.command(v_m_s, math.radians(omega_deg_s))
+                    clock.sleep_until_ns(min(end_ns, clock.now_ns() + 100_000_000))
+                _print_state(driver, min(second, args.duration))
+            driver.stop()
+    finally:
+        driver.close()
+        restore()
+    counters = driver.counters()
+    print(f"closed: {counters.sips} SIPs, {counters.bad_checksums} bad checksums, "
+          f"{counters.dropped_commands} commands dropped")
+    return 0
+
+
+def _print_state(driver: object, t_s: float) -> None:
+    from robot.pioneer.driver import PioneerDriver
+
+    assert isinstance(driver, PioneerDriver)
+    s = driver.status()
+    x, y, yaw = s.odom_pose
+    print(f"  t {t_s:4.1f} s: odometry x {x:+.3f} m, y {y:+.3f} m, yaw {math.degrees(yaw):+.1f} "
+          f"deg, {s.odom_distance_m:.3f} m driven; battery {s.battery_v:.1f} V; motors "
+          f"{'on' if s.motors_enabled else 'off'}; bumpers {s.front_bumpers:#x}/"
+          f"{s.rear_bumpers:#x}; stalled {'yes' if s.left_stalled or s.right_stalled else 'no'}")
