@@ -14,8 +14,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 from shared.errors import InputError, TransportError
+
+if TYPE_CHECKING:
+    from robot.pioneer.driver import PioneerDriver
 
 #: Wall time allowed to connect, s (ARIA's own connect gives up after about 6.4 s of SYNCs).
 CONNECT_TIMEOUT_S = 10.0
@@ -65,10 +69,7 @@ def run_pioneer(args: argparse.Namespace) -> int:
     try:
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
-            status = driver.status()
-            raise TransportError(config.url, f"no Pioneer ready within {CONNECT_TIMEOUT_S:.0f} s "
-                                             f"(link {status.link.value}, motors "
-                                             f"{'on' if status.motors_enabled else 'off'})")
+            raise TransportError(config.url, _why_not_connected(driver))
         identity = driver.status().identity
         assert identity is not None  # set by the handshake
         print(f"connected to {identity.name!r} ({identity.robot_class} {identity.subclass}) "
@@ -93,10 +94,21 @@ def run_pioneer(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_state(driver: object, t_s: float) -> None:
-    from robot.pioneer.driver import PioneerDriver
+def _why_not_connected(driver: PioneerDriver) -> str:
+    """The last transport or handshake failure the driver reported, in one line."""
+    from robot.pioneer.events import ConnectFailed, TransportFailed
 
-    assert isinstance(driver, PioneerDriver)
+    status, cause = driver.status(), ""
+    while (event := driver.next_event()) is not None:
+        if isinstance(event, TransportFailed):
+            cause = f"; last error: {event.problem}"
+        elif isinstance(event, ConnectFailed):
+            cause = "; the robot did not answer the SYNC handshake"
+    return (f"no Pioneer ready within {CONNECT_TIMEOUT_S:.0f} s (link {status.link.value}, "
+            f"motors {'on' if status.motors_enabled else 'off'}{cause})")
+
+
+def _print_state(driver: PioneerDriver, t_s: float) -> None:
     s = driver.status()
     x, y, yaw = s.odom_pose
     print(f"  t {t_s:4.1f} s: odometry x {x:+.3f} m, y {y:+.3f} m, yaw {math.degrees(yaw):+.1f} "

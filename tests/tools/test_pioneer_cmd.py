@@ -92,3 +92,12 @@ def test_a_client_killed_mid_motion_leaves_the_robot_to_the_next(
     distance, _, _ = drive(tcp_url, capsys)
     assert distance == pytest.approx(0.4, rel=0.25)
     assert math.hypot(*body.velocity_base[:2]) < 0.05  # stopped again after the CLOSE
+
+
+def test_a_missing_device_is_one_line_naming_it(capsys: pytest.CaptureFixture[str],
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("tools.pioneer_cmd.CONNECT_TIMEOUT_S", 1.0)
+    code = main(["pioneer", "--aria", "/dev/ttyNOPE"])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1
+    assert "/dev/ttyNOPE: no Pioneer ready within 1 s" in err and "could not open port" in err
