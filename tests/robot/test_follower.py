@@ -17,6 +17,9 @@ from robot.follower import (
     targets_from_route,
 )
 from robot.segment_frame import relative_pose
+from robot.vision.frame_state import FrameState
+from robot.vision.image_errors import ImageErrors
+from robot.vision.path_state import PathState
 from shared.config import VmnavConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState
@@ -80,20 +83,43 @@ class TestChainTracks:
         assert chained.shape == (0, 2) and chained.dtype == np.int64
 
 
+BASE = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False, stalled=False,
+                 battery_v=13.0, motors_enabled=True)
+
+
+def make_follower(memory) -> RouteFollower:
+    config = VmnavConfig()
+    follower_config = FollowerConfig(
+        features=config.features, path_state=config.path_state,
+        estimator=config.estimator, switching=config.switching, control=config.control,
+        mount=config.sim.camera)
+    route = memory.paths[0].keyframe_ids[:3]
+    return RouteFollower(memory, list(route), follower_config, np.random.default_rng(0), 0, BASE)
+
+
+def blank(memory) -> np.ndarray:
+    return np.full((memory.camera.height, memory.camera.width), 128, dtype=np.uint8)
+
+
+def vision_with(n_points: int, y_m: float) -> FrameState:
+    state = PathState(y_m=y_m, theta_rad=0.0, s_m=-0.3, ok=True, scale_source="three-view",
+                      n_inliers=40, n_points=n_points)
+    return FrameState(state=state, image_errors=ImageErrors(30.0, 20.0, 40), matches=40)
+
+
 class TestNoEstimate:
     def test_the_robot_stands_still_until_its_first_estimate(self, memory) -> None:
-        config = VmnavConfig()
-        follower_config = FollowerConfig(
-            features=config.features, path_state=config.path_state,
-            estimator=config.estimator, switching=config.switching, control=config.control,
-            mount=config.sim.camera)
-        base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
-                         stalled=False, battery_v=13.0, motors_enabled=True)
-        route = memory.paths[0].keyframe_ids[:3]
-        follower = RouteFollower(memory, list(route), follower_config,
-                                 np.random.default_rng(0), 0, base)
-        camera = memory.camera
-        blank = np.full((camera.height, camera.width), 128, dtype=np.uint8)
-        step = follower.step(66_000_000, blank, base)
+        follower = make_follower(memory)
+        step = follower.step(66_000_000, blank(memory), BASE)
         assert step.y_m is None
         assert (step.twist.v_m_s, step.twist.omega_rad_s) == (0.0, 0.0)
+
+    def test_only_an_estimate_on_enough_points_starts_the_filter(self, memory,
+                                                                 monkeypatch) -> None:
+        follower = make_follower(memory)
+        monkeypatch.setattr(follower, "_vision", lambda index, corners: vision_with(3, 1.05))
+        assert follower.step(66_000_000, blank(memory), BASE).y_m is None
+        monkeypatch.setattr(follower, "_vision", lambda index, corners: vision_with(12, 0.05))
+        step = follower.step(133_000_000, blank(memory), BASE)
+        assert step.y_m == pytest.approx(0.05)
+        assert step.twist.v_m_s > 0
