@@ -1003,11 +1003,34 @@ class MavlinkConfig:
     """Gap between PARAM_VALUEs streamed after PARAM_REQUEST_LIST, ns (50 per second)."""
     gcs_lost_action: str = "hold"
     """One of ``GCS_LOST_ACTIONS``: what the robot does when the ground heartbeat stops."""
+    system_id: int = 1
+    """The vehicle's MAVLink system id, 1..255 (unique per robot; its component id is 1)."""
+    heartbeat_period_ns: int = 1_000_000_000
+    """The vehicle's HEARTBEAT period, ns (1 Hz: ground stations call a vehicle lost after
+    about 4-5 missed beats)."""
+    gcs_timeout_ns: int = 5_000_000_000
+    """No ground-station HEARTBEAT for this long (after one was seen) is the GCS failsafe, ns."""
+    status_period_ns: int = 1_000_000_000
+    """Default period of SYS_STATUS, BATTERY_STATUS and MISSION_CURRENT, ns."""
+    odometry_period_ns: int = 250_000_000
+    """Default period of ODOMETRY and NAV_CONTROLLER_OUTPUT, ns."""
+    servo_status_period_ns: int = 500_000_000
+    """Default period of VISUAL_SERVO_STATUS, ns."""
+    home_period_ns: int = 10_000_000_000
+    """Default period of HOME_POSITION (once the home is known), ns."""
+    min_stream_period_ns: int = 50_000_000
+    """Shortest period SET_MESSAGE_INTERVAL may set for one message, ns (caps the link load)."""
+    service_period_ns: int = 10_000_000
+    """Period of the vehicle's UDP I/O thread, ns."""
 
     def __post_init__(self) -> None:
         for name in ("mission_timeout_ns", "mission_item_timeout_ns", "mission_max_items",
-                     "param_timeout_ns", "param_stream_period_ns"):
+                     "param_timeout_ns", "param_stream_period_ns", "heartbeat_period_ns",
+                     "gcs_timeout_ns", "status_period_ns", "odometry_period_ns",
+                     "servo_status_period_ns", "home_period_ns", "min_stream_period_ns",
+                     "service_period_ns"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(1 <= self.system_id <= 255, f"system_id must be in 1..255, got {self.system_id}")
         for name in ("mission_retries", "param_retries"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         require(self.mission_max_items <= 65535,
@@ -1055,6 +1078,59 @@ class FtpConfig:
             require(1 <= value <= 239, f"{name} must be in 1..239, got {value}")
 
 
+LOG_COMPRESSIONS = ("none", "lz4", "zstd")
+
+
+@dataclass(frozen=True, slots=True)
+class LogConfig:
+    """Field logging to MCAP (``shared.logs``): what is kept, flushing and rotation.
+
+    The loss window of a killed process is one flush period plus what waits in the
+    queue (mcap-logging.md §1 "Crash behaviour"): a chunk reaches the file only when
+    it is full or flushed, and 1 MiB of telemetry alone is minutes of data.
+    """
+
+    output_dir: str = "logs"
+    """Folder of the log files; created if missing."""
+    frame_rate_hz: float = 15.0
+    """Camera frames logged per second at most, per image topic; faster frames are skipped."""
+    jpeg_quality: int = 85
+    """JPEG quality of logged frames, 1-100 (cv2.IMWRITE_JPEG_QUALITY)."""
+    flush_period_ns: int = 500_000_000
+    """Close the open chunk and flush the file at least this often, ns (at most 1 s).
+    Half the 1 s budget: the other half covers a writer thread behind on a busy machine."""
+    fsync: bool = True
+    """``os.fsync`` after each flush, so a power cut also loses at most a flush period."""
+    chunk_size_bytes: int = 1024 * 1024
+    """Close a chunk once it holds this many uncompressed bytes (about 0.7 s of images)."""
+    compression: str = "lz4"
+    """Chunk compression, one of ``LOG_COMPRESSIONS``. JPEG does not compress (zstd gains
+    1-4 %) and zstd stalls the writer 8-10 ms per chunk; lz4 shrinks telemetry 4x."""
+    rotate_size_bytes: int = 1_000_000_000
+    """Start the next numbered file once a file reaches this size, bytes (overshoots by up
+    to one chunk)."""
+    rotate_period_ns: int = 600_000_000_000
+    """Start the next numbered file once a file spans this much log time, ns (10 min)."""
+    queue_messages: int = 256
+    """Messages waiting for the writer thread at most; more are dropped and counted
+    (about 3 s of 15 frames/s plus 50 Hz telemetry)."""
+    retry_period_ns: int = 5_000_000_000
+    """After a write error (disk full, folder gone) try a new file this often, ns."""
+
+    def __post_init__(self) -> None:
+        require(bool(self.output_dir.strip()), "output_dir must not be empty")
+        for name in ("frame_rate_hz", "flush_period_ns", "chunk_size_bytes", "rotate_size_bytes",
+                     "rotate_period_ns", "queue_messages", "retry_period_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(1 <= self.jpeg_quality <= 100,
+                f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
+        require(self.flush_period_ns <= 1_000_000_000,
+                f"flush_period_ns must be <= 1 s (1000000000), got {self.flush_period_ns}")
+        require(self.compression in LOG_COMPRESSIONS,
+                f"compression must be one of {', '.join(LOG_COMPRESSIONS)}, "
+                f"got {self.compression!r}")
+
+
 @dataclass(frozen=True, slots=True)
 class VmnavConfig:
     """The whole configuration file: one table per component."""
@@ -1072,6 +1148,7 @@ class VmnavConfig:
     mission: MissionConfig = field(default_factory=MissionConfig)
     pioneer: PioneerDriverConfig = field(default_factory=PioneerDriverConfig)
     mavlink: MavlinkConfig = field(default_factory=MavlinkConfig)
+    log: LogConfig = field(default_factory=LogConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

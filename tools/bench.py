@@ -64,6 +64,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
                         help="where the seeds' memories are cached [default: out/bench_follow]")
     follow.set_defaults(run=run_follow)
+    log = bench_sub.add_parser(
+        "log",
+        help="field logging: CPU cost of 15 frames/s of 800x600 JPEG plus telemetry",
+        description="Run a loop producing 800x600 grey frames at 15 frames/s and 50 Hz "
+        "telemetry, alternating phases with MCAP logging off and on; print the process CPU "
+        "time per wall second with logging minus without (log_overhead_core_fraction).",
+    )
+    log.add_argument("--seconds", type=float, default=8.0,
+                     help="total wall time, four phases (off, on, off, on) [default: 8]")
+    log.add_argument("--out", type=Path, metavar="DIR",
+                     help="keep the logs written in DIR [default: a temporary folder]")
+    log.set_defaults(run=run_log)
 
 
 def pin_to_one_core() -> list[int]:
@@ -148,4 +160,17 @@ def run_follow(args: argparse.Namespace) -> int:
         landmark_dropout=args.landmark_dropout)
     result = bench_follow(plan, args.out, config, sim_config, camera)
     print(json.dumps({"benchmark": "follow", **result}, indent=2))
+    return 0
+
+
+def run_log(args: argparse.Namespace) -> int:
+    """Print the logging benchmark's JSON."""
+    from shared.errors import InputError
+    from shared.logs.bench import bench_log
+
+    if not args.seconds > 0:
+        raise InputError("--seconds", f"must be > 0, got {args.seconds}")
+    load = [round(x, 2) for x in os.getloadavg()]
+    result = bench_log(seconds=args.seconds, out_dir=args.out)
+    print(json.dumps({"benchmark": "log", "load_average_at_start": load, **result}, indent=2))
     return 0

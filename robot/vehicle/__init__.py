@@ -1,0 +1,28 @@
+"""The robot as a MAVLink vehicle (issue 6).
+
+* ``app_port``: :class:`VehicleApp`, what the endpoint needs from the robot
+  application, and the :class:`VehicleTelemetry` snapshot it reads;
+* ``endpoint``: :class:`VehicleEndpoint`, the sans-I/O vehicle composing the
+  ``shared.mavlink`` cores (commands, missions, parameters, FTP, signing);
+* ``telemetry``, ``progress``, ``failsafe``, ``user_commands``: the pieces it
+  streams, reports, times and answers with;
+* ``options``: its files and signing setup;
+* ``udp_vehicle``: :class:`UdpVehicle`, the endpoint on a UDP socket.
+"""
+
+from robot.vehicle.app_port import GcsLostAction, ServoTelemetry, VehicleApp, VehicleTelemetry
+from robot.vehicle.endpoint import LinkStats, VehicleEndpoint
+from robot.vehicle.options import SigningSetup, VehicleFiles
+from robot.vehicle.udp_vehicle import UdpVehicle
+
+__all__ = [
+    "GcsLostAction",
+    "LinkStats",
+    "ServoTelemetry",
+    "SigningSetup",
+    "UdpVehicle",
+    "VehicleApp",
+    "VehicleEndpoint",
+    "VehicleFiles",
+    "VehicleTelemetry",
+]

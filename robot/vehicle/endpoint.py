@@ -1,0 +1,383 @@
+"""VehicleEndpoint: the robot as a MAVLink vehicle, sans-I/O (bytes in, packets out).
+
+Theory of operation
+-------------------
+
+The endpoint composes the shared protocol cores behind one surface::
+
+    endpoint.receive(datagram, now_ns)      # any number of MAVLink packets
+    for packet in endpoint.poll(now_ns):    # everything due now, one packet each
+        transport.send(packet)
+    endpoint.get_timer()                    # when poll has something to do next, ns
+
+and talks to the robot only through :class:`~robot.vehicle.app_port.VehicleApp`.
+
+Rules:
+
+1. Identity: system ``MavlinkConfig.system_id``, component 1 (QGC and MAVSDK want
+   an autopilot there), HEARTBEAT as a generic-autopilot ground rover every
+   ``heartbeat_period_ns`` with ArduRover mode numbers (``shared.mavlink.modes``).
+2. Received packets go to the cores: commands (``shared.mavlink.commands``, plus
+   the user commands of ``user_commands``), missions, parameters, FTP over the
+   memory and upload area (``shared.mavlink.ftp_memory``); HEARTBEATs of ground
+   stations feed the failsafe; MANUAL_CONTROL, SET_MODE and TIMESYNC are handled
+   here. Replies wait in an outbox for the next :meth:`poll`.
+3. Modes: DO_SET_MODE (ArduPilot or PX4 encoding) and SET_MODE go to
+   ``VehicleApp.set_mode``, except AUTO, which (like MISSION_START) starts the
+   uploaded mission from its current item through ``VehicleApp.start_mission``;
+   without a mission AUTO is DENIED.
+4. Missions are goal items (``shared.mavlink.goal``), validated on upload by
+   ``VehicleApp.validate_goals``; a refused upload keeps the mission in force. While
+   the uploaded mission runs, uploads and clears are refused (MAV_MISSION_DENIED):
+   switch to HOLD first.
+5. Parameters are ``robot_params`` over the config; the parameter file is applied
+   on construction and rewritten atomically after every change, and the
+   application gets the new config (``params_changed``), at construction too.
+6. Telemetry streams by default (``telemetry.default_periods_ns``), adjustable
+   with SET_MESSAGE_INTERVAL; REQUEST_MESSAGE answers any of them, and
+   AUTOPILOT_VERSION. Mission progress and events go out as MISSION_ITEM_REACHED,
+   MISSION_CURRENT and STATUSTEXT (``progress``).
+7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
+   while lost.
+8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
+   packets in that are unsigned (except RADIO_STATUS from a radio modem), wrongly
+   signed or replayed are dropped and counted (:meth:`stats`); the outgoing
+   timestamp is raised to the wall clock every 10 s (``SigningClock``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from robot.vehicle.app_port import VehicleApp, VehicleTelemetry
+from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
+from robot.vehicle.options import SigningSetup, VehicleFiles
+from robot.vehicle.progress import MissionProgress
+from robot.vehicle.telemetry import (
+    TELEMETRY_BUILDERS,
+    Builder,
+    TelemetryStreams,
+    default_periods_ns,
+    system_status,
+)
+from robot.vehicle.user_commands import user_handlers
+from shared.config import FtpConfig, VmnavConfig
+from shared.errors import InputError
+from shared.mavlink.address import Address, is_for
+from shared.mavlink.commands import CommandDispatcher, autopilot_version_message, vehicle_handlers
+from shared.mavlink.dialect import Message, make_codec, mavlink
+from shared.mavlink.ftp import FtpServer
+from shared.mavlink.ftp_memory import MemoryFileSystem
+from shared.mavlink.goal import Goal, goals_from_items
+from shared.mavlink.intervals import MessageIntervals
+from shared.mavlink.mission import MissionServer
+from shared.mavlink.mission_items import MissionItem, MissionRefusal
+from shared.mavlink.modes import Mode, heartbeat_message, mode_from_set_mode
+from shared.mavlink.param_file import load_param_file, save_param_file
+from shared.mavlink.params import ParamChanged, ParamServer
+from shared.mavlink.robot_params import config_with_params, robot_param_table
+from shared.mavlink.signing import (
+    SigningClock,
+    SigningStats,
+    UnsignedPolicy,
+    configure_signing,
+    signing_stats,
+)
+from shared.mavlink.statustext import statustext_messages
+
+logger = logging.getLogger(__name__)
+
+#: The vehicle's component id (MAV_COMP_ID_AUTOPILOT1).
+COMPONENT_ID = 1
+#: Messages accepted unsigned on a signed link: a radio modem's own reports.
+UNSIGNED_ALLOWED = (mavlink.MAVLINK_MSG_ID_RADIO_STATUS,)
+_HEARTBEAT = mavlink.MAVLINK_MSG_ID_HEARTBEAT
+_INT16_MAX = 0x7FFF
+
+
+@dataclass(frozen=True, slots=True)
+class LinkStats:
+    """What the endpoint received.
+
+    Attributes:
+        messages: packets decoded and handled.
+        bad_packets: packets dropped as corrupt or by the signature check.
+        unsigned_rejected: message id -> packets dropped for lacking a valid signature.
+        signing: pymavlink's signing counters; None without signing.
+    """
+
+    messages: int
+    bad_packets: int
+    unsigned_rejected: dict[int, int]
+    signing: SigningStats | None
+
+
+def _axis(value: int) -> float:
+    """A MANUAL_CONTROL axis, -1000..1000, normalized; INT16_MAX (axis unused) is NaN."""
+    return math.nan if value == _INT16_MAX else value / 1000
+
+
+class VehicleEndpoint:
+    """The robot's MAVLink vehicle (module docstring).
+
+    Args:
+        app: the robot application.
+        config: the robot's config; parameters start from its values.
+        files: memory, upload area and parameter file.
+        signing: sign the link; None leaves it unsigned.
+        ftp: FTP server limits.
+        uid: the robot's unique id in AUTOPILOT_VERSION (64 bits).
+
+    Raises:
+        ConfigError: the parameter file is malformed, or a config value lies outside its
+            parameter's range (names the file or parameter).
+        ValueError: a signing key that is not 32 bytes, or a link id outside 0..255.
+    """
+
+    def __init__(self, app: VehicleApp, config: VmnavConfig, files: VehicleFiles, *,
+                 signing: SigningSetup | None = None, ftp: FtpConfig | None = None,
+                 uid: int = 0) -> None:
+        link = config.mavlink
+        self.address = Address(link.system_id, COMPONENT_ID)
+        self.codec = make_codec(link.system_id, COMPONENT_ID)
+        self._app = app
+        self._files = files
+        self._base_config = config
+        self._table = robot_param_table(config)
+        load_param_file(files.param_file, self._table)
+        self.config = config_with_params(config, self._table)
+        """The config in force: ``config`` with the parameters applied."""
+        self._params = ParamServer(self._table, self.address, link)
+        self._mission = MissionServer(self.address, link, validate=self._validate)
+        ftp = ftp if ftp is not None else FtpConfig()
+        self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes)
+        self._ftp = FtpServer(self._fs, ftp)
+        self._intervals = MessageIntervals(default_periods_ns(link), link.min_stream_period_ns)
+        builders: dict[int, Builder] = {
+            _HEARTBEAT: self._heartbeat,
+            mavlink.MAVLINK_MSG_ID_MISSION_CURRENT: lambda t, us: self._mission.current_message(),
+            **TELEMETRY_BUILDERS,
+        }
+        self._streams = TelemetryStreams(builders, self._period_ns)
+        self._watchdog = GcsWatchdog(link.gcs_timeout_ns)
+        self._progress = MissionProgress(self._mission, self._notice)
+        providers = {msg_id: (lambda build=build: build(self._app.telemetry(), self._time_usec()))
+                     for msg_id, build in builders.items()}
+        providers[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION] = lambda: autopilot_version_message(uid)
+        self._commands = CommandDispatcher(self.address, {
+            **vehicle_handlers(set_mode=self._set_mode, start_mission=self._start_mission,
+                               set_mission_current=self._set_mission_current,
+                               arm=self._arm, messages=providers, intervals=self._intervals),
+            **user_handlers(app, self._fs,
+                            lambda text: self._notice(mavlink.MAV_SEVERITY_WARNING, text)),
+        })
+        self._policy: UnsignedPolicy | None = None
+        self._signing_clock: SigningClock | None = None
+        if signing is not None:
+            self._policy = configure_signing(self.codec, signing.key, signing.link_id, 0,
+                                             UnsignedPolicy(UNSIGNED_ALLOWED))
+            self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns)
+        self._outbox: list[Message] = []
+        self._messages = 0
+        self._boot_ns: int | None = None
+        self._now_ns = 0
+        self._notice_id = 0
+        app.params_changed(self.config)
+
+    # -- the I/O surface ----------------------------------------------------------------
+
+    def receive(self, data: bytes, now_ns: int) -> int:
+        """Handle every packet in ``data`` (a datagram, or a chunk of a byte stream).
+
+        Returns:
+            How many messages were accepted (0 when all were corrupt or unsigned).
+        """
+        self._tick(now_ns)
+        messages = self.codec.parse(data)
+        for msg in messages:
+            self._outbox += self._handle(msg, now_ns)
+            self._outbox += self._drain_events()
+        self._messages += len(messages)
+        return len(messages)
+
+    def poll(self, now_ns: int) -> list[bytes]:
+        """Everything due at ``now_ns``: replies, timer retries, heartbeat, telemetry,
+        progress and failsafe notices; one packed MAVLink packet per element."""
+        self._tick(now_ns)
+        if self._signing_clock is not None and now_ns >= (self._signing_clock.get_timer() or 0):
+            self._signing_clock.handle_timer(now_ns)
+        out, self._outbox = self._outbox, []
+        t = self._app.telemetry()
+        out += self._progress.update(t)
+        out += self._check_gcs(t, now_ns)
+        out += self._streams.due(t, now_ns, self._time_usec())
+        for core in (self._mission, self._params):
+            timer = core.get_timer()
+            if timer is not None and now_ns >= timer:
+                out += core.handle_timer(now_ns)
+        out += self._drain_events()
+        return [self.codec.pack(msg) for msg in out]
+
+    def get_timer(self) -> int | None:
+        """When :meth:`poll` next has something to send, ns (0: at once)."""
+        if self._outbox:
+            return self._now_ns
+        timers = [self._streams.get_timer(), self._watchdog.get_timer(),
+                  self._mission.get_timer(), self._params.get_timer()]
+        if self._signing_clock is not None:
+            timers.append(self._signing_clock.get_timer() or 0)
+        return min((t for t in timers if t is not None), default=None)
+
+    def stats(self) -> LinkStats:
+        """Counters of what was received."""
+        return LinkStats(
+            self._messages, self.codec.bad_packets,
+            dict(self._policy.rejected) if self._policy is not None else {},
+            signing_stats(self.codec) if self._policy is not None else None)
+
+    def close(self) -> None:
+        """Discard FTP uploads in progress (nothing half-written is kept)."""
+        self._ftp.close()
+
+    # -- input --------------------------------------------------------------------------
+
+    def _handle(self, msg: Any, now_ns: int) -> list[Message]:
+        if isinstance(msg, mavlink.MAVLink_heartbeat_message):
+            return self._on_heartbeat(msg, now_ns)
+        if isinstance(msg, mavlink.MAVLink_file_transfer_protocol_message):
+            if msg.target_network != 0 or not is_for(msg, self.address):
+                return []
+            peer = (msg.get_srcSystem(), msg.get_srcComponent())
+            return [mavlink.MAVLink_file_transfer_protocol_message(0, *peer, payload)
+                    for payload in self._ftp.handle(msg.payload, now_ns, peer)]
+        if isinstance(msg, mavlink.MAVLink_manual_control_message):
+            if msg.target in (0, self.address.system_id):
+                self._app.manual_control(_axis(msg.x), _axis(msg.y), _axis(msg.z), _axis(msg.r),
+                                         msg.buttons, now_ns)
+            return []
+        if isinstance(msg, mavlink.MAVLink_set_mode_message):
+            mode = mode_from_set_mode(msg.base_mode, msg.custom_mode)
+            if is_for(msg, self.address) and mode is not None:
+                self._set_mode(mode)
+            return []
+        if isinstance(msg, mavlink.MAVLink_timesync_message):
+            return [mavlink.MAVLink_timesync_message(now_ns, msg.ts1)] if msg.tc1 == 0 else []
+        return (self._commands.handle_message(msg) + self._mission.handle_message(msg, now_ns)
+                + self._params.handle_message(msg, now_ns))
+
+    def _on_heartbeat(self, msg: Any, now_ns: int) -> list[Message]:
+        if msg.type != mavlink.MAV_TYPE_GCS or not self._watchdog.heartbeat(now_ns):
+            return []
+        self._app.gcs_regained()
+        return self._notice(mavlink.MAV_SEVERITY_INFO, "GCS heartbeat regained")
+
+    def _drain_events(self) -> list[Message]:
+        """Persist and apply parameter changes; log mission events."""
+        out: list[Message] = []
+        while (event := self._params.next_event()) is not None:
+            logger.info("vehicle: %s", event)
+            if isinstance(event, ParamChanged):
+                out += self._apply_params()
+        while (mission_event := self._mission.next_event()) is not None:
+            logger.info("vehicle: %s", mission_event)
+        return out
+
+    def _apply_params(self) -> list[Message]:
+        out: list[Message] = []
+        try:
+            save_param_file(self._files.param_file, self._table)
+        except InputError as e:
+            out = self._notice(mavlink.MAV_SEVERITY_ERROR, f"params not saved: {e}")
+        self.config = config_with_params(self._base_config, self._table)
+        self._app.params_changed(self.config)
+        return out
+
+    # -- command callbacks --------------------------------------------------------------
+
+    def _set_mode(self, mode: Mode) -> int:
+        if mode is Mode.AUTO:
+            return self._start_mission(self._mission.current_seq, None)
+        return self._result(self._app.set_mode(mode))
+
+    def _start_mission(self, first: int, last: int | None) -> int:
+        items = self._mission.items
+        last = len(items) - 1 if last is None else last
+        if not 0 <= first <= last < len(items):
+            self._outbox += self._notice(mavlink.MAV_SEVERITY_WARNING,
+                                         f"mission: cannot run items {first}..{last} "
+                                         f"of {len(items)}")
+            return mavlink.MAV_RESULT_DENIED
+        goals = _goals(items)[first:last + 1]
+        if not self._app.start_mission(goals, first):
+            return mavlink.MAV_RESULT_DENIED
+        self._mission.set_current(first)
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    def _set_mission_current(self, seq: int) -> int:
+        if not self._mission.set_current(seq):
+            return mavlink.MAV_RESULT_DENIED
+        self._outbox.append(self._mission.current_message())
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    def _arm(self, armed: bool, force: bool) -> int:
+        return self._result(self._app.arm(armed, force))
+
+    @staticmethod
+    def _result(ok: bool) -> int:
+        return mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
+
+    def _validate(self, items: tuple[MissionItem, ...]) -> MissionRefusal | None:
+        """The mission server's hook (module rule 4)."""
+        if self._app.telemetry().mission_running:
+            return MissionRefusal(mavlink.MAV_MISSION_DENIED,
+                                  "the mission is running; switch to HOLD first")
+        if not items:
+            return None
+        goals = goals_from_items(items)
+        if isinstance(goals, MissionRefusal):
+            return goals
+        return self._app.validate_goals(goals)
+
+    # -- output -------------------------------------------------------------------------
+
+    def _check_gcs(self, t: VehicleTelemetry, now_ns: int) -> list[Message]:
+        silence_ns = self._watchdog.check(now_ns)
+        if silence_ns is None:
+            return []
+        action = gcs_lost_action(t.mode, self.config.mavlink.gcs_lost_action)
+        self._app.gcs_lost(action)
+        return self._notice(mavlink.MAV_SEVERITY_CRITICAL,  # one STATUSTEXT: <= 50 characters
+                            f"GCS heartbeat lost for {silence_ns / 1e9:.1f} s in "
+                            f"{t.mode.name}: {action}")
+
+    def _heartbeat(self, t: VehicleTelemetry, time_usec: int) -> Message:
+        return heartbeat_message(t.mode, t.armed, system_status(t, self._watchdog.lost))
+
+    def _period_ns(self, msg_id: int) -> int | None:
+        if msg_id == _HEARTBEAT:
+            return self.config.mavlink.heartbeat_period_ns
+        return self._intervals.interval_ns(msg_id)
+
+    def _notice(self, severity: int, text: str) -> list[Message]:
+        logger.info("vehicle: %s", text)
+        self._notice_id = self._notice_id % 0xFFFF + 1
+        return statustext_messages(severity, text, self._notice_id)
+
+    def _tick(self, now_ns: int) -> None:
+        if self._boot_ns is None:
+            self._boot_ns = now_ns
+        self._now_ns = now_ns
+
+    def _time_usec(self) -> int:
+        """Time since the endpoint first ran, us (MAVLink's "time since boot")."""
+        return (self._now_ns - (self._boot_ns or 0)) // 1000
+
+
+def _goals(items: tuple[MissionItem, ...]) -> tuple[Goal, ...]:
+    """The goals of a mission the server accepted (so every item decodes)."""
+    goals = goals_from_items(items)
+    assert not isinstance(goals, MissionRefusal), goals
+    return goals

@@ -1,0 +1,113 @@
+"""UdpVehicle: a :class:`~robot.vehicle.endpoint.VehicleEndpoint` on a UDP socket.
+
+Rules:
+
+1. :meth:`UdpVehicle.service` does one round of I/O at ``now_ns``: every waiting
+   datagram into the endpoint, then every packet of ``endpoint.poll`` out, one
+   datagram each. Either the robot's loop calls it, or the vehicle's own thread
+   (:meth:`start_thread`, every ``MavlinkConfig.service_period_ns`` on the injected
+   clock); never both. The application's callbacks run in that thread.
+2. A listening link (``udpin``) replies to the last ground station whose datagram
+   held a message the endpoint accepted, so on a signed link a stranger's unsigned
+   datagram cannot divert the replies. A ``udpout`` link always sends to its peer.
+3. Errors: a closed or failed socket raises
+   :class:`~shared.byte_link.LinkClosedError` from :meth:`service`; the thread logs
+   it and ends.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+
+from robot.vehicle.endpoint import VehicleEndpoint
+from shared.clock import Clock
+from shared.errors import IllegalEventError
+from shared.mavlink.udp_link import Peer, UdpLink
+
+logger = logging.getLogger(__name__)
+
+
+class UdpVehicle:
+    """The vehicle's UDP I/O (module rules).
+
+    Args:
+        endpoint: the vehicle; the adapter owns it from now on (closing closes it).
+        link: the socket; the adapter owns it.
+        clock: time for the I/O thread.
+    """
+
+    def __init__(self, endpoint: VehicleEndpoint, link: UdpLink, clock: Clock) -> None:
+        self.endpoint = endpoint
+        self.link = link
+        self._clock = clock
+        self._reply_to: Peer | None = link.peer
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._closed = False
+
+    @classmethod
+    def open(cls, url: str, endpoint: VehicleEndpoint, clock: Clock) -> UdpVehicle:
+        """The vehicle on a new :class:`UdpLink` for ``url`` (``udpin:0.0.0.0:14550``...).
+
+        Raises:
+            TransportError: a bad connection string or a port in use.
+        """
+        return cls(endpoint, UdpLink.open(url), clock)
+
+    def service(self, now_ns: int) -> None:
+        """One round of I/O at ``now_ns`` (rule 1)."""
+        with self._lock:
+            if self._closed:
+                return
+            for data, sender in self.link.receive():
+                if self.endpoint.receive(data, now_ns) and self.link.listening:
+                    self._reply_to = sender
+            self.link.peer = self._reply_to
+            for packet in self.endpoint.poll(now_ns):
+                self.link.send(packet)
+
+    def start_thread(self) -> None:
+        """Service the link from a daemon thread; idempotent.
+
+        Raises:
+            IllegalEventError: the vehicle is closed.
+        """
+        with self._lock:
+            if self._closed:
+                raise IllegalEventError("UdpVehicle", "CLOSED", "start_thread")
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="mavlink-io", daemon=True)
+                self._thread.start()
+
+    def _run(self) -> None:
+        period_ns = self.endpoint.config.mavlink.service_period_ns
+        deadline_ns = self._clock.now_ns()
+        try:
+            while not self._stop.is_set():
+                self.service(self._clock.now_ns())
+                deadline_ns = max(deadline_ns + period_ns, self._clock.now_ns())
+                self._clock.sleep_until_ns(deadline_ns)
+        except Exception:
+            logger.exception("vehicle: MAVLink I/O thread died")
+            raise
+
+    def close(self) -> None:
+        """Stop the thread, close the endpoint and the socket; idempotent."""
+        self._stop.set()
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join()
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            self.endpoint.close()
+            self.link.close()
+
+    def __enter__(self) -> UdpVehicle:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

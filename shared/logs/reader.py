@@ -1,0 +1,343 @@
+"""Reading field logs: a summary of any MCAP file, its messages, and recovery after a crash.
+
+* :func:`log_info`: topics, counts, schema names, duration and rates; from the
+  summary of a finished file, by scanning an unfinished or damaged one.
+* :func:`read_messages`: the decoded JSON messages of a finished file, in log time order.
+* :func:`recover`: rewrite an unfinished, truncated or damaged file into a valid,
+  indexed one, keeping every message of every intact chunk; the source is only read.
+
+Bad files raise :class:`~shared.errors.InputError` with one line naming the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from collections import Counter
+from collections.abc import Iterable, Iterator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.reader import SeekingReader
+from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
+from mcap.well_known import MessageEncoding
+from mcap.writer import CompressionType, Writer
+
+from shared.errors import InputError
+from shared.logs._scan import MAGIC, READ_ERRORS, RecordScan, check_magic
+
+RECOVER_HINT = "`vmnav log recover {path}` rewrites what it holds into a valid file"
+
+
+@dataclass(frozen=True, slots=True)
+class TopicInfo:
+    """One topic of a log.
+
+    Attributes:
+        topic: e.g. ``/servo/state``.
+        schema_name: e.g. ``foxglove.CompressedImage`` ("" without a schema).
+        message_encoding: e.g. ``json``.
+        message_count: messages on the topic.
+        rate_hz: messages per second of the log's duration (0 for a log shorter than 1 ns).
+    """
+
+    topic: str
+    schema_name: str
+    message_encoding: str
+    message_count: int
+    rate_hz: float
+
+
+@dataclass(frozen=True, slots=True)
+class LogInfo:
+    """What an MCAP file holds.
+
+    Attributes:
+        path: the file.
+        size_bytes: its size.
+        library: the writer named in the header.
+        complete: the file is finished (summary and index); False for a killed writer's file.
+        problem: why it is not complete, one line (None when complete).
+        message_count: messages read (all of them when complete).
+        start_ns, end_ns: first and last ``log_time``, ns (None without messages).
+        topics: per topic, sorted by name.
+        metadata: names of the metadata records (e.g. ``run``).
+    """
+
+    path: Path
+    size_bytes: int
+    library: str
+    complete: bool
+    problem: str | None
+    message_count: int
+    start_ns: int | None
+    end_ns: int | None
+    topics: tuple[TopicInfo, ...]
+    metadata: tuple[str, ...]
+
+    @property
+    def duration_s(self) -> float:
+        """Time from the first to the last message, s."""
+        if self.start_ns is None or self.end_ns is None:
+            return 0.0
+        return (self.end_ns - self.start_ns) / 1e9
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready: the fields plus ``duration_s``; the path as a string."""
+        data = asdict(self)
+        data["path"] = str(self.path)
+        data["duration_s"] = self.duration_s
+        return data
+
+
+@dataclass(frozen=True, slots=True)
+class LogMessage:
+    """One decoded message.
+
+    Attributes:
+        topic, schema_name: where it was logged and its schema.
+        log_time_ns, publish_time_ns: its MCAP times, ns.
+        sequence: per-topic counter from the writer (1, 2, ...).
+        data: the decoded JSON object.
+    """
+
+    topic: str
+    schema_name: str
+    log_time_ns: int
+    publish_time_ns: int
+    sequence: int
+    data: dict[str, Any]
+
+
+@dataclass(frozen=True, slots=True)
+class RecoverReport:
+    """What :func:`recover` kept.
+
+    Attributes:
+        src, dst: the damaged file and the valid one written.
+        messages: messages copied.
+        topics: channels copied.
+        metadata, attachments: records copied.
+        skipped_chunks: damaged chunks left out.
+        orphaned: messages left out because their channel was in a damaged chunk.
+        source_complete: the source was already a finished file.
+        problem: what was wrong with the source, one line (None if nothing).
+        start_ns, end_ns: first and last ``log_time`` copied, ns.
+    """
+
+    src: Path
+    dst: Path
+    messages: int
+    topics: int
+    metadata: int
+    attachments: int
+    skipped_chunks: int
+    orphaned: int
+    source_complete: bool
+    problem: str | None
+    start_ns: int | None
+    end_ns: int | None
+
+
+@contextlib.contextmanager
+def _open_mcap(path: Path) -> Iterator[tuple[IO[bytes], int]]:
+    try:
+        f = open(path, "rb")  # noqa: SIM115 - closed below, after the caller's block
+    except OSError as e:
+        raise InputError(path, f"cannot read: {e.strerror}") from None
+    with f:
+        yield f, check_magic(f, path)
+
+
+def log_info(path: str | Path) -> LogInfo:
+    """Summarise the MCAP file at ``path``: from its summary if finished, else by scanning.
+
+    Raises:
+        InputError: the file is missing, unreadable or not MCAP (one line naming it).
+    """
+    path = Path(path)
+    with _open_mcap(path) as (f, size):
+        return _info_from_summary(f, path, size) or _info_from_scan(f, path, size)
+
+
+def _info_from_summary(f: IO[bytes], path: Path, size: int) -> LogInfo | None:
+    f.seek(size - len(MAGIC))
+    finished = size >= 2 * len(MAGIC) and f.read(len(MAGIC)) == MAGIC
+    f.seek(0)
+    if not finished:
+        return None
+    try:
+        reader = SeekingReader(f, record_size_limit=size)
+        header = reader.get_header()
+        summary = reader.get_summary()
+    except READ_ERRORS:
+        return None
+    if summary is None or summary.statistics is None:
+        return None
+    stats = summary.statistics
+    counts = stats.channel_message_counts
+    has_messages = stats.message_count > 0
+    return _log_info(path, size, header.library, True, None, summary.schemas,
+                     summary.channels.values(), counts,
+                     stats.message_start_time if has_messages else None,
+                     stats.message_end_time if has_messages else None,
+                     [m.name for m in summary.metadata_indexes])
+
+
+def _info_from_scan(f: IO[bytes], path: Path, size: int) -> LogInfo:
+    f.seek(0)
+    scan = RecordScan(f, size)
+    library = ""
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    counts: Counter[int] = Counter()
+    times: list[int] = []
+    metadata: list[str] = []
+    for record in scan.records():
+        if isinstance(record, Header):
+            library = record.library
+        elif isinstance(record, Schema):
+            schemas[record.id] = record
+        elif isinstance(record, Channel):
+            channels[record.id] = record
+        elif isinstance(record, Message):
+            counts[record.channel_id] += 1
+            times.append(record.log_time)
+        elif isinstance(record, Metadata):
+            metadata.append(record.name)
+    problem = scan.problem or ("no summary or index (the writer never finished the file)"
+                               if scan.complete else None)
+    if scan.skipped_chunks:
+        problem = f"{problem}; {scan.skipped_chunks} damaged chunk(s) skipped"
+    return _log_info(path, size, library, False, problem, schemas, channels.values(), counts,
+                     min(times, default=None), max(times, default=None), metadata)
+
+
+def _log_info(path: Path, size: int, library: str, complete: bool, problem: str | None,
+              schemas: dict[int, Schema], channels: Iterable[Channel], counts: dict[int, int],
+              start_ns: int | None, end_ns: int | None, metadata: list[str]) -> LogInfo:
+    duration_s = 0.0 if start_ns is None or end_ns is None else (end_ns - start_ns) / 1e9
+    topics = sorted((TopicInfo(
+        topic=c.topic,
+        schema_name=schemas[c.schema_id].name if c.schema_id in schemas else "",
+        message_encoding=c.message_encoding,
+        message_count=counts.get(c.id, 0),
+        rate_hz=counts.get(c.id, 0) / duration_s if duration_s > 0 else 0.0,
+    ) for c in channels), key=lambda t: t.topic)
+    return LogInfo(path=path, size_bytes=size, library=library, complete=complete,
+                   problem=problem, message_count=sum(counts.values()), start_ns=start_ns,
+                   end_ns=end_ns, topics=tuple(topics), metadata=tuple(metadata))
+
+
+def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iterator[LogMessage]:
+    """The JSON messages of the finished MCAP file at ``path``, in log time order.
+
+    Args:
+        path: the file.
+        topics: only these topics (all when None).
+
+    Raises:
+        InputError: the file is missing, not MCAP, unfinished, truncated or damaged, or a
+            message is not JSON (one line naming the file; unfinished files name the fix).
+    """
+    path = Path(path)
+    with _open_mcap(path) as (f, size):
+        info = _info_from_summary(f, path, size)
+        if info is None:
+            raise InputError(path, f"{_info_from_scan(f, path, size).problem}; "
+                             + RECOVER_HINT.format(path=path))
+        f.seek(0)
+        reader = SeekingReader(f, validate_crcs=True, record_size_limit=size)
+        selected = None if topics is None else list(topics)
+        try:
+            for schema, channel, message in reader.iter_messages(topics=selected):
+                if channel.message_encoding != MessageEncoding.JSON:
+                    raise InputError(path, f"{channel.topic}: message encoding "
+                                     f"{channel.message_encoding!r} is not json")
+                yield LogMessage(channel.topic, schema.name if schema else "", message.log_time,
+                                 message.publish_time, message.sequence,
+                                 json.loads(message.data))
+        except READ_ERRORS as e:
+            raise InputError(path, f"damaged: {e}; " + RECOVER_HINT.format(path=path)) from None
+
+
+def recover(src: str | Path, dst: str | Path) -> RecoverReport:
+    """Rewrite the MCAP file ``src`` into a valid, indexed ``dst``, keeping what is intact.
+
+    Every message of every intact chunk is copied with its times and sequence number,
+    along with schemas, channels, metadata and attachments. ``src`` is only read;
+    ``dst`` is written to a temporary file first and replaced at the end.
+
+    Raises:
+        InputError: ``src`` is missing or not MCAP, ``dst`` is ``src``, or ``dst``
+            cannot be written (one line naming the file).
+    """
+    src, dst = Path(src), Path(dst)
+    if dst.resolve() == src.resolve():
+        raise InputError(dst, "the output must be another file (recover never changes its input)")
+    with _open_mcap(src) as (f, size):
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp", dir=dst.parent)
+        except OSError as e:
+            raise InputError(dst, f"cannot write: {e.strerror}") from None
+        try:
+            with os.fdopen(fd, "wb") as out:
+                report = _copy(RecordScan(f, size), out, src, dst)
+                out.flush()
+                os.fsync(out.fileno())
+            os.replace(tmp, dst)
+        except OSError as e:
+            os.unlink(tmp)
+            raise InputError(dst, f"cannot write: {e.strerror}") from None
+        except BaseException:
+            os.unlink(tmp)
+            raise
+    return report
+
+
+def _copy(scan: RecordScan, out: IO[bytes], src: Path, dst: Path) -> RecoverReport:
+    writer = Writer(out, compression=CompressionType.LZ4)
+    started = False
+    schema_ids: dict[int, int] = {}
+    channel_ids: dict[int, int] = {}
+    counts = Counter[str]()
+    times: list[int] = []
+    for record in scan.records():
+        if not started:
+            header = record if isinstance(record, Header) else Header("", "")
+            writer.start(profile=header.profile, library=header.library or "unknown")
+            started = True
+        if isinstance(record, Schema) and record.id not in schema_ids:
+            schema_ids[record.id] = writer.register_schema(record.name, record.encoding,
+                                                           record.data)
+        elif isinstance(record, Channel) and record.id not in channel_ids:
+            channel_ids[record.id] = writer.register_channel(
+                record.topic, record.message_encoding, schema_ids.get(record.schema_id, 0),
+                record.metadata)
+        elif isinstance(record, Message):
+            if record.channel_id not in channel_ids:
+                counts["orphaned"] += 1
+                continue
+            writer.add_message(channel_ids[record.channel_id], record.log_time, record.data,
+                               record.publish_time, record.sequence)
+            times.append(record.log_time)
+        elif isinstance(record, Metadata):
+            writer.add_metadata(record.name, record.metadata)
+            counts["metadata"] += 1
+        elif isinstance(record, Attachment):
+            writer.add_attachment(record.create_time, record.log_time, record.name,
+                                  record.media_type, record.data)
+            counts["attachments"] += 1
+    if not started:
+        writer.start(profile="", library="unknown")
+    writer.finish()
+    complete = scan.complete and scan.problem is None and not scan.skipped_chunks
+    return RecoverReport(
+        src=src, dst=dst, messages=len(times), topics=len(channel_ids),
+        metadata=counts["metadata"], attachments=counts["attachments"],
+        skipped_chunks=scan.skipped_chunks, orphaned=counts["orphaned"],
+        source_complete=complete, problem=scan.problem,
+        start_ns=min(times, default=None), end_ns=max(times, default=None))

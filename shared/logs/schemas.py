@@ -1,0 +1,243 @@
+"""JSON Schemas of every logged message, keyed by schema name (the schema's ``title``).
+
+Every channel is ``json`` with a ``jsonschema`` schema. Foxglove recognises its
+well-known types by schema name in any encoding it supports, JSON included, with
+``bytes`` fields as base64 strings (docs.foxglove.dev: "Custom schema encodings";
+the schema pages' "Reference implementations" table: JSON -> ``foxglove.CompressedImage``).
+The Foxglove schemas below copy the field names, types and ``required`` lists of
+``schemas/jsonschema/*.json`` in foxglove/foxglove-sdk, minus the optional ``uuid`` /
+``lineage`` / ``metadata`` fields we never fill.
+
+Our own schemas are flat (numbers at the top level, SI units in the names), so a
+Plot panel takes ``/servo/state.lateral_error_m`` directly (mcap-logging.md §3).
+MAVLink messages get one generated schema per message type, ``mavlink.<NAME>``.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+Schema = dict[str, Any]
+"""A JSON Schema object with a ``title`` (the MCAP schema name)."""
+
+
+def _time(description: str) -> Schema:
+    return {"type": "object", "title": "time", "description": description,
+            "properties": {"sec": {"type": "integer", "minimum": 0},
+                           "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}}}
+
+
+def _object(title: str, description: str, properties: dict[str, Schema]) -> Schema:
+    """An object whose every property is required (Foxglove's generated schemas do so)."""
+    return {"title": title, "description": description, "type": "object",
+            "properties": properties, "required": list(properties)}
+
+
+def _numbers(title: str, description: str, names_descriptions: dict[str, str]) -> Schema:
+    return _object(title, description, {name: {"type": "number", "description": text}
+                                        for name, text in names_descriptions.items()})
+
+
+def _point2(description: str) -> Schema:
+    return _numbers("foxglove.Point2", description,
+                    {"x": "x coordinate position", "y": "y coordinate position"})
+
+
+def _color(description: str) -> Schema:
+    return _numbers("foxglove.Color", description, {c: f"{name} value between 0 and 1" for c, name
+                                                   in zip("rgba", ("Red", "Green", "Blue", "Alpha"),
+                                                          strict=True)})
+
+
+_PIXELS = ("in 2D image coordinates (pixels).\nThe coordinate uses the top-left corner of the "
+           "top-left pixel of the image as the origin.")
+
+COMPRESSED_IMAGE = _object("foxglove.CompressedImage", "A compressed image", {
+    "timestamp": _time("Timestamp of image"),
+    "frame_id": {"type": "string", "description": "Frame of reference for the image. The origin "
+                 "of the frame is the optical center of the camera. +x points to the right in the "
+                 "image, +y points down, and +z points into the plane of the image."},
+    "data": {"type": "string", "contentEncoding": "base64", "description": "Compressed image data"},
+    "format": {"type": "string",
+               "description": "Image format\n\nSupported values: `jpeg`, `png`, `webp`, `avif`"},
+})
+
+POINTS_ANNOTATION_TYPES = {"UNKNOWN": 0, "POINTS": 1, "LINE_LOOP": 2, "LINE_STRIP": 3,
+                           "LINE_LIST": 4}
+"""foxglove.PointsAnnotationType values."""
+
+_POINTS_ANNOTATION = _object("foxglove.PointsAnnotation", "An array of points on a 2D image", {
+    "timestamp": _time("Timestamp of annotation"),
+    "type": {"title": "foxglove.PointsAnnotationType",
+             "description": "Type of points annotation to draw",
+             "oneOf": [{"title": k, "const": v} for k, v in POINTS_ANNOTATION_TYPES.items()]},
+    "points": {"type": "array", "items": _point2("A point representing a position in 2D space"),
+               "description": f"Points {_PIXELS}"},
+    "outline_color": _color("Outline color"),
+    "outline_colors": {"type": "array", "items": _color("A color in RGBA format"),
+                       "description": "Per-point colors, if `type` is `POINTS`, or per-segment "
+                       "stroke colors, if `type` is `LINE_LIST`, `LINE_STRIP` or `LINE_LOOP`."},
+    "fill_color": _color("Fill color"),
+    "thickness": {"type": "number", "description": "Stroke thickness in pixels"},
+})
+
+_CIRCLE_ANNOTATION = _object("foxglove.CircleAnnotation", "A circle annotation on a 2D image", {
+    "timestamp": _time("Timestamp of circle"),
+    "position": _point2(f"Center of the circle {_PIXELS}"),
+    "diameter": {"type": "number", "description": "Circle diameter in pixels"},
+    "thickness": {"type": "number", "description": "Line thickness in pixels"},
+    "fill_color": _color("Fill color"),
+    "outline_color": _color("Outline color"),
+})
+
+_TEXT_ANNOTATION = _object("foxglove.TextAnnotation", "A text label on a 2D image", {
+    "timestamp": _time("Timestamp of annotation"),
+    "position": _point2(f"Bottom-left origin of the text label {_PIXELS}"),
+    "text": {"type": "string", "description": "Text to display"},
+    "font_size": {"type": "number", "description": "Font size in pixels"},
+    "text_color": _color("Text color"),
+    "background_color": _color("Background fill color"),
+})
+
+IMAGE_ANNOTATIONS = _object("foxglove.ImageAnnotations", "Array of annotations for a 2D image", {
+    "circles": {"type": "array", "items": _CIRCLE_ANNOTATION, "description": "Circle annotations"},
+    "points": {"type": "array", "items": _POINTS_ANNOTATION, "description": "Points annotations"},
+    "texts": {"type": "array", "items": _TEXT_ANNOTATION, "description": "Text annotations"},
+})
+
+FRAME_TRANSFORM = _object(
+    "foxglove.FrameTransform",
+    "A transform between two reference frames in 3D space. The transform defines the position "
+    "and orientation of a child frame within a parent frame.",
+    {
+        "timestamp": _time("Timestamp of transform"),
+        "parent_frame_id": {"type": "string", "description": "Name of the parent frame"},
+        "child_frame_id": {"type": "string", "description": "Name of the child frame"},
+        "translation": _numbers("foxglove.Vector3", "Translation component of the transform",
+                                {a: f"{a} coordinate length" for a in "xyz"}),
+        "rotation": _numbers("foxglove.Quaternion", "Rotation component of the transform",
+                             {a: f"{a} value" for a in "xyzw"}),
+    },
+)
+
+FRAME_TRANSFORMS = _object("foxglove.FrameTransforms", "An array of FrameTransform messages", {
+    "transforms": {"type": "array", "items": FRAME_TRANSFORM, "description": "Array of transforms"},
+})
+
+LOG_LEVELS = {"UNKNOWN": 0, "DEBUG": 1, "INFO": 2, "WARNING": 3, "ERROR": 4, "FATAL": 5}
+"""foxglove.LogLevel values."""
+
+LOG = _object("foxglove.Log", "A log message", {
+    "timestamp": _time("Timestamp of log message"),
+    "level": {"title": "foxglove.LogLevel", "description": "Log level",
+              "oneOf": [{"title": k, "const": v} for k, v in LOG_LEVELS.items()]},
+    "message": {"type": "string", "description": "Log message"},
+    "name": {"type": "string", "description": "Process or node name"},
+    "file": {"type": "string", "description": "Filename"},
+    "line": {"type": "integer", "minimum": 0, "description": "Line number in the file"},
+})
+
+
+def _flat(title: str, description: str, fields: dict[str, tuple[str | list[str], str]]) -> Schema:
+    """A flat object: ``fields`` maps name -> (JSON type or types, description with units);
+    the type ``"base64"`` is a string of base64 bytes."""
+    def field(kind: str | list[str], text: str) -> Schema:
+        if kind == "base64":
+            return {"type": "string", "contentEncoding": "base64", "description": text}
+        return {"type": kind, "description": text}
+
+    return _object(title, description, {name: field(*spec) for name, spec in fields.items()})
+
+
+_STAMP = ("integer", "capture time of the data, ns (the loop's clock)")
+
+SERVO_STATE = _flat("vmnav.ServoState", "One visual servo cycle (robot.follower.FollowStep)", {
+    "stamp_ns": _STAMP,
+    "mode": ("string", "teach, repeat, idle, ..."),
+    "target_index": ("integer", "index of the key image headed for in the route"),
+    "key_image_id": (["integer", "null"], "id of that key image"),
+    "lateral_error_m": (["number", "null"], "y: lateral offset from the taught path, m"),
+    "angular_error_rad": (["number", "null"], "theta: heading error to the taught path, rad"),
+    "progress_m": (["number", "null"], "s: distance along the current segment, m"),
+    "v_m_s": ("number", "commanded forward speed, m/s"),
+    "omega_rad_s": ("number", "commanded turn rate, rad/s, counter-clockwise"),
+    "matched_points": ("integer", "points matched to the key images"),
+    "inliers": (["integer", "null"], "matches consistent with the estimated geometry"),
+    "lost": ("boolean", "the estimator declared the robot lost this cycle"),
+})
+
+COMMAND = _flat("vmnav.Command", "A velocity command sent to the base", {
+    "stamp_ns": _STAMP,
+    "linear_x_m_s": ("number", "forward speed, m/s"),
+    "angular_z_rad_s": ("number", "turn rate, rad/s, counter-clockwise"),
+    "source": ("string", "who commanded it: servo, teleop, stop, ..."),
+})
+
+SIP = _flat("vmnav.Sip", "A Pioneer server information packet (shared.aria.sip.Sip), flattened", {
+    "stamp_ns": _STAMP,
+    "moving": ("boolean", "SIP type 0x33 (moving) rather than 0x32 (stopped)"),
+    "x_counts": ("integer", "XPOS, 15-bit position counter"),
+    "y_counts": ("integer", "YPOS, 15-bit position counter"),
+    "th_counts": ("integer", "THPOS, heading in AngleConvFactor units"),
+    "left_vel_m_s": ("number", "left wheel velocity, m/s"),
+    "right_vel_m_s": ("number", "right wheel velocity, m/s"),
+    "battery_v": ("number", "battery, V"),
+    "left_stalled": ("boolean", "left motor stalled"),
+    "right_stalled": ("boolean", "right motor stalled"),
+    "front_bumpers": ("integer", "front bumper segments pressed, bit mask"),
+    "rear_bumpers": ("integer", "rear bumper segments pressed, bit mask"),
+    "flags": ("integer", "FLAGS bits (SipFlags)"),
+    "motors_enabled": ("boolean", "FLAGS bit 0"),
+    "compass_rad": ("number", "compass heading, rad (0 without a compass)"),
+    "sonar_count": ("integer", "new sonar readings in this SIP"),
+    "sonar_min_m": (["number", "null"], "nearest of the new sonar readings, m"),
+    "rot_vel_rad_s": (["number", "null"], "ROTVEL, rad/s, when the robot sends it"),
+    "real_battery_v": (["number", "null"], "BATTERYX10, V, when the robot sends it"),
+    "temperature_c": (["integer", "null"], "TEMPERATURE, degC, when the robot sends it"),
+    "state_of_charge_pct": (["integer", "null"], "STATE_OF_CHARGE, %, when the robot sends it"),
+})
+
+MISSION_EVENT = _flat("vmnav.MissionEvent", "A mission event: goal set, started, reached, failed", {
+    "stamp_ns": _STAMP,
+    "event": ("string", "what happened, e.g. goal_received, started, reached, lost, aborted"),
+    "state": ("string", "the mission state after the event"),
+    "goal_key_image_id": (["integer", "null"], "the goal's key image"),
+    "detail": ("string", "free text for the operator"),
+})
+
+MAVLINK_RAW = _flat("mavlink.Raw", "One MAVLink frame as it crossed the link", {
+    "direction": ("string", "in (received) or out (sent)"),
+    "msgid": ("integer", "message id"),
+    "name": ("string", "message name"),
+    "sysid": ("integer", "sender system id"),
+    "compid": ("integer", "sender component id"),
+    "seq": ("integer", "packet sequence number, 0-255"),
+    "frame": ("base64", "the whole packet, header to checksum"),
+})
+
+SCHEMAS: dict[str, Schema] = {s["title"]: s for s in (
+    COMPRESSED_IMAGE, IMAGE_ANNOTATIONS, FRAME_TRANSFORM, FRAME_TRANSFORMS, LOG,
+    SERVO_STATE, COMMAND, SIP, MISSION_EVENT, MAVLINK_RAW)}
+"""Every fixed schema by name; MAVLink message schemas come from :func:`mavlink_schema`."""
+
+_MAVLINK_TYPES = {"float": "number", "double": "number"}
+
+
+@functools.cache
+def mavlink_schema(message_class: type) -> Schema:
+    """The JSON Schema ``mavlink.<NAME>`` of one pymavlink message class.
+
+    Built from the class's ``fieldnames`` / ``fieldtypes`` / ``array_lengths``: ``char``
+    arrays are strings, other arrays lists of numbers, integers stay integers.
+    """
+    properties: dict[str, Schema] = {}
+    for name, ctype, length in zip(message_class.fieldnames, message_class.fieldtypes,
+                                   message_class.array_lengths, strict=True):
+        kind = _MAVLINK_TYPES.get(ctype, "string" if ctype == "char" else "integer")
+        if length and ctype != "char":
+            properties[name] = {"type": "array", "items": {"type": kind}, "maxItems": length}
+        else:
+            properties[name] = {"type": kind}
+    return _object(f"mavlink.{message_class.msgname}", f"MAVLink {message_class.msgname}",
+                   properties)

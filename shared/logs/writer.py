@@ -1,0 +1,338 @@
+"""``LogWriter``: field logging to MCAP off the control loop.
+
+Theory of operation. The loop calls ``log_*``; each call checks its arguments,
+copies what the caller might reuse (an image, a dict) and puts one job on a
+bounded queue, never waiting: when the queue is full the job is dropped and
+counted. One writer thread takes jobs, builds the messages (JPEG encoding, JSON)
+and writes them through :class:`~shared.logs._mcap_files.McapFiles`, which owns the
+files, rotates them and swallows OS errors (reported once, counted). The thread
+flushes the open chunk at most ``flush_period_ns`` (wall time) after the first
+message written since the last flush, so a ``kill -9`` loses at most that plus what
+waited in the queue; ``close()`` (also run at interpreter exit) finishes the file
+with its summary and index. Entry points turn SIGTERM into ``sys.exit`` so that
+exit runs too (mcap-logging.md §1 "Exit paths").
+
+Time: ``t_ns`` is the data's time from the loop's clock, integer ns >= 0; it is the
+MCAP ``log_time`` and ``publish_time`` and the Foxglove ``timestamp``. Only the flush
+and retry periods use the wall clock, in the writer thread.
+"""
+
+from __future__ import annotations
+
+import atexit
+import logging
+import queue
+import threading
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from shared.clock import NS_PER_S, WallClock
+from shared.config import LogConfig
+from shared.errors import check_shape
+from shared.logs import messages, topics
+from shared.logs._mcap_files import McapFiles, Record
+from shared.logs.schemas import (
+    COMPRESSED_IMAGE,
+    FRAME_TRANSFORMS,
+    IMAGE_ANNOTATIONS,
+    LOG,
+    LOG_LEVELS,
+    MAVLINK_RAW,
+    SCHEMAS,
+    Schema,
+    mavlink_schema,
+)
+
+log = logging.getLogger(__name__)
+
+GREEN: messages.Rgba = (0.1, 0.9, 0.2, 1.0)
+
+
+@dataclass(frozen=True, slots=True)
+class LogStats:
+    """What a :class:`LogWriter` did so far (message counts).
+
+    Attributes:
+        queued: jobs accepted onto the queue (a MAVLink job is two messages).
+        dropped: jobs refused because the queue was full or the writer closed.
+        skipped: camera frames left out to keep ``frame_rate_hz``.
+        written: messages handed to the MCAP writer (a file error also loses those of
+            the chunk it was filling).
+        lost: messages not written because of a file error or a failed encoding.
+        errors: file errors and failed encodings met (the first of each outage is logged).
+        files: every file opened, in order.
+        last_error: the last error, one line naming the file, or None.
+    """
+
+    queued: int
+    dropped: int
+    skipped: int
+    written: int
+    lost: int
+    errors: int
+    files: tuple[Path, ...]
+    last_error: str | None
+
+
+class _Job(NamedTuple):
+    t_ns: int
+    build: Callable[..., list[Record]]
+    args: tuple[Any, ...]
+
+
+class _Metadata(NamedTuple):
+    name: str
+    data: dict[str, str]
+
+
+_STOP = object()
+
+
+class LogWriter:
+    """Logs to numbered MCAP files ``<output_dir>/<name>-NNNN.mcap`` from a writer thread.
+
+    Every ``log_*`` method returns at once: True if the job was queued, False if it
+    was dropped (queue full, writer closed) or skipped (frame rate). Bad arguments
+    (wrong shape, unknown schema) are bugs and raise; file problems never do.
+
+    Args:
+        config: folder, frame rate, JPEG quality, flushing, rotation, queue size.
+        name: file name prefix, e.g. ``"robot"`` or ``"ground"``.
+    """
+
+    def __init__(self, config: LogConfig | None = None, name: str = "robot") -> None:
+        self.config = config or LogConfig()
+        self._files = McapFiles(self.config, name)
+        self._queue: queue.Queue[Any] = queue.Queue(maxsize=self.config.queue_messages)
+        self._lock = threading.Lock()
+        self._queued = self._dropped = self._skipped = self._job_errors = self._job_lost = 0
+        self._job_error: str | None = None
+        self._frame_period_ns = round(NS_PER_S / self.config.frame_rate_hz)
+        self._next_frame_ns: dict[str, int] = {}
+        self._closed = False
+        self._thread = threading.Thread(target=self._run, name=f"log-writer-{name}", daemon=True)
+        self._thread.start()
+        atexit.register(self.close)
+
+    def log_image(self, t_ns: int, topic: str, image: npt.NDArray[np.uint8],
+                  frame_id: str = topics.FRAME_CAMERA) -> bool:
+        """Log a grey frame as a JPEG ``foxglove.CompressedImage``, at most ``frame_rate_hz``.
+
+        Args:
+            t_ns: capture time, ns.
+            topic: e.g. :data:`topics.CAMERA_IMAGE`.
+            image: (H, W) uint8 grey; copied, so the caller may reuse its buffer.
+            frame_id: the camera's frame.
+
+        Returns:
+            Whether the frame was queued; log its annotations only if so.
+        """
+        check_shape("image", np.shape(image), (None, None))
+        if np.asarray(image).dtype != np.uint8:
+            raise ValueError(f"image: expected uint8 grey, got {np.asarray(image).dtype}")
+        if not self._frame_due(t_ns, topic):
+            return False
+        return self._put(_Job(t_ns, _image_records, (t_ns, topic, frame_id, np.array(image),
+                                                      self.config.jpeg_quality)))
+
+    def log_points(self, t_ns: int, topic: str, pixels_xy: npt.ArrayLike, *,
+                   color: messages.Rgba = GREEN, thickness_px: float = 4.0,
+                   label: str | None = None) -> bool:
+        """Log points on an image as ``foxglove.ImageAnnotations``.
+
+        Args:
+            t_ns: the image's ``t_ns`` exactly (the Image panel pairs them by timestamp).
+            topic: e.g. :data:`topics.CAMERA_ANNOTATIONS`.
+            pixels_xy: (N, 2) pixel coordinates, origin at the top-left corner of the
+                top-left pixel.
+            color: RGBA in [0, 1].
+            thickness_px: point size, px.
+            label: optional text, e.g. ``"key 42: 117 matches"``.
+        """
+        pixels = np.array(pixels_xy, np.float64)
+        check_shape("pixels_xy", pixels.shape, (None, 2))
+        return self._put(_Job(t_ns, _one, (topic, IMAGE_ANNOTATIONS, messages.image_points,
+                                           t_ns, pixels, color, thickness_px, label)))
+
+    def log_json(self, t_ns: int, topic: str, schema_name: str,
+                 message: Mapping[str, Any]) -> bool:
+        """Log a JSON message under one of :data:`~shared.logs.schemas.SCHEMAS`.
+
+        Args:
+            t_ns: log time, ns.
+            topic: e.g. :data:`topics.SERVO_STATE`.
+            schema_name: e.g. ``"vmnav.ServoState"``.
+            message: the fields (copied, one level deep).
+
+        Raises:
+            ValueError: ``schema_name`` is not a known schema.
+        """
+        if schema_name not in SCHEMAS:
+            raise ValueError(f"unknown log schema {schema_name!r} (known: {', '.join(SCHEMAS)})")
+        return self._put(_Job(t_ns, _one, (topic, SCHEMAS[schema_name], dict, dict(message))))
+
+    def log_transform(self, t_ns: int, transforms: Sequence[messages.FrameTransform],
+                      topic: str = topics.TF) -> bool:
+        """Log ``foxglove.FrameTransforms``, every transform stamped ``t_ns``."""
+        return self._put(_Job(t_ns, _one, (topic, FRAME_TRANSFORMS, messages.frame_transforms,
+                                           t_ns, tuple(transforms))))
+
+    def log_text(self, t_ns: int, level: str, message: str, name: str,
+                 topic: str = topics.LOG) -> bool:
+        """Log a ``foxglove.Log`` line; ``level`` is DEBUG, INFO, WARNING, ERROR or FATAL.
+
+        Raises:
+            ValueError: an unknown ``level``.
+        """
+        if level not in LOG_LEVELS:
+            raise ValueError(f"unknown log level {level!r} (known: {', '.join(LOG_LEVELS)})")
+        return self._put(_Job(t_ns, _one, (topic, LOG, messages.log_entry, t_ns, level, message,
+                                           name)))
+
+    def log_mavlink(self, t_ns: int, msg: Any, direction: str) -> bool:
+        """Log a pymavlink message on ``/mavlink/<direction>/<NAME>`` and its packet on
+        ``/mavlink/raw`` (the raw frame only once the message was packed or parsed).
+
+        Args:
+            t_ns: time it was received or sent, ns.
+            msg: a decoded or packed pymavlink message; not changed afterwards.
+            direction: ``"in"`` (received) or ``"out"`` (sent).
+        """
+        if direction not in topics.MAVLINK_DIRECTIONS:
+            raise ValueError(f"direction must be 'in' or 'out', got {direction!r}")
+        frame = msg.get_msgbuf()
+        return self._put(_Job(t_ns, _mavlink_records,
+                              (direction, msg, bytes(frame) if frame else b"")))
+
+    def add_metadata(self, name: str, data: Mapping[str, str]) -> bool:
+        """Store key-value metadata (e.g. ``"run"``: route, mode, git sha) in every file."""
+        return self._put(_Metadata(name, {str(k): str(v) for k, v in data.items()}))
+
+    def stats(self) -> LogStats:
+        """A snapshot of the counters."""
+        files = self._files
+        with self._lock:
+            return LogStats(queued=self._queued, dropped=self._dropped, skipped=self._skipped,
+                            written=files.written, lost=files.lost + self._job_lost,
+                            errors=files.errors + self._job_errors,
+                            files=tuple(files.paths),
+                            last_error=files.last_error or self._job_error)
+
+    def close(self, timeout_s: float = 10.0) -> LogStats:
+        """Write what is queued, finish the file (summary, index) and stop the thread.
+
+        Safe to call twice; runs at interpreter exit if not called.
+
+        Args:
+            timeout_s: wait at most this long for the thread, s.
+        """
+        with self._lock:
+            closing, self._closed = not self._closed, True
+        if closing:
+            atexit.unregister(self.close)
+            try:
+                self._queue.put(_STOP, timeout=timeout_s)
+            except queue.Full:
+                log.error("log writer: queue still full after %.1f s; file left unfinished",
+                          timeout_s)
+            self._thread.join(timeout_s)
+        return self.stats()
+
+    def __enter__(self) -> LogWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _frame_due(self, t_ns: int, topic: str) -> bool:
+        # Frames are due on a grid one period apart and accepted up to a quarter period
+        # early, so camera jitter does not halve the rate; the grid only moves to follow
+        # a frame more than that late. Accepts stay at least a period apart on average.
+        period, slack = self._frame_period_ns, self._frame_period_ns // 4
+        with self._lock:
+            due = self._next_frame_ns.get(topic, t_ns)
+            if t_ns < due - slack:
+                self._skipped += 1
+                return False
+            self._next_frame_ns[topic] = max(due + period, t_ns + period - slack)
+            return True
+
+    def _put(self, job: _Job | _Metadata) -> bool:
+        if isinstance(job, _Job) and job.t_ns < 0:
+            raise ValueError(f"t_ns must be >= 0, got {job.t_ns}")
+        with self._lock:
+            if not self._closed:
+                try:
+                    self._queue.put_nowait(job)
+                    self._queued += 1
+                    return True
+                except queue.Full:
+                    pass
+            self._dropped += 1
+            return False
+
+    def _run(self) -> None:
+        clock = WallClock()  # real time: the flush period bounds what a kill loses
+        files = self._files
+        files.open(clock.now_ns())
+        flush_due_ns: int | None = None
+        while True:
+            timeout_s = (None if flush_due_ns is None
+                         else max(0, flush_due_ns - clock.now_ns()) / NS_PER_S)
+            try:
+                job = self._queue.get(timeout=timeout_s)
+            except queue.Empty:
+                job = None
+            if job is _STOP:
+                break
+            if isinstance(job, _Metadata):
+                files.add_metadata(job.name, job.data, clock.now_ns())
+            elif job is not None:
+                self._write(job, clock.now_ns())
+            if job is not None and flush_due_ns is None:
+                flush_due_ns = clock.now_ns() + self.config.flush_period_ns
+            if flush_due_ns is not None and clock.now_ns() >= flush_due_ns:
+                files.flush(clock.now_ns())
+                flush_due_ns = None
+        files.close(clock.now_ns())
+
+    def _write(self, job: _Job, now_ns: int) -> None:
+        try:
+            self._files.write(job.t_ns, job.build(*job.args), now_ns)
+        except Exception as e:  # a bad message (or a bug) must not stop the writer thread
+            with self._lock:
+                self._job_errors += 1
+                self._job_lost += 1
+                first = self._job_error is None
+                self._job_error = f"{job.build.__name__}: {e}"
+            if first:
+                log.exception("cannot log a message (%s); counted, not logged",
+                              job.build.__name__)
+
+
+def _one(topic: str, schema: Schema, build: Callable[..., Mapping[str, Any]],
+         *args: Any) -> list[Record]:
+    return [(topic, schema, build(*args))]
+
+
+def _image_records(t_ns: int, topic: str, frame_id: str, image: npt.NDArray[np.uint8],
+                   quality: int) -> list[Record]:
+    ok, jpeg = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    if not ok:
+        raise ValueError(f"cv2.imencode failed on a {image.shape} image")
+    return [(topic, COMPRESSED_IMAGE, messages.compressed_image(t_ns, frame_id, jpeg.tobytes()))]
+
+
+def _mavlink_records(direction: str, msg: Any, frame: bytes) -> list[Record]:
+    records: list[Record] = [(topics.mavlink_topic(direction, msg.get_type()),
+                              mavlink_schema(type(msg)), messages.mavlink_fields(msg))]
+    if frame:
+        records.append((topics.MAVLINK_RAW, MAVLINK_RAW,
+                        messages.mavlink_raw(direction, msg, frame)))
+    return records

@@ -1,0 +1,191 @@
+"""UdpLink: MAVLink datagrams over UDP, opened from a pymavlink-style connection string.
+
+Connection strings (pymavlink ``mavutil.mavlink_connection`` spells them the same):
+
+=====================  ===================================================================
+``udpin:HOST:PORT``    listen on HOST:PORT (``0.0.0.0`` for every interface; port 0 picks
+                       a free one, see :attr:`UdpLink.local_port`); send to the last peer a
+                       datagram came from, so nothing goes out before the first one arrives
+``udp:HOST:PORT``      the same as ``udpin`` (pymavlink's alias)
+``udpout:HOST:PORT``   send to HOST:PORT from a free local port; receive from anyone
+=====================  ===================================================================
+
+Theory of operation: one datagram carries one or more whole MAVLink packets; the
+link never splits or joins them. ``send`` and ``receive`` never block. UDP loses
+datagrams by nature, so a send that the kernel refuses (no route, buffer full) is
+counted in :attr:`UdpLink.send_errors` and dropped like a lost datagram; only a
+closed socket raises. Bad connection strings, unresolvable hosts and ports in use
+raise :class:`~shared.errors.TransportError` with one line naming the string.
+IPv4 only, like pymavlink's UDP links.
+"""
+
+from __future__ import annotations
+
+import enum
+import socket
+
+from shared.byte_link import LinkClosedError
+from shared.errors import TransportError
+
+__all__ = ["Peer", "UdpLink", "UdpMode", "parse_udp_url"]
+
+#: An IPv4 address and port, as ``socket`` gives them.
+Peer = tuple[str, int]
+
+#: Largest UDP payload, bytes.
+MAX_DATAGRAM = 65535
+#: Most datagrams one :meth:`UdpLink.receive` returns, so one busy peer cannot starve a loop.
+MAX_BATCH = 256
+
+_FORMS = "udpin:HOST:PORT, udpout:HOST:PORT or udp:HOST:PORT"
+
+
+class UdpMode(enum.Enum):
+    """Which end of the conversation the link is."""
+
+    IN = "udpin"  #: listens; replies to the last sender
+    OUT = "udpout"  #: sends to a fixed peer
+
+
+def parse_udp_url(url: str) -> tuple[UdpMode, str, int]:
+    """Split a connection string into (mode, host, port).
+
+    Raises:
+        TransportError: not one of the three forms, an empty host, or a port that is
+            not an integer in 0..65535 (1..65535 for ``udpout``).
+    """
+    scheme, _, rest = url.partition(":")
+    modes = {"udpin": UdpMode.IN, "udp": UdpMode.IN, "udpout": UdpMode.OUT}
+    host, sep, port_text = rest.rpartition(":")
+    if scheme not in modes or not sep:
+        raise TransportError(url, f"not a UDP connection string (expected {_FORMS})")
+    if not host:
+        raise TransportError(url, "no host (use 0.0.0.0 to listen on every interface)")
+    mode = modes[scheme]
+    low = 1 if mode is UdpMode.OUT else 0
+    if not port_text.isdigit() or not low <= int(port_text) <= 65535:
+        raise TransportError(url, f"port {port_text!r} is not an integer in {low}..65535")
+    return mode, host, int(port_text)
+
+
+def _resolve(url: str, host: str, port: int) -> Peer:
+    try:
+        infos = socket.getaddrinfo(host, port, socket.AF_INET, socket.SOCK_DGRAM)
+    except (socket.gaierror, UnicodeError) as e:
+        raise TransportError(url, f"cannot resolve host {host!r}: {e}") from None
+    address, resolved_port = infos[0][4][:2]
+    return str(address), int(resolved_port)
+
+
+class UdpLink:
+    """A non-blocking UDP socket that carries MAVLink datagrams (module docstring).
+
+    Use :meth:`open`; the constructor takes an already bound socket.
+
+    Args:
+        sock: a bound, non-blocking IPv4 UDP socket; the link owns it.
+        url: the connection string, for messages.
+        mode: listening or sending end.
+        peer: where :meth:`send` goes (None until a datagram arrives, for ``udpin``).
+    """
+
+    def __init__(self, sock: socket.socket, url: str, mode: UdpMode, peer: Peer | None) -> None:
+        self._sock = sock
+        self.url = url
+        self.mode = mode
+        self.peer = peer
+        """Where :meth:`send` goes; a ``udpin`` link moves it to each datagram's sender.
+        The owner may set it (e.g. back to the last sender it trusts)."""
+        self.local_port: int = sock.getsockname()[1]
+        """The port the socket is bound to (the one picked when opened with port 0)."""
+        self.send_errors = 0
+        """Datagrams the kernel refused to send (dropped)."""
+        self._closed = False
+
+    @classmethod
+    def open(cls, url: str) -> UdpLink:
+        """Open ``url`` (see the module docstring for the forms).
+
+        Raises:
+            TransportError: a bad string, an unknown host, or a port in use (one line
+                naming ``url``).
+        """
+        mode, host, port = parse_udp_url(url)
+        address = _resolve(url, host, port)
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.bind(address if mode is UdpMode.IN else ("0.0.0.0", 0))
+            sock.setblocking(False)
+        except OSError as e:
+            sock.close()
+            raise TransportError(url, f"cannot bind {address[0]}:{address[1]}: "
+                                      f"{e.strerror or e}") from None
+        return cls(sock, url, mode, None if mode is UdpMode.IN else address)
+
+    @property
+    def listening(self) -> bool:
+        """A ``udpin`` link (it follows the last sender)."""
+        return self.mode is UdpMode.IN
+
+    def fileno(self) -> int:
+        """The socket's descriptor, for ``select``."""
+        return self._sock.fileno()
+
+    def send(self, data: bytes) -> bool:
+        """Send ``data`` as one datagram to :attr:`peer`.
+
+        Returns:
+            True if handed to the kernel; False if there is no peer yet (``udpin``
+            before the first datagram) or the kernel refused it (counted).
+
+        Raises:
+            LinkClosedError: the link was closed.
+        """
+        self._check_open()
+        if self.peer is None:
+            return False
+        try:
+            self._sock.sendto(data, self.peer)
+        except OSError:
+            self.send_errors += 1
+            return False
+        return True
+
+    def receive(self) -> list[tuple[bytes, Peer]]:
+        """Every datagram waiting (at most :data:`MAX_BATCH`), without blocking.
+
+        Returns:
+            ``(data, sender)`` pairs in arrival order; a ``udpin`` link's :attr:`peer`
+            becomes the last sender.
+
+        Raises:
+            LinkClosedError: the link was closed, or the socket failed.
+        """
+        self._check_open()
+        out: list[tuple[bytes, Peer]] = []
+        while len(out) < MAX_BATCH:
+            try:
+                data, sender = self._sock.recvfrom(MAX_DATAGRAM)
+            except BlockingIOError:
+                break
+            except OSError as e:
+                raise LinkClosedError(self.url, f"receive failed: {e.strerror or e}") from None
+            out.append((data, (str(sender[0]), int(sender[1]))))
+        if out and self.listening:
+            self.peer = out[-1][1]
+        return out
+
+    def close(self) -> None:
+        """Release the socket; idempotent."""
+        self._closed = True
+        self._sock.close()
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise LinkClosedError(self.url, "the UDP link is closed")
+
+    def __enter__(self) -> UdpLink:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,85 @@
+"""MAVLink FTP of the memory and goal photos over real UDP, and the robot's user commands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robot.vehicle.user_commands import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
+from shared.mavlink.dialect import mavlink
+from shared.mavlink.ftp import Downloaded, FtpFailed, Listed, NakCode, Uploaded
+from shared.memory.store import read_memory, thumbnail_path, write_memory
+from tests.robot.vehicle.fake_app import FakeApp
+from tests.robot.vehicle.harness import Net
+from tests.shared.memory.builders import loop_memory
+
+ACCEPTED, DENIED = mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_DENIED
+
+
+class TestMemory:
+    def test_list_and_get_a_thumbnail(self, net: Net, tmp_path: Path,
+                                      rng: np.random.Generator) -> None:
+        write_memory(tmp_path / "memory", loop_memory(rng))
+        net.ground.ftp.list_directory("/memory/thumbnails", net.now_ns)
+        listed = net.until_event(net.ground.ftp)
+        assert isinstance(listed, Listed)
+        ids = sorted(read_memory(tmp_path / "memory").keyframes)
+        assert sorted(e.name for e in listed.entries) == sorted(f"{i}.png" for i in ids)
+        net.ground.ftp.get("/memory/thumbnails/5.png", net.now_ns)
+        expected = thumbnail_path(tmp_path / "memory", 5).read_bytes()
+        assert net.until_event(net.ground.ftp) == Downloaded("/memory/thumbnails/5.png", expected)
+
+    def test_ardupilot_param_file_is_refused_at_once(self, net: Net) -> None:
+        net.ground.ftp.get("@PARAM/param.pck?withdefaults=1", net.now_ns)
+        start = net.now_ns
+        failed = net.until_event(net.ground.ftp)
+        assert isinstance(failed, FtpFailed) and failed.nak is NakCode.FILE_NOT_FOUND
+        assert net.now_ns == start  # no retry needed
+
+
+class TestGotoPhoto:
+    def test_uploaded_photo_is_the_goal(self, net: Net, app: FakeApp, tmp_path: Path) -> None:
+        photo = bytes(range(256)) * 20
+        net.ground.ftp.put("/upload/7.jpg", photo, net.now_ns)
+        assert net.until_event(net.ground.ftp) == Uploaded("/upload/7.jpg", len(photo))
+        assert net.command(GOTO_PHOTO, 7).result == ACCEPTED
+        assert app.called("goto_image") == [(tmp_path / "upload" / "7.jpg", photo)]
+
+    def test_a_missing_or_malformed_photo_is_denied_with_a_reason(
+            self, net: Net, app: FakeApp, tmp_path: Path) -> None:
+        (tmp_path / "upload" / "3.jpg").write_bytes(b"a")
+        (tmp_path / "upload" / "3.png").write_bytes(b"b")
+        for photo_id in (8, 1.5, 3):
+            assert net.command(GOTO_PHOTO, photo_id).result == DENIED
+        net.advance(0.1)
+        assert net.ground.notices() == [
+            "go to photo: want one uploaded /upload/8.<ext>, found none",
+            "go to photo: photo id 1.5 is not an integer in 1..16777216",
+            "go to photo: want one uploaded /upload/3.<ext>, found 3.jpg, 3.png"]
+        assert app.called("goto_image") == []
+
+    def test_a_photo_the_app_refuses_is_denied(self, net: Net, app: FakeApp,
+                                               tmp_path: Path) -> None:
+        (tmp_path / "upload" / "4.png").write_bytes(b"png")
+        app.accept = False
+        assert net.command(GOTO_PHOTO, 4).result == DENIED
+        assert app.called("goto_image") == [(tmp_path / "upload" / "4.png", b"png")]
+
+
+class TestTeach:
+    def test_start_with_a_name_then_stop(self, net: Net, app: FakeApp) -> None:
+        assert net.command(TEACH_START, *params_from_name("corridor west 2")).result == ACCEPTED
+        assert net.command(TEACH_STOP).result == ACCEPTED
+        assert net.command(TEACH_START).result == ACCEPTED  # NaN params: the robot names it
+        assert app.called("teach_start") == [("corridor west 2",), ("",)]
+        assert app.called("teach_stop") == [()]
+
+    def test_malformed_name_or_refusal_is_denied(self, net: Net, app: FakeApp) -> None:
+        assert net.command(TEACH_START, 1.5).result == DENIED
+        app.accept = False
+        assert net.command(TEACH_STOP).result == DENIED
+        net.advance(0.1)
+        assert net.ground.notices() == [
+            "teach start: parameters carry no valid path name", "teach stop: not teaching"]
+        assert app.called("teach_start") == []

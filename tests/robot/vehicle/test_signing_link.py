@@ -1,0 +1,113 @@
+"""A signed link over real UDP: signed ground stations work; unsigned, wrongly signed and
+replayed packets take no effect and are counted; the vehicle's timestamp keeps up."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from shared.clock import ManualClock
+from shared.mavlink.address import Address
+from shared.mavlink.dialect import Message, mavlink
+from shared.mavlink.goal import Goal
+from shared.mavlink.mission_client import UploadDone
+from shared.mavlink.modes import Mode
+from shared.mavlink.signing import (
+    configure_signing,
+    key_from_passphrase,
+    signing_stats,
+    timestamp_from_unix_ns,
+)
+from tests.robot.vehicle.fake_app import FakeApp
+from tests.robot.vehicle.harness import UNIX_OFFSET_NS, Ground, Net, make_vehicle
+
+KEY = key_from_passphrase("vmnav signing test")
+CUSTOM = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+
+
+def signed_ground(net: Net, key: bytes, address: Address, link_id: int,
+                  heartbeat: bool = True) -> Ground:
+    """A ground station aimed at the vehicle, signing with ``key`` from now on."""
+    ground = Ground(f"udpout:127.0.0.1:{net.vehicle.link.local_port}", address, heartbeat)
+    configure_signing(ground.codec, key, link_id, timestamp_from_unix_ns(UNIX_OFFSET_NS
+                                                                         + net.now_ns))
+    return ground
+
+
+@pytest.fixture
+def net(tmp_path: Path, app: FakeApp, manual_clock: ManualClock) -> Iterator[Net]:
+    """A signing vehicle, one signed ground station (255, 190)."""
+    network = Net(manual_clock, make_vehicle(tmp_path, app, manual_clock, key=KEY))
+    network.ends.append(signed_ground(network, KEY, Address(255, 190), link_id=1))
+    yield network
+    network.close()
+
+
+def attacks() -> list[Message]:
+    """One of each: a mode change, a mission upload, a parameter set, a manual control."""
+    return [mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0,
+                                                 CUSTOM, 4, 0, 0, 0, 0, 0),
+            mavlink.MAVLink_mission_count_message(1, 1, 1, 0),
+            mavlink.MAVLink_param_set_message(1, 1, b"CTL_SPEED", 0.5,
+                                              mavlink.MAV_PARAM_TYPE_REAL32),
+            mavlink.MAVLink_manual_control_message(1, 500, 0, 0, 0, 0)]
+
+
+def test_the_signed_ground_station_works(net: Net, app: FakeApp) -> None:
+    assert net.command(mavlink.MAV_CMD_DO_SET_MODE, CUSTOM, 4).result == \
+        mavlink.MAV_RESULT_ACCEPTED
+    net.ground.send(*net.ground.mission.upload((Goal(1).to_item(),), net.now_ns))
+    assert net.until_event(net.ground.mission) == UploadDone(1)
+    assert app.called("set_mode") == [(Mode.HOLD,)]
+    stats = net.vehicle.endpoint.stats()
+    assert stats.bad_packets == 0 and stats.unsigned_rejected == {}
+    assert stats.signing is not None and stats.signing.good == stats.messages > 0
+    ours = signing_stats(net.ground.codec)  # everything the vehicle sent was signed
+    assert ours.good == ours.signed > 0 and ours.rejected == 0
+
+
+def test_unsigned_wrongly_signed_and_replayed_packets_take_no_effect(
+        net: Net, app: FakeApp) -> None:
+    net.advance(1.5)
+    stranger = Ground(f"udpout:127.0.0.1:{net.vehicle.link.local_port}", Address(255, 191),
+                      heartbeat=False)
+    impostor = signed_ground(net, key_from_passphrase("not the key"), Address(255, 192), 2,
+                             heartbeat=False)
+    net.ends += [stranger, impostor]
+    n = 5
+    genuine = net.ground.codec.pack(mavlink.MAVLink_manual_control_message(1, 100, 0, 0, 0, 0))
+    for _ in range(3):
+        net.ground.link.send(genuine)  # the first counts; the copies are replays
+    for _ in range(n):  # the last datagrams the vehicle receives in this round
+        stranger.send(*attacks())
+        impostor.send(*attacks())
+    net.advance(2.0)
+
+    assert len(app.called("manual_control")) == 1
+    assert app.called("set_mode") == [] and app.called("validate_goals") == []
+    assert net.vehicle.endpoint.config.control.speed_m_s == 0.2
+    stats = net.vehicle.endpoint.stats()
+    assert stats.unsigned_rejected == {mavlink.MAVLINK_MSG_ID_COMMAND_LONG: 2 * n,
+                                       mavlink.MAVLINK_MSG_ID_MISSION_COUNT: 2 * n,
+                                       mavlink.MAVLINK_MSG_ID_PARAM_SET: 2 * n,
+                                       mavlink.MAVLINK_MSG_ID_MANUAL_CONTROL: 2 * n + 2}
+    assert stats.signing is not None and stats.signing.rejected == 8 * n + 2
+    assert stats.bad_packets == 8 * n + 2
+    # Their datagrams did not divert the vehicle's replies from the genuine station.
+    assert stranger.datagrams == impostor.datagrams == 0
+    assert net.ground.of_type("HEARTBEAT", net.now_ns - 1_000_000_000)
+
+
+def test_the_timestamp_keeps_up_with_the_wall_clock(net: Net, app: FakeApp) -> None:
+    net.advance(100.0)
+    wall = timestamp_from_unix_ns(UNIX_OFFSET_NS + net.now_ns)
+    assert net.vehicle.endpoint.codec.signing.timestamp >= wall - 10 * 100_000  # 10 s period
+    # A station that starts now accepts the vehicle: its stream is not 60 s old.
+    net.ground.heartbeat = False
+    late = signed_ground(net, KEY, Address(254, 190), link_id=3)
+    net.ends.append(late)
+    net.advance(2.0)
+    assert late.of_type("HEARTBEAT") and late.codec.bad_packets == 0
+

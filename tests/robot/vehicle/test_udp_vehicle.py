@@ -1,0 +1,39 @@
+"""UdpVehicle: the vehicle sending first (udpout) to a listening ground station, and closing."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from shared.clock import ManualClock
+from shared.errors import IllegalEventError
+from tests.robot.vehicle.fake_app import FakeApp
+from tests.robot.vehicle.harness import Ground, Net, make_vehicle
+
+
+def test_udpout_vehicle_reaches_a_listening_ground(tmp_path: Path, app: FakeApp,
+                                                   manual_clock: ManualClock) -> None:
+    ground = Ground("udpin:127.0.0.1:0", heartbeat=False)
+    vehicle = make_vehicle(tmp_path, app, manual_clock,
+                           url=f"udpout:127.0.0.1:{ground.link.local_port}")
+    net = Net(manual_clock, vehicle, ground)
+    try:
+        net.advance(2.0)
+        assert [t for t, m in ground.received if m.get_type() == "HEARTBEAT"] == [
+            0, 1_000_000_000, 2_000_000_000]  # the first beat too: no need to hear first
+        ground.send(*ground.params.get("CTL_SPEED", net.now_ns))  # and it answers
+        assert net.until_event(ground.params).name == "CTL_SPEED"
+    finally:
+        net.close()
+
+
+def test_close_is_idempotent_and_final(tmp_path: Path, app: FakeApp,
+                                       manual_clock: ManualClock) -> None:
+    vehicle = make_vehicle(tmp_path, app, manual_clock)
+    vehicle.close()
+    vehicle.close()
+    vehicle.service(0)  # a no-op once closed
+    with pytest.raises(IllegalEventError, match="UdpVehicle: event start_thread is not "
+                                                "allowed in state CLOSED"):
+        vehicle.start_thread()

@@ -1,0 +1,106 @@
+"""``vmnav log ...``: inspect and repair MCAP field logs.
+
+* ``vmnav log info FILE [--json]``: topics, schemas, message counts, duration, rates;
+  works on unfinished files too (by scanning) and says what is wrong with them.
+* ``vmnav log recover FILE [-o OUT]``: rewrite an unfinished or damaged file (from a
+  killed process) into a valid, indexed one; FILE is never changed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from shared.logs.reader import LogInfo, RecoverReport
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav log`` and its subcommands."""
+    log = subparsers.add_parser("log", help="inspect and recover MCAP field logs")
+    log_sub = log.add_subparsers(dest="log_command", metavar="SUBCOMMAND", required=True)
+    info = log_sub.add_parser(
+        "info",
+        help="topics, schemas, message counts, duration and rates of a log",
+        description="Summarise the MCAP file FILE: per topic its schema, message count and "
+        "rate, and the log's duration. A finished file is read from its summary; an "
+        "unfinished one (a killed writer) is scanned and what is wrong with it is shown.",
+    )
+    info.add_argument("file", type=Path, metavar="FILE", help="an MCAP file")
+    info.add_argument("--json", action="store_true", help="print the summary as JSON")
+    info.set_defaults(run=run_info)
+    recover = log_sub.add_parser(
+        "recover",
+        help="rewrite an unfinished or damaged log into a valid, indexed one",
+        description="Copy every message of every intact chunk of FILE, with schemas, "
+        "channels, metadata and attachments, into a new valid MCAP file with a summary and "
+        "index. FILE is only read.",
+    )
+    recover.add_argument("file", type=Path, metavar="FILE", help="the unfinished MCAP file")
+    recover.add_argument("-o", "--output", type=Path, metavar="OUT",
+                         help="the file to write [default: FILE with .recovered.mcap]")
+    recover.set_defaults(run=run_recover)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    """Print the summary of ``args.file``."""
+    from shared.logs.reader import log_info
+
+    info = log_info(args.file)
+    print(json.dumps(info.as_dict(), indent=2) if args.json else info_text(info))
+    return 0
+
+
+def info_text(info: LogInfo) -> str:
+    """The summary as a readable table."""
+    status = "complete (summary and index)" if info.complete else (
+        f"{info.problem}; `vmnav log recover {info.path}` rewrites it into a valid file")
+    lines = [
+        f"file      {info.path} ({info.size_bytes / 1e6:.1f} MB, written by "
+        f"{info.library or 'an unnamed library'})",
+        f"status    {status}",
+        f"duration  {info.duration_s:.2f} s, {info.message_count} messages"
+        + (f", metadata: {', '.join(info.metadata)}" if info.metadata else ""),
+    ]
+    if not info.topics:
+        return "\n".join([*lines, "no topics"])
+    width = max(len("topic"), *(len(t.topic) for t in info.topics))
+    schema_width = max(len("schema"), *(len(t.schema_name) for t in info.topics))
+    lines.append(f"{'topic':<{width}}  {'schema':<{schema_width}}  {'messages':>8}  "
+                 f"{'rate Hz':>8}")
+    lines += [f"{t.topic:<{width}}  {t.schema_name:<{schema_width}}  {t.message_count:>8}  "
+              f"{t.rate_hz:>8.2f}" for t in info.topics]
+    return "\n".join(lines)
+
+
+def default_output(path: Path) -> Path:
+    """``run.mcap`` -> ``run.recovered.mcap`` (any other name gets the suffix appended)."""
+    stem = path.name[: -len(".mcap")] if path.name.endswith(".mcap") else path.name
+    return path.with_name(f"{stem}.recovered.mcap")
+
+
+def run_recover(args: argparse.Namespace) -> int:
+    """Recover ``args.file`` into ``args.output`` and say what was kept."""
+    from shared.logs.reader import recover
+
+    report = recover(args.file, args.output or default_output(args.file))
+    print(recover_text(report))
+    return 0
+
+
+def recover_text(report: RecoverReport) -> str:
+    """What :func:`~shared.logs.reader.recover` kept, in a few lines."""
+    span = ("" if report.start_ns is None or report.end_ns is None
+            else f", {(report.end_ns - report.start_ns) / 1e9:.2f} s")
+    lines = [f"wrote {report.dst}: {report.messages} messages on {report.topics} topics{span}"]
+    if report.source_complete:
+        lines.append(f"{report.src} was already complete; the copy holds the same messages")
+    else:
+        lines.append(f"{report.src}: {report.problem or 'no summary or index'}")
+    if report.skipped_chunks:
+        lines.append(f"skipped {report.skipped_chunks} damaged chunk(s)")
+    if report.orphaned:
+        lines.append(f"left out {report.orphaned} message(s) whose channel was in a damaged chunk")
+    return "\n".join(lines)
