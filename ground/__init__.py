@@ -1,1 +1,10 @@
-"""The ground station: MAVLink ground station core, mission dispatch, telemetry, ground log."""
+"""The ground station: MAVLink ground station core, mission dispatch, telemetry, ground log.
+
+Modules: ``station`` (the link and the blocking API), ``fleet`` (vehicles by system
+id), ``command_client`` (COMMAND_LONG with retries, sans-I/O), ``mission_watch``
+(whether a goal was reached), ``telemetry_text`` (lines for people), ``teleop``
+(keyboard driving).
+"""
+
+#: QGroundControl's listening address: vehicles send there by default.
+DEFAULT_URL = "udpin:0.0.0.0:14550"

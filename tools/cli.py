@@ -17,9 +17,20 @@ import sys
 from collections.abc import Sequence
 
 from shared.errors import VmnavError
-from tools import bench, calibrate, demo_cmd, log_cmd, memory_cmd, pioneer_cmd, sim_cmd, teach_cmd
+from tools import (
+    bench,
+    calibrate,
+    demo_cmd,
+    ground_cmd,
+    log_cmd,
+    memory_cmd,
+    pioneer_cmd,
+    sim_cmd,
+    teach_cmd,
+)
 
-COMMANDS = (sim_cmd, calibrate, bench, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, log_cmd)
+COMMANDS = (sim_cmd, calibrate, bench, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, log_cmd,
+            ground_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

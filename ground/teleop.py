@@ -1,0 +1,80 @@
+"""Keyboard teleoperation: keys to MANUAL_CONTROL axes, and the 10 Hz loop that sends them.
+
+Keys (teleop_twist_keyboard's habit: a key changes the command, the command holds):
+
+=========  ===========================================================
+``w``/``s``  forward axis ``x`` up/down by :data:`STEP` (-1..1)
+``a``/``d``  yaw axis ``r`` left/right by :data:`STEP` (-1..1; MAVLink
+             yaw is clockwise positive, so ``a`` lowers it)
+space       stop: both axes 0
+``q``, Esc  quit (a last all-zero MANUAL_CONTROL goes out, also on Ctrl-C)
+=========  ===========================================================
+
+The robot stops by itself when MANUAL_CONTROL stops coming (its dead-man timer), so
+the loop sends the held command every period, changed or not.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ground.station import GroundStation
+from shared.clock import Clock
+
+#: Change of an axis per key press (axes run -1..1).
+STEP = 0.2
+#: MANUAL_CONTROL period, ns (10 Hz).
+PERIOD_NS = 100_000_000
+_QUIT = frozenset("q\x1b")
+
+
+class KeyboardTeleop:
+    """The held command (module docstring): ``x`` forward, ``r`` yaw clockwise, -1..1."""
+
+    def __init__(self) -> None:
+        self.x = 0.0
+        self.r = 0.0
+
+    def press(self, key: str) -> bool:
+        """Apply one key; unknown keys are ignored.
+
+        Returns:
+            False when the key asks to quit.
+        """
+        if key in _QUIT:
+            return False
+        steps = {"w": (STEP, 0.0), "s": (-STEP, 0.0), "a": (0.0, -STEP), "d": (0.0, STEP)}
+        if key == " ":
+            self.x = self.r = 0.0
+        elif key in steps:
+            dx, dr = steps[key]
+            self.x = round(min(1.0, max(-1.0, self.x + dx)), 6)
+            self.r = round(min(1.0, max(-1.0, self.r + dr)), 6)
+        return True
+
+
+def drive(station: GroundStation, read_keys: Callable[[], str], clock: Clock,
+          show: Callable[[KeyboardTeleop], None] = lambda teleop: None,
+          period_ns: int = PERIOD_NS) -> None:
+    """Send the held command every ``period_ns`` until a quit key; then one all-zero one.
+
+    Args:
+        station: a station talking to a vehicle (``wait_vehicle`` done).
+        read_keys: the keys pressed since the last call, without blocking ("" if none).
+        clock: paces the loop.
+        show: called after each key but a quit key, e.g. to print the held command.
+        period_ns: MANUAL_CONTROL period, ns.
+    """
+    teleop = KeyboardTeleop()
+    deadline_ns = clock.now_ns()
+    try:
+        while True:
+            for key in read_keys():
+                if not teleop.press(key):
+                    return
+                show(teleop)
+            station.send_manual_control(teleop.x, teleop.r)
+            deadline_ns += period_ns
+            station.run_until(lambda: False, max(0, deadline_ns - clock.now_ns()))
+    finally:
+        station.send_manual_control(0.0, 0.0)

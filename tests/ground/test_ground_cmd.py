@@ -1,0 +1,164 @@
+"""``vmnav ground`` against a real vehicle endpoint over loopback UDP."""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robot.mission import MissionState
+from robot.vehicle.udp_vehicle import UdpVehicle
+from shared.mavlink.goal import Goal
+from shared.mavlink.modes import Mode
+from shared.mavlink.udp_link import UdpLink
+from shared.memory.store import read_memory, thumbnail_path, write_memory
+from tests.ground.conftest import run_ground
+from tests.robot.vehicle.fake_app import FakeApp
+from tests.shared.memory.builders import loop_memory
+from tools.cli import main
+
+Capsys = pytest.CaptureFixture[str]
+
+
+def one_line_error(capsys: Capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("vmnav ground: "), err
+    return err
+
+
+def test_status_shows_the_vehicle_and_its_mode(vehicle: UdpVehicle, app: FakeApp,
+                                               capsys: Capsys) -> None:
+    app.update(mode=Mode.HOLD)
+    assert run_ground(vehicle, "status") == 0
+    assert capsys.readouterr().out == (
+        "vehicle 1: mode HOLD, standby, battery 12.6 V, mission item 0/0, no mission, "
+        "heartbeat 0.0 s ago\n")
+
+
+def test_no_vehicle_is_one_line_within_the_timeout(capsys: Capsys) -> None:
+    with UdpLink.open("udpin:127.0.0.1:0") as silent:
+        start = time.monotonic()
+        code = main(["ground", "--connect", f"udpout:127.0.0.1:{silent.local_port}",
+                     "--timeout", "0.3", "params", "list"])
+        elapsed_s = time.monotonic() - start
+    assert code == 1 and elapsed_s < 1.0
+    assert "no HEARTBEAT from a vehicle within 0.3 s" in one_line_error(capsys)
+
+
+def test_params_list_get_set(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys) -> None:
+    assert run_ground(vehicle, "params", "list") == 0
+    listed = capsys.readouterr().out.splitlines()
+    assert "CTL_SPEED = 0.2" in listed and len(listed) >= 10
+    assert run_ground(vehicle, "params", "set", "CTL_SPEED", "0.35") == 0
+    assert capsys.readouterr().out == "CTL_SPEED = 0.35\n"
+    assert app.configs[-1].control.speed_m_s == pytest.approx(0.35)
+    assert run_ground(vehicle, "params", "get", "CTL_SPEED") == 0
+    assert capsys.readouterr().out == "CTL_SPEED = 0.35\n"
+    assert run_ground(vehicle, "params", "set", "CTL_SPEED", "5") == 1
+    assert "kept CTL_SPEED = 0.35, not 5" in one_line_error(capsys)
+    assert run_ground(vehicle, "params", "get", "NO_SUCH") == 1
+    assert "parameter get NO_SUCH: no such parameter" in one_line_error(capsys)
+
+
+def test_memory_list_and_get(vehicle: UdpVehicle, tmp_path: Path, rng: np.random.Generator,
+                             capsys: Capsys) -> None:
+    write_memory(tmp_path / "memory", loop_memory(rng))
+    ids = sorted(read_memory(tmp_path / "memory").keyframes)
+    assert run_ground(vehicle, "memory", "list") == 0
+    assert [int(line.split()[0]) for line in capsys.readouterr().out.splitlines()] == ids
+    out = tmp_path / "thumbs"
+    assert run_ground(vehicle, "memory", "get", "5", "2", "--out", str(out)) == 0
+    for key in (5, 2):
+        assert (out / f"{key}.png").read_bytes() == \
+            thumbnail_path(tmp_path / "memory", key).read_bytes()
+    assert run_ground(vehicle, "memory", "get", "99", "--out", str(out)) == 1
+    assert "FTP OPEN_FILE_RO /memory/thumbnails/99.png" in one_line_error(capsys)
+
+
+def test_goto_key_uploads_and_starts_a_one_goal_mission(vehicle: UdpVehicle, app: FakeApp,
+                                                        capsys: Capsys) -> None:
+    assert run_ground(vehicle, "goto", "3") == 0
+    assert app.called("start_mission") == [((Goal(3),), 0)]
+    assert capsys.readouterr().out == "vehicle 1: going to key image 3\n"
+
+
+def test_goto_an_unknown_key_is_refused(vehicle: UdpVehicle, app: FakeApp,
+                                        capsys: Capsys) -> None:
+    assert run_ground(vehicle, "goto", "99") == 1
+    assert one_line_error(capsys) == (
+        "vmnav ground: error: vehicle 1 refused the mission: MAV_MISSION_INVALID_PARAM1 "
+        "(mission refused: item 0: no key image 99)\n")
+    assert app.called("start_mission") == []
+
+
+class ArrivingApp(FakeApp):
+    """Arrives at the last goal as soon as the mission starts."""
+
+    def start_mission(self, goals: tuple[Goal, ...], first_seq: int) -> bool:
+        super().start_mission(goals, first_seq)
+        self.update(mission_state=MissionState.ARRIVED, mission_detail="at the goal",
+                    reached_seqs=tuple(range(first_seq, first_seq + len(goals))))
+        return True
+
+
+@pytest.mark.parametrize("app", [ArrivingApp()], ids=["arriving"])
+def test_goto_wait_reached(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys) -> None:
+    assert run_ground(vehicle, "goto", "4", "--wait", "--wait-timeout", "3") == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "vehicle 1: goal reached"
+
+
+def test_goto_wait_not_reached(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys) -> None:
+    assert run_ground(vehicle, "goto", "4", "--wait", "--wait-timeout", "0.3") == 1
+    assert one_line_error(capsys) == (
+        "vmnav ground: goal not reached: still on the way after 0.3 s "
+        "(last notice: mission localizing: localizing the start)\n")
+
+
+def test_goto_image_uploads_the_photo_and_sends_the_command(
+        vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
+    photo = tmp_path / "goal.jpg"
+    photo.write_bytes(bytes(range(256)) * 3)
+    assert run_ground(vehicle, "goto", "--image", str(photo)) == 0
+    assert run_ground(vehicle, "goto", "--image", str(photo)) == 0  # a second one, new id
+    assert [(path.name, data) for path, data in app.called("goto_image")] == [
+        ("1.jpg", photo.read_bytes()), ("2.jpg", photo.read_bytes())]
+    assert capsys.readouterr().out.splitlines()[-1] == \
+        "vehicle 1: going to photo goal.jpg (uploaded as photo 2)"
+
+
+def test_goto_needs_exactly_one_goal(vehicle: UdpVehicle, capsys: Capsys) -> None:
+    assert run_ground(vehicle, "goto") == 1
+    assert "give either a key image id KEY or --image PHOTO" in one_line_error(capsys)
+
+
+def test_teach_start_and_stop_reach_the_app(vehicle: UdpVehicle, app: FakeApp,
+                                            capsys: Capsys) -> None:
+    assert run_ground(vehicle, "teach", "start", "corridor 2") == 0
+    assert run_ground(vehicle, "teach", "stop") == 0
+    assert app.called("teach_start") == [("corridor 2",)] and app.called("teach_stop") == [()]
+    app.accept = False
+    capsys.readouterr()
+    assert run_ground(vehicle, "teach", "stop") == 1
+    assert one_line_error(capsys) == ("vmnav ground: error: vehicle 1 answered MAV_CMD_USER_3 "
+                                      "with MAV_RESULT_DENIED (teach stop: not teaching)\n")
+
+
+def test_drive_needs_a_terminal(vehicle: UdpVehicle, monkeypatch: pytest.MonkeyPatch,
+                                capsys: Capsys) -> None:
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))
+    assert run_ground(vehicle, "drive") == 1
+    assert one_line_error(capsys) == (
+        "vmnav ground: error: stdin: not a terminal: drive reads keys, run it from one\n")
+
+
+def test_watch_prints_telemetry_lines(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys) -> None:
+    app.update(odom_pose=(1.5, -0.25, 0.5))
+    assert run_ground(vehicle, "watch", "--duration", "1.1") == 0
+    lines = capsys.readouterr().out.splitlines()
+    kinds = {line.split()[4] for line in lines}
+    assert {"HEARTBEAT:", "SYS_STATUS:", "ODOMETRY:", "MISSION_CURRENT:"} <= kinds
+    assert any(line.endswith("vehicle 1  HEARTBEAT: mode MANUAL, standby") for line in lines)
+    assert any("ODOMETRY: x +1.50 m, y -0.25 m, yaw +28.6 deg" in line for line in lines)
