@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 
@@ -62,6 +63,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"vmnav {args.command}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (``vmnav log info X | head``): not an error
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 (stdout stays open until exit)
+        return 0
 
 
 if __name__ == "__main__":
