@@ -63,7 +63,7 @@ def _wrap(angle_rad: float) -> float:
     return (angle_rad + math.pi) % (2 * math.pi) - math.pi
 
 
-def _ramp(current: float, target: float, up: float, down: float) -> float:
+def ramp(current: float, target: float, up: float, down: float) -> float:
     """Move ``current`` towards ``target`` by at most ``up`` away from 0, ``down`` towards 0."""
     if current != 0 and (target - current) * current < 0:  # slowing down (or reversing)
         step = max(target - current, -down) if current > 0 else min(target - current, down)
@@ -204,8 +204,8 @@ class PioneerBody:
     def before_step(self, dt_s: float) -> None:
         """Ramp the set-points (rule 2); remember the pose the step starts from."""
         c = self.config
-        self._v_set = _ramp(self._v_set, self._v_cmd, c.accel_m_s2 * dt_s, c.decel_m_s2 * dt_s)
-        self._w_set = _ramp(
+        self._v_set = ramp(self._v_set, self._v_cmd, c.accel_m_s2 * dt_s, c.decel_m_s2 * dt_s)
+        self._w_set = ramp(
             self._w_set, self._w_cmd, c.rot_accel_rad_s2 * dt_s, c.rot_accel_rad_s2 * dt_s
         )
         x, y = self._body.position

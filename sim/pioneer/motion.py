@@ -15,7 +15,7 @@ Rules (ARCOS, as aria-protocol.md §4, §7 and §9 describe it):
    (argument > 0) or the deceleration (< 0), up to the acceleration tops.
 4. **Profile.** Every physics step the profiled velocity moves towards the target by
    at most acceleration * dt when speeding up, deceleration * dt when slowing down
-   (the body's ramp rule, :func:`sim.body._ramp`). A distance or heading target asks
+   (the body's ramp rule, :func:`sim.body.ramp`). A distance or heading target asks
    for the speed that still stops in what is left: min(max, sqrt(2 decel d), k d).
 5. **Watchdog.** :meth:`MotionController.halt` brings the profile to zero and keeps
    the targets; :meth:`MotionController.resume` drives on (ARCOS resumes the last
@@ -33,7 +33,7 @@ import math
 from dataclasses import replace
 
 from shared.aria import ConfigPacket
-from sim.body import _ramp
+from sim.body import ramp
 from sim.pioneer.p3at import DIFF_CONV_RAD_PER_M
 
 Pose = tuple[float, float, float]
@@ -211,8 +211,8 @@ class MotionController:
         if self._motors and not self._halted:
             v_des = _clamp(self._translation_target(pose), lim.trans_vel_max_m_s)
             w_des = _clamp(self._rotation_target(pose), lim.rot_vel_max_rad_s)
-        self._v = _ramp(self._v, v_des, lim.trans_accel_m_s2 * dt_s, lim.trans_decel_m_s2 * dt_s)
-        self._w = _ramp(self._w, w_des, lim.rot_accel_rad_s2 * dt_s, lim.rot_decel_rad_s2 * dt_s)
+        self._v = ramp(self._v, v_des, lim.trans_accel_m_s2 * dt_s, lim.trans_decel_m_s2 * dt_s)
+        self._w = ramp(self._w, w_des, lim.rot_accel_rad_s2 * dt_s, lim.rot_decel_rad_s2 * dt_s)
         return self._v, self._w
 
     def _translation_target(self, pose: Pose) -> float:

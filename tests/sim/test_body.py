@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from shared.config import BodyConfig, OdometryConfig, SimConfig
 from shared.errors import InputError
-from sim.body import _ramp
+from sim.body import ramp
 from sim.simulation import Simulation
 from sim.world import Pose2, World
 from tests.sim.rooms import box_room
@@ -194,7 +194,7 @@ class TestRamp:
     def test_moves_towards_the_target_within_the_limits(
         self, current: float, target: float, up: float, down: float
     ) -> None:
-        nxt = _ramp(current, target, up, down)
+        nxt = ramp(current, target, up, down)
         assert min(current, target) - 1e-12 <= nxt <= max(current, target) + 1e-12  # no overshoot
         assert nxt * current >= 0  # a reversal stops at zero first
         if abs(nxt) > abs(current):  # speeding up
