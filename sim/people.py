@@ -24,7 +24,8 @@ Rules:
    - otherwise step aside: walk square to the robot's motion, away from its
      line (the other side if that way is not clear), until their body is
      :data:`SIDESTEP_MARGIN_M` beyond the robot's half-diagonal from that line,
-     then pick a new goal. With nowhere clear to go they stand still.
+     or, where walls leave less room, as far as they fit clear of the robot's
+     width; then pick a new goal. With nowhere clear to go they stand still.
 4. People are kinematic: nothing stops them, and a person who walks into the
    robot pushes it (that is how people bump the robot; with ``avoid_robot``
    False, or a robot turning into them). On that contact the person stops,
@@ -58,6 +59,7 @@ SIDESTEP_MARGIN_M = 0.3
 """Room a sidestepping person leaves between their body and the robot's half-diagonal, m."""
 
 _BODY_CLEARANCE_M = 0.1  # room left between a person and walls or furniture
+_SIDESTEP_TRIES = 4  # sidestep lengths tried, from the full one down to just clear
 _START_CLEARANCE_M = 1.5  # people start at least this far from the robot
 _ROBOT_PASS_M = 0.5  # a goal path passes the robot's centre no closer than radius + this
 _MIN_WALK_M = 1.0  # goals nearer than this are not worth walking to
@@ -89,6 +91,7 @@ class People:
         self._rng = rng
         self._robot = robot
         self._robot_half_diagonal_m = max(v.length for v in robot.get_vertices())
+        self._robot_width_m = 2 * max(abs(v.y) for v in robot.get_vertices())
         self._bodies: list[pymunk.Body] = []
         self._index: dict[pymunk.Shape, int] = {}
         self._goals: list[tuple[float, float] | None] = [None] * config.count
@@ -131,6 +134,22 @@ class People:
         self._wait_s[index] = 0.0
         self._blocked_s[index] = 0.0
         self._sidestepping[index] = False
+
+    def clear_robot_start(self) -> None:
+        """Move anyone standing within :data:`_START_CLEARANCE_M` of the robot to a new start
+        place (call after the robot was placed somewhere else than where people started)."""
+        robot = np.array(self._robot.body.position, dtype=float)
+        for i, body in enumerate(self._bodies):
+            if np.hypot(*(np.array(body.position, dtype=float) - robot)) >= _START_CLEARANCE_M:
+                continue
+            others = [np.array(b.position, dtype=float) for j, b in enumerate(self._bodies)
+                      if j != i]
+            for _ in range(100):
+                p = self._sample(1)[0]
+                if np.hypot(*(p - robot)) >= _START_CLEARANCE_M and all(
+                        np.hypot(*(p - q)) >= 2 * self.config.radius_m for q in others):
+                    self.place(i, (p[0], p[1]), (p[0], p[1]))  # arrived: picks a goal next step
+                    break
 
     # -- the step ---------------------------------------------------------------------
 
@@ -208,18 +227,24 @@ class People:
     def _sidestep_goal(
         self, position: pymunk.Vec2d, robot_velocity: pymunk.Vec2d
     ) -> tuple[float, float] | None:
-        """Where to step, square to the robot's motion and clear of its path, or None."""
+        """Where to step, square to the robot's motion and clear of its path, or None.
+
+        The full sidestep first, either side; where walls leave less room (a 2 m
+        corridor), as far as the person fits, still clear of the robot's box.
+        """
         left = robot_velocity.perpendicular_normal()
         lateral = (position - self._robot.body.position).dot(left)
-        reach = self._robot_half_diagonal_m + self.config.radius_m + SIDESTEP_MARGIN_M
+        half_width = 0.5 * self._robot_width_m + self.config.radius_m
+        full = self._robot_half_diagonal_m + self.config.radius_m + SIDESTEP_MARGIN_M
         side = 1.0 if lateral >= 0 else -1.0
-        for sign in (side, -side):
-            goal = position + left * (sign * reach - lateral)
-            start, end = (position.x, position.y), (goal.x, goal.y)
-            if self._free_space.path_is_clear(
-                start, end, self.config.radius_m + 0.5 * _BODY_CLEARANCE_M
-            ):
-                return end
+        for reach in np.linspace(full, half_width + _BODY_CLEARANCE_M, _SIDESTEP_TRIES):
+            for sign in (side, -side):
+                goal = position + left * (sign * reach - lateral)
+                start, end = (position.x, position.y), (goal.x, goal.y)
+                if self._free_space.path_is_clear(
+                    start, end, self.config.radius_m + 0.5 * _BODY_CLEARANCE_M
+                ):
+                    return end
         return None
 
     def _on_bump(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:

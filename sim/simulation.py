@@ -162,6 +162,7 @@ class Simulation:
 
     def place_robot(self, pose: Pose2) -> None:
         """Put the robot at rest at ``pose``; odometry restarts there (see :mod:`sim.body`).
+        People standing too close to it start elsewhere.
 
         Raises:
             ConfigError: the robot would overlap a wall or furniture.
@@ -180,3 +181,4 @@ class Simulation:
                 "robot pose", f"({pose.x_m}, {pose.y_m}, {pose.yaw_deg} deg) overlaps a {kind}"
             )
         self.body.place(pose)
+        self.people.clear_robot_start()

@@ -9,7 +9,7 @@ from sim._geometry import point_segment_distances, points_in_polygons
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.people import SIDESTEP_MARGIN_M
 from sim.simulation import Simulation
-from sim.world import World, load_world
+from sim.world import Pose2, World, load_world
 from tests.sim.rooms import box_room
 
 
@@ -68,6 +68,17 @@ class TestWalking:
         assert positions.shape == (4, 2)
         assert (radius, height) == (0.25, 1.75)
         assert np.linalg.norm(positions - [5.0, 3.0], axis=1).min() >= 1.5
+
+    def test_placing_the_robot_by_a_person_moves_that_person_away(self) -> None:
+        sim = people_sim(box_room(), count=4)
+        before = sim.people.positions().copy()
+        x, y = before[2]
+        sim.place_robot(Pose2(float(x), float(y), 0.0))
+        after = sim.people.positions()
+        assert np.linalg.norm(after - [x, y], axis=1).min() >= 1.5
+        moved = np.linalg.norm(after - before, axis=1) > 0
+        far = np.linalg.norm(before - [x, y], axis=1) >= 1.5
+        assert moved[2] and not moved[far].any()  # only those too close moved
 
     def test_too_many_people_for_the_world(self) -> None:
         with pytest.raises(ConfigError, match=r"^people: cannot place 40 people"):
@@ -157,6 +168,22 @@ class TestYielding:
             sim.step()
             bumps += sim.body.bumped_front or sim.body.bumped_rear
         assert bumps > 0
+
+    @pytest.mark.parametrize("tries", [1, 4])
+    def test_in_a_2_m_corridor_a_person_steps_to_the_wall(self, tries: int,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+        # The lab's main corridor (y 9-11): too narrow for the full sidestep (the robot's
+        # half-diagonal plus a margin on either side); flat against the wall is clear.
+        monkeypatch.setattr("sim.people._SIDESTEP_TRIES", tries)
+        sim = people_sim(load_world("lab"), count=1, speed=0.8)
+        sim.place_robot(Pose2(8.0, 10.05, 0.0))
+        sim.people.place(0, (11.5, 9.75), (4.0, 9.75))  # walking west, at the robot
+        sim.body.command(0.2, 0.0)
+        bumped = False
+        for k in range(1, 100):
+            sim.step_until(k * 100_000_000)
+            bumped = bumped or sim.body.bumped_front or sim.body.bumped_rear
+        assert bumped == (tries == 1)  # a single full-length try (the old rule) finds no room
 
     def test_same_seed_same_yields(self) -> None:
         def walk() -> np.ndarray:
