@@ -1,7 +1,8 @@
 """``vmnav demo``: teach routes, then repeat one to a goal on another path; report, plots, video.
 
 See :mod:`tools.demo` for the story, :mod:`tools.demo_report` for what is measured
-and :mod:`tools.demo_plots` for the figures and the video.
+and :mod:`tools.demo_plots` for the figures and the video, :mod:`tools.demo_log` for the
+robot's MCAP log.
 """
 
 from __future__ import annotations
@@ -10,12 +11,22 @@ import argparse
 import dataclasses
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from shared.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.sim_args import add_sim_arguments, sim_config_from_args
+
+if TYPE_CHECKING:
+    from shared.logs.writer import LogStats
+    from sim.renderer import RenderedFrame
+    from sim.simulation import Simulation
+    from tools.demo import CycleSample
+
+OnCycle = Callable[["Simulation", "RenderedFrame", "CycleSample"], None]
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -26,7 +37,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         description="In one lock-step process: teach the routes into one visual memory (or "
         "reuse the one in OUT), place the robot 0.3 m and 10 degrees off the first route, "
         "localize, plan to a goal key image on another path and follow it there. Prints a "
-        "summary and writes report.json, plots and a video into OUT.",
+        "summary and writes report.json, plots, a video and the robot's MCAP log (OUT/logs) "
+        "into OUT.",
     )
     add_sim_arguments(demo)
     demo.add_argument("--out", type=Path, default=Path("out/demo"), metavar="DIR",
@@ -44,6 +56,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="control law: the paper's eq. (2), or with the teach path's "
                       "curvature fed forward [default: %(default)s]")
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
+    demo.add_argument("--no-log", action="store_true",
+                      help="do not write the robot's MCAP log (OUT/logs/robot-NNNN.mcap)")
     demo.set_defaults(run=run)
 
 
@@ -56,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
         repeat_in_sim,
         taught_memory,
     )
+    from tools.demo_log import DemoLog
     from tools.demo_plots import VideoWriter, write_plots
     from tools.demo_report import build_report, summary_text
 
@@ -78,13 +93,22 @@ def run(args: argparse.Namespace) -> int:
     teach_s = time.perf_counter() - started
     goal = default_goal(taught) if args.goal is None else args.goal
     video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
+    robot_log = None if args.no_log else DemoLog(
+        out / "logs", taught.memory, sim_config.camera, config.log,
+        {"source": "vmnav demo (simulator, lock-step)", "goal_key_image": str(goal),
+         "routes": ",".join(routes) if routes else "all", "seed": str(sim_config.seed),
+         "control_law": config.control.law})
+    consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:
         repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout,
-                               None if video is None else video.add)
+                               _chain(consumers))
+        if robot_log is not None:
+            robot_log.log_events(repeat.result.events)
     finally:
         if video is not None:
             video.close()
+        log_stats = None if robot_log is None else robot_log.close()
     report = build_report(repeat, taught, config.control, time.perf_counter() - repeat_started)
     report["teach_wall_time_s"] = round(teach_s, 2)
     report["memory_reused"] = taught.reused
@@ -99,4 +123,33 @@ def run(args: argparse.Namespace) -> int:
           f"images, {'reused' if taught.reused else f'taught in {teach_s:.1f} s'}")
     print(summary_text(report))
     print(f"wrote {out / 'report.json'}, plots{'' if video is None else ' and demo.mp4'}")
+    if robot_log is not None:
+        print(log_text(log_stats))
     return 0 if report["reached_goal"] else 1
+
+
+def log_text(stats: LogStats | None) -> str:
+    """Where the robot log went and what it holds, one line (``stats`` None: no cycle)."""
+    if stats is None:
+        return "log: none written (no cycle ran)"
+    files = ", ".join(str(p) for p in stats.files) or "no file"
+    problems = [f"{n} {what}" for n, what in ((stats.dropped, "dropped (writer behind)"),
+                                              (stats.lost, "lost")) if n]
+    if stats.last_error:
+        problems.append(stats.last_error)
+    return (f"log {files}: {stats.written} messages"
+            + (f" ({'; '.join(problems)})" if problems else ""))
+
+
+def _chain(consumers: list[OnCycle]) -> OnCycle | None:
+    """One ``on_cycle`` calling each of ``consumers`` in turn (None for none)."""
+    if not consumers:
+        return None
+    if len(consumers) == 1:
+        return consumers[0]
+
+    def on_cycle(sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
+        for consumer in consumers:
+            consumer(sim, frame, sample)
+
+    return on_cycle

@@ -4,6 +4,8 @@
   works on unfinished files too (by scanning) and says what is wrong with them.
 * ``vmnav log recover FILE [-o OUT]``: rewrite an unfinished or damaged file (from a
   killed process) into a valid, indexed one; FILE is never changed.
+* ``vmnav log plot FILE [--out DIR]``: the paper-style figures of a robot log
+  (:mod:`tools.log_plot`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ if TYPE_CHECKING:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav log`` and its subcommands."""
-    log = subparsers.add_parser("log", help="inspect and recover MCAP field logs")
+    log = subparsers.add_parser("log", help="inspect, recover and plot MCAP field logs")
     log_sub = log.add_subparsers(dest="log_command", metavar="SUBCOMMAND", required=True)
     info = log_sub.add_parser(
         "info",
@@ -42,6 +44,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     recover.add_argument("-o", "--output", type=Path, metavar="OUT",
                          help="the file to write [default: FILE with .recovered.mcap]")
     recover.set_defaults(run=run_recover)
+    plot = log_sub.add_parser(
+        "plot",
+        help="the paper-style figures of a robot log (y, theta, image errors, matches)",
+        description="From the servo state and odometry of the finished MCAP file FILE, write "
+        "y and theta against the distance driven, errImageMax and errPoints against time, "
+        "and the matches per frame, as PNG files named after FILE.",
+    )
+    plot.add_argument("file", type=Path, metavar="FILE", help="a robot log (MCAP)")
+    plot.add_argument("--out", type=Path, metavar="DIR",
+                      help="folder of the figures [default: FILE's folder]")
+    plot.set_defaults(run=run_plot)
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -87,6 +100,15 @@ def run_recover(args: argparse.Namespace) -> int:
 
     report = recover(args.file, args.output or default_output(args.file))
     print(recover_text(report))
+    return 0
+
+
+def run_plot(args: argparse.Namespace) -> int:
+    """Write the figures of ``args.file`` and list them."""
+    from tools.log_plot import plot_log
+
+    for path in plot_log(args.file, args.out):
+        print(f"wrote {path}")
     return 0
 
 
