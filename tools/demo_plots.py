@@ -21,6 +21,7 @@ import numpy as np
 from shared.config import SimConfig
 from tools.demo import CycleSample, RepeatRun, TaughtMemory
 from tools.demo_report import following_errors, plan_references
+from tools.log_plot import plot_image_errors, plot_matches, save_figure
 
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
@@ -61,7 +62,7 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     ax.set_ylabel("y (m)")
     ax.legend(loc="best")
     ax.set_title("Taught paths and the repeated trajectory (ground truth)")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def _plot_errors(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
@@ -85,51 +86,26 @@ def _plot_errors(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     ax_t.set_xlabel("distance driven (m)")
     ax_y.legend(loc="best")
     ax_y.set_title("Errors along the route (cf. Courbon et al. 2008, Fig. 8)")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def _plot_image_errors(path: Path, run: RepeatRun) -> None:
-    fig, ax = plt.subplots(figsize=(9, 4))
-    t, err_max, err_mean = [], [], []
-    for s in run.samples:
-        follow = s.record.follow
-        if follow is not None and follow.vision is not None:
-            t.append(s.record.t_ns / 1e9)
-            err_max.append(follow.vision.image_errors.err_image_max_px)
-            err_mean.append(follow.vision.image_errors.err_points_px)
-    ax.plot(t, np.where(np.isfinite(err_max), err_max, np.nan), label="errImageMax")
-    ax.plot(t, np.where(np.isfinite(err_mean), err_mean, np.nan), label="errPoints")
-    for s in run.samples:
-        if s.record.follow is not None and s.record.follow.switch is not None:
-            ax.axvline(s.record.t_ns / 1e9, color="0.85", lw=0.6, zorder=0)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("image error (px)")
-    ax.legend(loc="best")
-    ax.set_title("Image errors to the next key image; grey: key image switches (cf. Fig. 6)")
-    _save(fig, path)
+    seen = [(s.record.t_ns / 1e9, s.record.follow.vision.image_errors) for s in run.samples
+            if s.record.follow is not None and s.record.follow.vision is not None]
+    switches = [s.record.t_ns / 1e9 for s in run.samples
+                if s.record.follow is not None and s.record.follow.switch is not None]
+    plot_image_errors(path, [t for t, _ in seen], [e.err_image_max_px for _, e in seen],
+                      [e.err_points_px for _, e in seen], switches)
 
 
 def _plot_matches(path: Path, run: RepeatRun) -> None:
-    fig, ax = plt.subplots(figsize=(9, 3.5))
-    t = [s.record.t_ns / 1e9 for s in run.samples
-         if s.record.follow is not None and s.record.follow.vision is not None]
-    n = [s.record.follow.vision.matches for s in run.samples
-         if s.record.follow is not None and s.record.follow.vision is not None]
-    ax.plot(t, n, ".", ms=2)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("matches with the next key image")
-    ax.set_title("Matches per frame")
-    _save(fig, path)
+    seen = [(s.record.t_ns / 1e9, s.record.follow.vision.matches) for s in run.samples
+            if s.record.follow is not None and s.record.follow.vision is not None]
+    plot_matches(path, [t for t, _ in seen], [n for _, n in seen])
 
 
 def _value(v: float | None) -> float:
     return np.nan if v is None else v
-
-
-def _save(fig: plt.Figure, path: Path) -> None:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 class VideoWriter:

@@ -118,8 +118,8 @@ def plot_log(path: Path, out: Path | None = None) -> list[Path]:
     stem = path.name.removesuffix(".mcap")
     files = [out / f"{stem}-{name}.png" for name in PLOT_NAMES]
     _plot_errors(files[0], series)
-    _plot_image_errors(files[1], series)
-    _plot_matches(files[2], series)
+    plot_image_errors(files[1], series.t_s, series.err_image_max_px, series.err_points_px)
+    plot_matches(files[2], series.t_s, series.matches)
     return files
 
 
@@ -152,30 +152,49 @@ def _plot_errors(path: Path, s: ServoSeries) -> None:
     ax_t.set_xlabel("time (s)" if s.distance_m is None else "distance driven, odometry (m)")
     ax_y.legend(loc="best")
     ax_y.set_title("Errors to the next key image (cf. Courbon et al. 2008, Fig. 8)")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
-def _plot_image_errors(path: Path, s: ServoSeries) -> None:
+def plot_image_errors(path: Path, t_s: npt.ArrayLike, err_image_max_px: npt.ArrayLike,
+                      err_points_px: npt.ArrayLike, switches_s: Sequence[float] = ()) -> None:
+    """errImageMax and errPoints against time (cf. Courbon et al. 2008, Fig. 6).
+
+    Args:
+        path: the PNG.
+        t_s, err_image_max_px, err_points_px: (N,) time, s, and the errors, px (inf or NaN:
+            no matches, left blank).
+        switches_s: times of key image switches, s, drawn as grey lines.
+    """
     fig, ax = plt.subplots(figsize=(9, 4))
-    ax.plot(s.t_s, s.err_image_max_px, label="errImageMax")
-    ax.plot(s.t_s, s.err_points_px, label="errPoints")
+    for values, label in ((err_image_max_px, "errImageMax"), (err_points_px, "errPoints")):
+        v = np.asarray(values, dtype=float)
+        ax.plot(t_s, np.where(np.isfinite(v), v, np.nan), label=label)
+    for t in switches_s:
+        ax.axvline(t, color="0.85", lw=0.6, zorder=0)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("image error (px)")
     ax.legend(loc="best")
-    ax.set_title("Image errors to the next key image (cf. Courbon et al. 2008, Fig. 6)")
-    _save(fig, path)
+    grey = "; grey: key image switches" if len(switches_s) else ""
+    ax.set_title(f"Image errors to the next key image{grey} (cf. Courbon et al. 2008, Fig. 6)")
+    save_figure(fig, path)
 
 
-def _plot_matches(path: Path, s: ServoSeries) -> None:
+def plot_matches(path: Path, t_s: npt.ArrayLike, matches: npt.ArrayLike) -> None:
+    """Matches with the next key image per frame against time, s."""
     fig, ax = plt.subplots(figsize=(9, 3.5))
-    ax.plot(s.t_s, s.matches, ".", ms=2)
+    ax.plot(t_s, matches, ".", ms=2)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("matched points")
+    ax.set_ylabel("matches with the next key image")
     ax.set_title("Matches per frame")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
-def _save(fig: plt.Figure, path: Path) -> None:
+def save_figure(fig: plt.Figure, path: Path) -> None:
+    """Write ``fig`` as a PNG and close it.
+
+    Raises:
+        InputError: the file cannot be written.
+    """
     fig.tight_layout()
     try:
         fig.savefig(path, dpi=110)
