@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from shared.clock import ManualClock
-from shared.config import MavlinkConfig, VmnavConfig
+from shared.config import VmnavConfig
 from shared.mavlink.dialect import to_float32
 from shared.mavlink.goal import Goal
 from shared.mavlink.mission_client import DownloadDone, UploadDone
@@ -18,10 +18,8 @@ from shared.mavlink.robot_params import ROBOT_PARAMS
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, Relay, make_vehicle
 
-#: Retries as in the shared lossy-link tests: at 20 % loss each way a request and its
-#: answer both pass with p = 0.64, so 5 retries would fail a 25-exchange session ~5 % of
-#: the time; 10 retries make that ~1e-4.
-CONFIG = VmnavConfig(mavlink=MavlinkConfig(mission_retries=10, param_retries=10))
+#: The default retries (10, MavlinkConfig) carry a 25-exchange session through 20 % loss.
+CONFIG = VmnavConfig()
 
 
 @pytest.fixture(params=[11, 12])

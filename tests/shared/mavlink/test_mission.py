@@ -311,8 +311,7 @@ def test_too_many_items_get_no_space() -> None:
 
 @pytest.mark.parametrize("seed", range(40))
 def test_upload_and_download_survive_20_percent_loss(seed: int) -> None:
-    config = MavlinkConfig(mission_retries=10)
-    link, client, server = make_link(config, loss=0.2, seed=seed)
+    link, client, server = make_link(MavlinkConfig(), loss=0.2, seed=seed)  # default retries
     items = goal_items(*range(10, 22))
     link.send(link.ground, client.upload(items, 0))
     rounds = link.run(lambda: client.operation is None, max_rounds=100)

@@ -152,8 +152,7 @@ def test_fetch_re_reads_only_missing_indexes() -> None:
 @pytest.mark.parametrize("seed", range(40))
 def test_fetch_all_survives_20_percent_loss(seed: int) -> None:
     table = make_table(n_extra=30)
-    config = MavlinkConfig(param_retries=10)
-    link, client, _ = make_link(table, config, loss=0.2, seed=seed)
+    link, client, _ = make_link(table, MavlinkConfig(), loss=0.2, seed=seed)  # default retries
     assert finish(link, client, client.fetch_all(0), max_rounds=100) == [
         ParamsFetched(wire_values(table))]
     assert link.dropped > 0
@@ -162,7 +161,7 @@ def test_fetch_all_survives_20_percent_loss(seed: int) -> None:
 @pytest.mark.parametrize("seed", range(10))
 def test_set_survives_20_percent_loss(seed: int) -> None:
     table = make_table()
-    link, client, _ = make_link(table, MavlinkConfig(param_retries=10), loss=0.2, seed=seed)
+    link, client, _ = make_link(table, MavlinkConfig(), loss=0.2, seed=seed)
     (done,) = finish(link, client, client.set("MIS_LOC_TRIES", 9, 0))
     assert done == ParamSetDone("MIS_LOC_TRIES", 9.0, 9.0, accepted=True)
 
