@@ -30,6 +30,9 @@ Rules:
 5. Signing (a key given): everything sent is signed, unsigned or badly signed
    packets are dropped by the codec, and the signing timestamp follows the wall
    clock (``SigningClock``).
+6. Taps: every packet parsed off the link and every packet sent (once per datagram)
+   goes to each of :attr:`~GroundStation.packet_taps`, in wire order, with its bytes,
+   its message and the clock's reading at that moment (e.g. ``ground.ground_log``).
 """
 
 from __future__ import annotations
@@ -76,6 +79,8 @@ SIGNING_LINK_ID = 1
 
 #: (vehicle, message) -> None, called for every message from a known vehicle.
 Listener = Callable[[VehicleState, Any], None]
+#: (direction ``"in"``/``"out"``, packet bytes, its message, clock ns) -> None (rule 6).
+PacketTap = Callable[[str, bytes, Message, int], None]
 
 
 class GroundError(VmnavError):
@@ -114,6 +119,8 @@ class GroundStation:
         self.system_id = system_id
         self.listeners: list[Listener] = []
         """Called with every message from a known vehicle (e.g. to print telemetry)."""
+        self.packet_taps: list[PacketTap] = []
+        """Called with every packet received or sent (rule 6)."""
         self.clock = clock
         """The station's time: deadlines and waits."""
         self._config = config if config is not None else MavlinkConfig()
@@ -160,6 +167,7 @@ class GroundStation:
         now_ns = self.clock.now_ns()
         for data, sender in self.link.receive():
             for msg in self.codec.parse(data):
+                self._tap("in", bytes(msg.get_msgbuf()), msg)
                 self._handle(msg, sender, now_ns)
         if self._signing is not None and now_ns >= (self._signing.get_timer() or 0):
             self._signing.handle_timer(now_ns)
@@ -227,14 +235,14 @@ class GroundStation:
             messages.append(mavlink.MAVLink_command_long_message(
                 0, 0, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
                 mavlink.MAVLINK_MSG_ID_HEARTBEAT, 0, 0, 0, 0, 0, 0))
-        packets = [self.codec.pack(msg) for msg in messages]
+        packets = [(msg, self.codec.pack(msg)) for msg in messages]
         peers = {v.peer for v in self.fleet.vehicles.values() if v.peer is not None}
         if not self.link.listening or not peers:
             peers = {self.link.peer} if self.link.peer is not None else set()
         for peer in peers:
             self.link.peer = peer
-            for packet in packets:
-                self.link.send(packet)
+            for msg, packet in packets:
+                self._transmit(msg, packet)
 
     def _send(self, messages: Sequence[Message]) -> None:
         """Send ``messages`` to the vehicle talked to (its own address when listening)."""
@@ -243,7 +251,18 @@ class GroundStation:
         if self.link.listening and self.vehicle is not None and self.vehicle.peer is not None:
             self.link.peer = self.vehicle.peer
         for msg in messages:
-            self.link.send(self.codec.pack(msg))
+            self._transmit(msg, self.codec.pack(msg))
+
+    def _transmit(self, msg: Message, packet: bytes) -> None:
+        """Send one packet to the link's peer and show it to the taps (rule 6)."""
+        self.link.send(packet)
+        self._tap("out", packet, msg)
+
+    def _tap(self, direction: str, packet: bytes, msg: Message) -> None:
+        if self.packet_taps:
+            now_ns = self.clock.now_ns()
+            for tap in self.packet_taps:
+                tap(direction, packet, msg, now_ns)
 
     def _send_ftp(self) -> None:
         payloads = self._ftp.payloads_to_send()

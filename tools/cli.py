@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -55,6 +56,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         level=logging.DEBUG if args.verbose else logging.INFO,
         format="%(levelname)s %(name)s: %(message)s",
     )
+    # SIGTERM (a service manager, `kill`) unwinds like Ctrl-C: finally blocks close
+    # logs and links; commands that need more install their own handler.
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
     try:
         return int(args.run(args))
     except VmnavError as e:
@@ -66,6 +70,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (``vmnav log info X | head``): not an error
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 (stdout stays open until exit)
         return 0
+
+
+def _exit_on_sigterm(signum: int, frame: object) -> None:
+    raise SystemExit(128 + signum)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,9 @@
 Every subcommand connects (``--connect``, pymavlink connection strings), waits up to
 ``--timeout`` for the vehicle (``--system`` picks one by system id; default the first
 heard), does its one thing and exits: 0 on success, 1 with one line on stderr when the
-vehicle is not there, refuses, or (``goto --wait``) does not reach the goal.
+vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. With
+``--log DIR`` every MAVLink packet in and out also goes to ``DIR/ground-NNNN.mcap`` and
+``DIR/ground-<stamp>.tlog`` (``ground.ground_log``).
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ground.fleet import VehicleState
-    from ground.station import GroundStation
+    from ground.station import GroundStation, PacketTap
+    from shared.clock import Clock
 
 #: Default wait for the vehicle's HEARTBEAT, s.
 DEFAULT_TIMEOUT_S = 5.0
@@ -46,6 +49,9 @@ def add_parser(subparsers: Subparsers) -> None:
                              "or a passphrase)")
     ground.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT_S, metavar="S",
                         help=f"wait this long for the vehicle, s (default {DEFAULT_TIMEOUT_S:g})")
+    ground.add_argument("--log", type=Path, metavar="DIR",
+                        help="log every MAVLink packet in and out to DIR/ground-NNNN.mcap "
+                             "and DIR/ground-<stamp>.tlog (default: no log)")
     sub = ground.add_subparsers(dest="ground_command", metavar="SUBCOMMAND", required=True)
 
     sub.add_parser("status", help="vehicles seen, mode, battery, mission state"
@@ -111,10 +117,33 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")
     clock = WallClock()
     key = read_key_file(args.key) if args.key is not None else None
-    with GroundStation.open(args.connect, clock, system_id=args.system, key=key,
-                            unix_offset_ns=time.time_ns() - clock.now_ns()) as station:
+    unix_offset_ns = time.time_ns() - clock.now_ns()
+    with contextlib.ExitStack() as stack:
+        station = stack.enter_context(GroundStation.open(
+            args.connect, clock, system_id=args.system, key=key, unix_offset_ns=unix_offset_ns))
+        if args.log is not None:
+            station.packet_taps.append(open_ground_log(stack, args.log, clock, unix_offset_ns))
         station.wait_vehicle(args.timeout)
         return int(args.action(station, args))
+
+
+def open_ground_log(stack: contextlib.ExitStack, folder: Path, clock: Clock,
+                    unix_offset_ns: int) -> PacketTap:
+    """Open the ground log in ``folder``, closed by ``stack`` with a line on stderr naming
+    its files; its packet tap."""
+    from ground.ground_log import GroundLog
+    from shared.config import LogConfig
+
+    ground_log = GroundLog(LogConfig(output_dir=str(folder)), clock, unix_offset_ns)
+
+    def close() -> None:
+        stats = ground_log.close()
+        files = ", ".join(str(path) for path in (*stats.files, ground_log.tlog.path))
+        print(f"vmnav ground: logged {ground_log.tlog.records} packets to {files}",
+              file=sys.stderr)
+
+    stack.callback(close)
+    return ground_log.record
 
 
 def run_status(station: GroundStation, args: argparse.Namespace) -> int:
