@@ -1,4 +1,4 @@
-"""``vmnav memory ...``: inspect a visual memory on disk.
+"""``vmnav memory ...``: inspect a visual memory on disk, or build a path from a teach log.
 
 Each subcommand is a pair of functions here, ``add_<name>_parser(memory_sub)``
 and ``run_<name>(args)``; :data:`SUBCOMMANDS` lists the parser builders, so a new
@@ -227,4 +227,43 @@ def run_route(args: argparse.Namespace) -> int:
     return 0
 
 
-SUBCOMMANDS = (add_info_parser, add_localize_parser, add_route_parser)
+def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav memory build LOG.mcap --memory DIR``."""
+    build = memory_sub.add_parser(
+        "build",
+        help="build a visual path from a recorded teach drive (an MCAP log)",
+        description="Select key images from the camera frames and odometry of a teach drive "
+        "recorded in LOG (a robot field log, or 'vmnav teach --sim --log'), add them as a new "
+        "path to the visual memory in DIR (created if needed) and join it to the paths already "
+        "there where its ends are localized.",
+    )
+    build.add_argument("log", type=Path, metavar="LOG", help="the teach log (MCAP)")
+    build.add_argument(
+        "--memory", required=True, type=Path, metavar="DIR", help="the visual memory's folder"
+    )
+    build.add_argument("--name", help="the new path's name [default: the log file's stem]")
+    build.add_argument(
+        "--camera",
+        metavar="FILE",
+        help="camera calibration JSON of a new memory; must match an existing memory's "
+        "[default: the memory's camera, or 800x600, 185 deg]",
+    )
+    build.add_argument(
+        "--config", metavar="FILE", help="vmnav TOML config ([features], [teach], [localize])"
+    )
+    build.set_defaults(run=run_build)
+
+
+def run_build(args: argparse.Namespace) -> int:
+    """Build a path of the memory in ``args.memory`` from ``args.log``; print a summary."""
+    from shared.config import load_config
+    from tools.memory_build import build_path, summary_text
+
+    config = load_config(args.config)
+    name = args.log.stem if args.name is None else args.name
+    built, memory = build_path(args.log, args.memory, name, args.camera, config)
+    print(summary_text(built, memory, args.log, args.memory))
+    return 0
+
+
+SUBCOMMANDS = (add_info_parser, add_localize_parser, add_route_parser, add_build_parser)

@@ -12,13 +12,19 @@ never imports sim/, sim/ never imports robot/):
    against the other paths to make junctions
    (:func:`robot.memory.junctions.junction_attempts`);
 4. :func:`shared.memory.write_memory` stores it (adding to what ``DIR`` holds).
+
+With ``--log LOGDIR`` the drive's frames and odometry are also recorded, as a robot's
+teach run would be, in ``LOGDIR/teach-<route>-NNNN.mcap`` (:class:`TeachLog`), which
+``vmnav memory build`` turns into the same path.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -28,9 +34,11 @@ from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
     from robot.memory.junctions import JunctionAttempt
-    from robot.teach import SelectedKeyImage
+    from robot.teach import OdomPose, SelectedKeyImage
+    from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
+    from shared.config import CameraMountConfig, LogConfig, SimConfig, VmnavConfig
+    from shared.logs.writer import LogStats
     from shared.memory import VisualMemory, VisualPath
     from sim.world import Route, World
 
@@ -79,6 +87,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     teach.add_argument(
         "--memory", required=True, type=Path, metavar="DIR", help="the visual memory's folder"
     )
+    teach.add_argument(
+        "--log",
+        type=Path,
+        metavar="LOGDIR",
+        help="also record the drive's frames and odometry in LOGDIR/teach-ROUTE-NNNN.mcap "
+        "(for 'vmnav memory build')",
+    )
     teach.set_defaults(run=run)
 
 
@@ -96,13 +111,74 @@ def run(args: argparse.Namespace) -> int:
     route = find_route(world, args.route)
     memory = open_memory(args.memory, camera)
     started = time.perf_counter()
-    taught = teach_in_sim(world, route, config, sim_config, camera)
+    teach_log = None if args.log is None else TeachLog(
+        args.log, route.name, sim_config.camera, config.log,
+        {"source": "vmnav teach --sim (lock-step)", "world": world.name, "route": route.name,
+         "seed": str(sim_config.seed)})
+    try:
+        taught = teach_in_sim(world, route, config, sim_config, camera,
+                              None if teach_log is None else teach_log.add)
+    finally:
+        log_stats = None if teach_log is None else teach_log.close()
     path = memory.add_path(route.name, [k.record for k in taught.key_images])
     attempts = join_path(memory, path, config)
     write_memory(args.memory, memory)
     wall_s = time.perf_counter() - started
     print(summary_text(taught, path, memory, attempts, config, args.memory, wall_s))
+    if log_stats is not None:
+        print(log_text(log_stats))
     return 0
+
+
+class TeachLog:
+    """The log of a teach drive, as a robot records it: what ``vmnav memory build`` reads.
+
+    On the topics and in the frames of :class:`tools.demo_log.DemoLog`: each frame as
+    JPEG on :data:`~shared.logs.topics.CAMERA_IMAGE` (at most ``LogConfig.frame_rate_hz``,
+    by default the simulated camera's rate), and on :data:`~shared.logs.topics.TF` at the
+    same time the odometry ``odom`` -> ``base_link`` with the static ``base_link`` ->
+    ``camera``. Files are ``folder/teach-<route>-NNNN.mcap``, numbered after any there.
+
+    Args:
+        folder: the log folder.
+        route_name: the route driven (in the file name).
+        mount: the simulated camera's mount.
+        config: frame rate, JPEG quality, flushing; its ``output_dir`` is replaced by ``folder``.
+        run: key-value metadata ``"run"`` stored in the file (world, route, seed).
+    """
+
+    def __init__(self, folder: Path, route_name: str, mount: CameraMountConfig,
+                 config: LogConfig, run: Mapping[str, str]) -> None:
+        from shared.logs.writer import LogWriter
+        from tools.demo_log import camera_transform
+
+        self._camera = camera_transform(mount)
+        self._writer = LogWriter(dataclasses.replace(config, output_dir=str(folder)),
+                                 f"teach-{route_name}")
+        self._writer.add_metadata("run", run)
+
+    def add(self, t_ns: int, image: GreyImage, odom_pose: OdomPose) -> None:
+        """Log one frame: (H, W) uint8 grey image and odometry (x_m, y_m, yaw_rad) at ``t_ns``."""
+        from shared.logs import topics
+        from shared.logs.messages import FrameTransform
+
+        self._writer.log_image(t_ns, topics.CAMERA_IMAGE, image)
+        self._writer.log_transform(t_ns, [
+            FrameTransform.planar(topics.FRAME_ODOM, topics.FRAME_BASE, *odom_pose),
+            self._camera])
+
+    def close(self) -> LogStats:
+        """Write what is queued, finish the file; returns the writer's counters."""
+        return self._writer.close()
+
+
+def log_text(stats: LogStats) -> str:
+    """The line ``vmnav teach`` prints about its log: the file and any messages lost."""
+    files = ", ".join(str(f) for f in stats.files) or "no file"
+    lost = stats.dropped + stats.lost
+    problem = (f"; {lost} messages dropped or lost ({stats.last_error or 'queue full'})"
+               if lost else "")
+    return f"log {files}: {stats.written} messages{problem}"
 
 
 def find_route(world: World, name: str) -> Route:
@@ -148,7 +224,12 @@ def open_memory(directory: Path, camera: CameraModel) -> VisualMemory:
 
 
 def teach_in_sim(
-    world: World, route: Route, config: VmnavConfig, sim_config: SimConfig, camera: CameraModel
+    world: World,
+    route: Route,
+    config: VmnavConfig,
+    sim_config: SimConfig,
+    camera: CameraModel,
+    on_frame: Callable[[int, GreyImage, OdomPose], None] | None = None,
 ) -> TaughtRoute:
     """Drive ``route`` in lock-step and select its key images from frames and odometry.
 
@@ -158,6 +239,8 @@ def teach_in_sim(
         config: teach, driver and feature parameters.
         sim_config: the simulation's config (its seed seeds the driver too).
         camera: the simulated camera.
+        on_frame: called with each frame's (t_ns, image, odometry pose), e.g.
+            :meth:`TeachLog.add`.
 
     Raises:
         InputError: the drive did not reach the route's end in time.
@@ -185,6 +268,8 @@ def teach_in_sim(
     frames = 0
     for frame in record_drive(sim, renderer, driver, round(max_duration_s * 1e9)):
         true_poses.append(frame.pose_w)
+        if on_frame is not None:
+            on_frame(frame.t_ns, frame.image, frame.odom_pose)
         key_images.extend(selector.push(frame.t_ns, frame.image, frame.odom_pose))
         frames += 1
     key_images.extend(selector.finish())
@@ -250,8 +335,16 @@ def summary_text(
     weak = [k for k in taught.key_images[1:-1] if k.shared_points < m]
     if weak:
         lines.append(f"  {len(weak)} key images forced with fewer than M = {m} tracked points")
+    lines.extend(junction_lines(attempts, memory, directory))
+    return "\n".join(lines)
+
+
+def junction_lines(
+    attempts: Sequence[JunctionAttempt], memory: VisualMemory, directory: Path
+) -> list[str]:
+    """The end of a teach summary: the junctions made and tried, then the memory."""
     made = [a for a in attempts if a.accepted]
-    lines.append(f"  junctions made: {len(made)}")
+    lines = [f"  junctions made: {len(made)}"]
     for a in attempts:
         lines.append(
             f"    end key image {a.end_id}: best key image {a.best_id} with {a.matches} "
@@ -261,4 +354,4 @@ def summary_text(
         f"memory {directory}: {len(memory.paths)} paths, {len(memory.keyframes)} key images, "
         f"{len(memory.junctions)} junctions"
     )
-    return "\n".join(lines)
+    return lines
