@@ -12,8 +12,13 @@ while it "sleeps".
 
 from __future__ import annotations
 
+import logging
+import threading
 import time
+from collections.abc import Callable
 from typing import Protocol
+
+logger = logging.getLogger(__name__)
 
 NS_PER_S = 1_000_000_000
 
@@ -84,3 +89,22 @@ def ns_from_s(seconds: float) -> int:
 def s_from_ns(nanoseconds: int) -> float:
     """Integer nanoseconds to float seconds (for math only)."""
     return nanoseconds / NS_PER_S
+
+
+def service_loop(service: Callable[[int], None], clock: Clock, period_ns: int,
+                 stop: threading.Event, name: str) -> None:
+    """Call ``service(now_ns)`` every ``period_ns`` on ``clock`` until ``stop`` is set.
+
+    The body of an I/O thread (the ARIA driver's, the MAVLink vehicle's). Deadlines
+    advance by the period; a late round does not make the next ones hurry. An
+    exception is a bug: it is logged with ``name`` and ends the thread.
+    """
+    deadline_ns = clock.now_ns()
+    try:
+        while not stop.is_set():
+            service(clock.now_ns())
+            deadline_ns = max(deadline_ns + period_ns, clock.now_ns())
+            clock.sleep_until_ns(deadline_ns)
+    except Exception:
+        logger.exception("%s: I/O thread died", name)
+        raise

@@ -47,7 +47,7 @@ from robot.pioneer.events import (
 from robot.pioneer.serial_link import serial_link_factory
 from robot.pioneer.status import LinkCounters, LinkState, PioneerStatus
 from shared.byte_link import ByteLink, LinkClosedError
-from shared.clock import Clock
+from shared.clock import Clock, service_loop
 from shared.config import PioneerDriverConfig
 from shared.errors import IllegalEventError, TransportError
 from shared.interfaces import BaseState
@@ -229,21 +229,12 @@ class PioneerDriver:
             if self._closed:
                 raise IllegalEventError("PioneerDriver", "CLOSED", "start_thread")
             if self._thread is None:
-                self._thread = threading.Thread(target=self._run, name="pioneer-io", daemon=True)
+                # Should it die (a bug), the robot's watchdog stops it within 2 s.
+                self._thread = threading.Thread(
+                    target=service_loop, name="pioneer-io", daemon=True,
+                    args=(self.service, self._clock, self.config.service_period_ns, self._stop,
+                          "pioneer"))
                 self._thread.start()
-
-    def _run(self) -> None:
-        period_ns = self.config.service_period_ns
-        deadline_ns = self._clock.now_ns()
-        try:
-            while not self._stop.is_set():
-                self.service(self._clock.now_ns())
-                deadline_ns = max(deadline_ns + period_ns, self._clock.now_ns())
-                self._clock.sleep_until_ns(deadline_ns)
-        except Exception:
-            # A bug: without PULSEs the robot's watchdog stops it within 2 s.
-            logger.exception("pioneer: I/O thread died")
-            raise
 
     def wait_connected(self, timeout_ns: int) -> bool:
         """Wait until the robot is connected and reports its motors enabled.

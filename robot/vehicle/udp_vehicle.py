@@ -17,15 +17,12 @@ Rules:
 
 from __future__ import annotations
 
-import logging
 import threading
 
 from robot.vehicle.endpoint import VehicleEndpoint
-from shared.clock import Clock
+from shared.clock import Clock, service_loop
 from shared.errors import IllegalEventError
 from shared.mavlink.udp_link import Peer, UdpLink
-
-logger = logging.getLogger(__name__)
 
 
 class UdpVehicle:
@@ -78,20 +75,11 @@ class UdpVehicle:
             if self._closed:
                 raise IllegalEventError("UdpVehicle", "CLOSED", "start_thread")
             if self._thread is None:
-                self._thread = threading.Thread(target=self._run, name="mavlink-io", daemon=True)
+                self._thread = threading.Thread(
+                    target=service_loop, name="mavlink-io", daemon=True,
+                    args=(self.service, self._clock, self.endpoint.config.mavlink.service_period_ns,
+                          self._stop, "vehicle"))
                 self._thread.start()
-
-    def _run(self) -> None:
-        period_ns = self.endpoint.config.mavlink.service_period_ns
-        deadline_ns = self._clock.now_ns()
-        try:
-            while not self._stop.is_set():
-                self.service(self._clock.now_ns())
-                deadline_ns = max(deadline_ns + period_ns, self._clock.now_ns())
-                self._clock.sleep_until_ns(deadline_ns)
-        except Exception:
-            logger.exception("vehicle: MAVLink I/O thread died")
-            raise
 
     def close(self) -> None:
         """Stop the thread, close the endpoint and the socket; idempotent."""

@@ -1,8 +1,10 @@
 from __future__ import annotations
 
+import threading
+
 import pytest
 
-from shared.clock import Clock, ManualClock, WallClock, ns_from_s, s_from_ns
+from shared.clock import Clock, ManualClock, WallClock, ns_from_s, s_from_ns, service_loop
 
 
 class TestManualClock:
@@ -52,3 +54,24 @@ class TestWallClock:
 def test_conversions_round_trip() -> None:
     assert ns_from_s(1.5) == 1_500_000_000
     assert s_from_ns(ns_from_s(0.066666667)) == pytest.approx(0.066666667)
+
+
+class TestServiceLoop:
+    def test_rounds_on_period_deadlines_until_stopped(self) -> None:
+        clock, stop, seen = ManualClock(), threading.Event(), []
+
+        def service(now_ns: int) -> None:
+            seen.append(now_ns)
+            if len(seen) == 4:
+                stop.set()
+
+        service_loop(service, clock, 10, stop, "test")
+        assert seen == [0, 10, 20, 30]
+
+    def test_a_failing_round_is_logged_and_raised(self, caplog) -> None:
+        def service(now_ns: int) -> None:
+            raise RuntimeError("bug")
+
+        with pytest.raises(RuntimeError, match="bug"):
+            service_loop(service, ManualClock(), 10, threading.Event(), "io")
+        assert "io: I/O thread died" in caplog.text
