@@ -146,8 +146,7 @@ class People:
                       if j != i]
             for _ in range(100):
                 p = self._sample(1)[0]
-                if np.hypot(*(p - robot)) >= _START_CLEARANCE_M and all(
-                        np.hypot(*(p - q)) >= 2 * self.config.radius_m for q in others):
+                if self._free_start(p, others):
                     self.place(i, (p[0], p[1]), (p[0], p[1]))  # arrived: picks a goal next step
                     break
 
@@ -260,13 +259,10 @@ class People:
     def _start_places(self) -> npt.NDArray[np.float64]:
         """Start positions: clear of walls, furniture, the robot and each other."""
         r = self.config.radius_m
-        robot = np.array(self._robot.body.position, dtype=float)
         places: list[npt.NDArray[np.float64]] = []
         for _ in range(100 * self.config.count):
             p = self._sample(1)[0]
-            if np.hypot(*(p - robot)) >= _START_CLEARANCE_M and all(
-                np.hypot(*(p - q)) >= 2 * r for q in places
-            ):
+            if self._free_start(p, places):
                 places.append(p)
                 if len(places) == self.config.count:
                     break
@@ -275,6 +271,14 @@ class People:
                 "people", f"cannot place {self.config.count} people of radius {r} m in this world"
             )
         return np.array(places, dtype=float).reshape(-1, 2)
+
+    def _free_start(self, p: npt.NDArray[np.float64],
+                    others: list[npt.NDArray[np.float64]]) -> bool:
+        """``p`` (x_m, y_m) is at least :data:`_START_CLEARANCE_M` from the robot and a body
+        width from every one of ``others``."""
+        robot = np.array(self._robot.body.position, dtype=float)
+        return bool(np.hypot(*(p - robot)) >= _START_CLEARANCE_M) and all(
+            np.hypot(*(p - q)) >= 2 * self.config.radius_m for q in others)
 
     def _sample(self, count: int) -> npt.NDArray[np.float64]:
         try:
