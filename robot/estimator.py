@@ -147,6 +147,11 @@ class Estimator:
                         covariance=self._kf.P.copy(), t_update_ns=self._t_update_ns)
 
     @property
+    def tracking(self) -> bool:
+        """An estimate exists and LOST was not declared since: vision updates are gated."""
+        return self._initialized and not self._lost
+
+    @property
     def lost(self) -> bool:
         """LOST was declared and no estimate has been accepted since."""
         return self._lost

@@ -274,7 +274,7 @@ class RouteFollower:
     def _trusted(self, vision: FrameState) -> bool:
         """Whether a usable estimate may update the filter: always once it runs (the
         gate judges), but to initialise it only with enough points behind it."""
-        if self._estimator.estimate is not None and not self._estimator.lost:
+        if self._estimator.tracking:
             return True
         return vision.state.n_points >= self._config.estimator.init_min_points
 

@@ -204,3 +204,15 @@ class TestReset:
         assert estimator.estimate is None and not estimator.lost
         manual_clock.advance(1.9)
         assert estimator.poll(manual_clock.now_ns()) is None
+
+
+def test_tracking_from_the_first_update_until_lost_or_reset() -> None:
+    estimator = Estimator(EstimatorConfig(lost_timeout_ns=ns_from_s(1.0)), 0)
+    assert not estimator.tracking
+    estimator.update(ns_from_s(0.1), -0.3, 0.02, 0.01)
+    assert estimator.tracking
+    assert estimator.poll(ns_from_s(2.0)) is not None and not estimator.tracking
+    estimator.update(ns_from_s(2.1), -0.3, 0.02, 0.01)
+    assert estimator.tracking
+    estimator.reset(ns_from_s(2.2))
+    assert not estimator.tracking
