@@ -10,7 +10,7 @@ It couples the simulator and the robot application, so it lives in tools/:
    camera, is reused; a memory there taught otherwise is an error (never overwritten).
 2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation (optionally with people
    and with a fraction of the landmarks removed), the robot placed off the taught
-   path, and :class:`robot.app.RobotApp` on :class:`sim.sim_camera.SimFrameSource`,
+   path, and :class:`robot.mission_run.MissionRun` on :class:`sim.sim_camera.SimFrameSource`,
    :class:`sim.sim_base.SimBase` and :class:`sim.sim_clock.SimClock`, with a goal
    key image on another path. Each cycle is recorded with the ground truth.
 """
@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 from shared.errors import InputError
 
 if TYPE_CHECKING:
-    from robot.app import CycleRecord, MissionResult
+    from robot.mission_run import CycleRecord, MissionResult
     from shared.camera_model import CameraModel
     from shared.config import SimConfig, VmnavConfig
     from shared.memory import VisualMemory
@@ -210,7 +210,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         InputError: ``goal_id`` is not a key image of the memory, or the start
             pose overlaps an obstacle.
     """
-    from robot.app import RobotApp
+    from robot.mission_run import MissionRun
     from sim.landmark_dropout import drop_landmarks
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
@@ -233,7 +233,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    app = RobotApp(memory, config, frames, base, clock, sim_config.frame_period_ns, rng)
+    run = MissionRun(memory, config, base, rng)
     samples: list[CycleSample] = []
 
     def observe(record: CycleRecord) -> None:
@@ -245,6 +245,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     taught_m = sum(memory.keyframes[p.keyframe_ids[-1]].distance_m
                    for p in memory.paths.values())
     limit_s = _TIME_MARGIN * taught_m / config.control.speed_m_s + _EXTRA_S
-    result = app.run(goal_id, round(limit_s * 1e9), observe)
+    result = run.run(goal_id, frames, clock, sim_config.frame_period_ns, round(limit_s * 1e9),
+                     observe)
     return RepeatRun(result=result, start_pose=start, goal_id=goal_id, samples=tuple(samples),
                      sim_time_s=sim.now_ns / 1e9)

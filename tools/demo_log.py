@@ -16,7 +16,7 @@ only queues), stamped with the cycle's frame time on the simulation clock:
 * :data:`TRUTH_TF` (simulator only): the true pose ``world`` -> ``base_link_truth`` and
   ``world`` -> ``odom`` (the odometry frame placed by the first cycle's truth), so the 3D
   panel shows the odometry's drift;
-* :data:`~shared.logs.topics.LOG`: the application's events (:class:`robot.app.AppEvent`),
+* :data:`~shared.logs.topics.LOG`: the application's events (:class:`robot.mission_run.AppEvent`),
   written after the run by :meth:`DemoLog.log_events` (the cycle record does not carry them).
 """
 
@@ -38,7 +38,7 @@ from shared.logs.messages import FrameTransform
 from shared.logs.writer import LogStats, LogWriter
 
 if TYPE_CHECKING:
-    from robot.app import AppEvent, CycleRecord
+    from robot.mission_run import AppEvent, CycleRecord
     from shared.memory import VisualMemory
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
@@ -50,7 +50,7 @@ FRAME_WORLD = "world"
 FRAME_BASE_TRUTH = "base_link_truth"
 #: Log level of the application's events by kind (others are INFO).
 _EVENT_LEVELS = {"lost": "WARNING"}
-_EVENT_SOURCE = "robot.app"
+_EVENT_SOURCE = "robot.mission_run"
 
 
 def camera_transform(mount: CameraMountConfig) -> FrameTransform:

@@ -11,8 +11,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from robot.app import CycleRecord
 from robot.mission import MissionState
+from robot.mission_run import CycleRecord
 from shared.interfaces import BaseState
 from tools.cli import main
 from tools.demo import CycleSample

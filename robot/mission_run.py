@@ -1,16 +1,16 @@
-"""The robot application: a mission to a goal key image, run by one loop on three interfaces.
+"""One mission to a goal key image, cycle by cycle: localize, plan, follow, arrive.
 
-The application talks to the world only through a
-:class:`shared.interfaces.FrameSource`, a :class:`shared.interfaces.MobileBase`
-and a :class:`shared.clock.Clock` (the simulator's in lock-step, the camera, the
-ARIA driver and the wall clock on the robot). It owns the mission state machine
-(:class:`robot.mission.Mission`) and, while following, the
-:class:`robot.follower.RouteFollower`.
+A :class:`MissionRun` owns the mission state machine (:class:`robot.mission.Mission`)
+and, while following, the :class:`robot.follower.RouteFollower`; it commands a
+:class:`shared.interfaces.MobileBase`. Whoever reads the camera calls
+:meth:`MissionRun.cycle` with each frame: the robot's runtime
+(:class:`robot.runtime.RobotRuntime`, between its other duties), or
+:meth:`MissionRun.run`, a loop over a :class:`shared.interfaces.FrameSource` and a
+:class:`shared.clock.Clock` (the simulator's in lock-step).
 
-Rules of the loop (:meth:`RobotApp.run`), once per ``period_ns`` scheduled by
-deadline on the clock (STYLE.md sec. 3):
+Rules of a cycle (:meth:`MissionRun.cycle`):
 
-1. Read a frame and the base's state. A pressed bumper or a stall goes to the
+1. Read the base's state. A pressed bumper or a stall goes to the
    mission first (ABORTED).
 2. LOCALIZING or LOST: localize the frame in the memory
    (:class:`robot.memory.localize.Localizer`); a localization plans the route to
@@ -21,9 +21,11 @@ deadline on the clock (STYLE.md sec. 3):
    the final key image switch go to the mission.
 4. A ``Tick`` drives the give-up timers. A transition whose commands include STOP
    stops the base at once.
-5. The loop ends in a final state, when the frame source ends (operator abort),
-   or after ``max_duration_ns`` (operator abort, "time limit"); the base is
-   stopped on the way out.
+
+:meth:`MissionRun.run` cycles once per ``period_ns`` scheduled by deadline on the
+clock (STYLE.md sec. 3) and ends in a final state, when the frame source ends
+(operator abort), or after ``max_duration_ns`` (operator abort, "time limit"); the
+base is stopped on the way out.
 
 Every transition, key image switch and localization attempt is an :class:`AppEvent`.
 """
@@ -131,33 +133,29 @@ class MissionResult:
         return self.state is MissionState.ARRIVED
 
 
-class RobotApp:
-    """The robot's application (see the module docstring).
+class MissionRun:
+    """One mission to a goal key image (see the module docstring).
 
     Args:
         memory: the visual memory.
         config: all component configs (features, localize, path state, estimator,
             switching, control, mission; the camera mount from ``config.sim.camera``).
-        frames: the camera.
         base: the mobile base.
-        clock: time and waiting.
-        period_ns: the servo period, ns (the camera's frame period).
         rng: draws the RANSAC samples.
+        localizer: finds the robot in ``memory``; None builds one over all its key images.
         stopwatch: wall-time counter for ``compute_ns``, ns (default ``time.perf_counter_ns``).
     """
 
-    def __init__(self, memory: VisualMemory, config: VmnavConfig, frames: FrameSource,
-                 base: MobileBase, clock: Clock, period_ns: int, rng: np.random.Generator,
+    def __init__(self, memory: VisualMemory, config: VmnavConfig, base: MobileBase,
+                 rng: np.random.Generator, *, localizer: Localizer | None = None,
                  stopwatch: Callable[[], int] = time.perf_counter_ns) -> None:
         self._memory = memory
         self._config = config
-        self._frames = frames
         self._base = base
-        self._clock = clock
-        self._period_ns = period_ns
         self._rng = rng
         self._stopwatch = stopwatch
-        self._localizer = Localizer.from_memory(memory, config.features, config.localize)
+        self._localizer = (localizer if localizer is not None else
+                           Localizer.from_memory(memory, config.features, config.localize))
         self._follower_config = FollowerConfig(
             features=config.features, path_state=config.path_state,
             estimator=config.estimator, switching=config.switching, control=config.control,
@@ -169,37 +167,42 @@ class RobotApp:
         self._last: Transition | None = None
         self._reached = 0
 
-    def run(self, goal_id: int, max_duration_ns: int,
-            observer: Callable[[CycleRecord], None] | None = None) -> MissionResult:
-        """Run a mission to ``goal_id`` until it ends (see the module rules).
+    @property
+    def state(self) -> MissionState:
+        """The mission's state now."""
+        return self._mission.state
 
-        Args:
-            goal_id: the goal key image.
-            max_duration_ns: give up (operator abort) after this long, ns.
-            observer: called after every cycle.
+    @property
+    def finished(self) -> bool:
+        """The mission is in a final state."""
+        return self._mission.state in FINAL_STATES
+
+    @property
+    def goal_id(self) -> int | None:
+        """The goal key image; None before :meth:`start`."""
+        return self._mission.goal_id
+
+    @property
+    def follower(self) -> RouteFollower | None:
+        """The route follower of the route planned last; None before the first plan."""
+        return self._follower
+
+    def start(self, goal_id: int, t_ns: int) -> None:
+        """Start the mission to ``goal_id`` at ``t_ns``: the next cycles localize.
 
         Raises:
-            UnknownKeyframeError: ``goal_id`` is not in the memory (the robot never moved).
+            UnknownKeyframeError: ``goal_id`` is not in the memory (nothing changes).
         """
         self._memory.keyframe(goal_id)
-        start_ns = self._clock.now_ns()
-        self._feed(Start(start_ns, goal_id))
-        deadline_ns = start_ns
-        while self._mission.state not in FINAL_STATES:
-            if self._clock.now_ns() - start_ns >= max_duration_ns:
-                self._feed(OperatorAbort(self._clock.now_ns(), "time limit "
-                                         f"{max_duration_ns / 1e9:.0f} s reached"))
-                break
-            frame = self._frames.read()
-            if frame is None:
-                self._feed(OperatorAbort(self._clock.now_ns(), "the camera ended"))
-                break
-            record = self._cycle(*frame)
-            if observer is not None:
-                observer(record)
-            deadline_ns += self._period_ns
-            self._clock.sleep_until_ns(deadline_ns)
-        self._base.stop()
+        self._feed(Start(t_ns, goal_id))
+
+    def abort(self, t_ns: int, detail: str) -> None:
+        """End an active mission as the operator's abort (the base stops)."""
+        if not self.finished:
+            self._feed(OperatorAbort(t_ns, detail))
+
+    def result(self) -> MissionResult:
+        """How the mission ended (or stands)."""
         last = self._last
         return MissionResult(
             state=self._mission.state,
@@ -209,7 +212,44 @@ class RobotApp:
             targets=0 if self._follower is None else len(self._follower.targets),
             events=tuple(self._events))
 
-    def _cycle(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
+    def run(self, goal_id: int, frames: FrameSource, clock: Clock, period_ns: int,
+            max_duration_ns: int,
+            observer: Callable[[CycleRecord], None] | None = None) -> MissionResult:
+        """Run the mission to ``goal_id`` until it ends (see the module docstring).
+
+        Args:
+            goal_id: the goal key image.
+            frames: the camera.
+            clock: time and waiting.
+            period_ns: the servo period, ns (the camera's frame period).
+            max_duration_ns: give up (operator abort) after this long, ns.
+            observer: called after every cycle.
+
+        Raises:
+            UnknownKeyframeError: ``goal_id`` is not in the memory (the robot never moved).
+        """
+        start_ns = clock.now_ns()
+        self.start(goal_id, start_ns)
+        deadline_ns = start_ns
+        while not self.finished:
+            if clock.now_ns() - start_ns >= max_duration_ns:
+                self.abort(clock.now_ns(), f"time limit {max_duration_ns / 1e9:.0f} s reached")
+                break
+            frame = frames.read()
+            if frame is None:
+                self.abort(clock.now_ns(), "the camera ended")
+                break
+            record = self.cycle(*frame)
+            if observer is not None:
+                observer(record)
+            deadline_ns += period_ns
+            clock.sleep_until_ns(deadline_ns)
+        self._base.stop()
+        return self.result()
+
+    def cycle(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
+        """One cycle on the frame ``image`` ((H, W) uint8 grey) taken at ``t_ns`` (module
+        rules); nothing happens in a final state but the record."""
         started = self._stopwatch()
         base = self._base.state()
         if base.bumped:

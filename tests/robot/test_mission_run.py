@@ -1,7 +1,7 @@
-"""RobotApp against fake interfaces: bad goals, failed localization, safety, the camera ending.
+"""MissionRun against fake interfaces: bad goals, failed localization, safety, the camera ending.
 
 The lock-step end-to-end run (teach in the simulator, repeat from an offset) is in
-tests/tools/test_demo.py, which drives RobotApp on the simulator's adapters.
+tests/tools/test_demo.py, which drives MissionRun on the simulator's adapters.
 """
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robot.app import RobotApp
 from robot.mission import MissionState
+from robot.mission_run import MissionRun
 from shared.clock import ManualClock
 from shared.config import FeatureConfig, MissionConfig, VmnavConfig
 from shared.errors import UnknownKeyframeError
@@ -55,13 +55,23 @@ def memory():
     return loop_memory(np.random.default_rng(5))
 
 
-def make_app(memory, base: FakeBase, count: int | None = None) -> tuple[RobotApp, ManualClock]:
+class App:
+    """A MissionRun with its frames and clock, run like ``MissionRun.run``."""
+
+    def __init__(self, run: MissionRun, frames: FakeFrames, clock: ManualClock) -> None:
+        self.mission, self.frames, self.clock = run, frames, clock
+
+    def run(self, goal_id: int, max_duration_ns: int, observer=None):
+        return self.mission.run(goal_id, self.frames, self.clock, PERIOD_NS, max_duration_ns,
+                                observer)
+
+
+def make_app(memory, base: FakeBase, count: int | None = None) -> tuple[App, ManualClock]:
     clock = ManualClock()
     config = VmnavConfig(features=FeatureConfig(patch_size_px=int(PATCH_LENGTH**0.5)),
                          mission=MissionConfig(localize_attempts=3))
     frames = FakeFrames((memory.camera.height, memory.camera.width), clock, count)
-    return RobotApp(memory, config, frames, base, clock, PERIOD_NS,
-                    np.random.default_rng(0)), clock
+    return App(MissionRun(memory, config, base, np.random.default_rng(0)), frames, clock), clock
 
 
 def test_a_goal_not_in_memory_is_refused_before_moving(memory) -> None:
