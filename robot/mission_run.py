@@ -183,6 +183,11 @@ class MissionRun:
         return self._mission.goal_id
 
     @property
+    def events(self) -> tuple[AppEvent, ...]:
+        """Everything that happened so far, in order."""
+        return tuple(self._events)
+
+    @property
     def follower(self) -> RouteFollower | None:
         """The route follower of the route planned last; None before the first plan."""
         return self._follower
@@ -210,7 +215,7 @@ class MissionRun:
             detail="" if last is None else last.detail,
             route=self._route, key_images_reached=self._reached,
             targets=0 if self._follower is None else len(self._follower.targets),
-            events=tuple(self._events))
+            events=self.events)
 
     def run(self, goal_id: int, frames: FrameSource, clock: Clock, period_ns: int,
             max_duration_ns: int,

@@ -268,6 +268,47 @@ class PioneerDriverConfig:
                 f"({self.reconnect_initial_ns})")
 
 
+@dataclass(frozen=True, slots=True)
+class CameraSourceConfig:
+    """The robot's camera (``robot.camera``): ``cv2.VideoCapture`` on a device, file or URL.
+
+    A live source (a device or a URL) that fails is reopened after a backoff, forever;
+    a file ends. A stall shorter than ``read_timeout_ns`` resumes on the same connection.
+    """
+
+    source: str = "0"
+    """What cv2.VideoCapture opens: a device index (``"0"``), a video file, or a URL
+    (``http://host:8080/stream.mjpg``, ``rtsp://...``)."""
+    open_timeout_ns: int = 5_000_000_000
+    """A URL that does not open within this long fails (at start-up: an error; later: a
+    reconnect attempt), ns (OpenCV FFMPEG's CAP_PROP_OPEN_TIMEOUT_MSEC, whole ms)."""
+    read_timeout_ns: int = 5_000_000_000
+    """A URL silent for this long is dropped and reopened, ns; also bounds the wait for
+    the first frame at start-up (CAP_PROP_READ_TIMEOUT_MSEC, whole ms)."""
+    stall_timeout_ns: int = 500_000_000
+    """:meth:`~robot.camera.VideoCaptureSource.read_within` reports a stall after this long
+    without a new frame by default, ns (7 frame periods at 15 frames/s)."""
+    max_failed_reads: int = 5
+    """This many failed reads in a row mean the source is gone (a file ended, a stream
+    closed); fewer are undecodable frames, skipped."""
+    reconnect_initial_ns: int = 250_000_000
+    """First wait before reopening a lost live source, ns; doubles per failure in a row."""
+    reconnect_max_ns: int = 4_000_000_000
+    """Longest wait between reopen attempts, ns."""
+
+    def __post_init__(self) -> None:
+        require(bool(self.source.strip()), "source must not be empty")
+        for name in ("open_timeout_ns", "read_timeout_ns"):
+            require(getattr(self, name) >= 1_000_000,
+                    f"{name} must be >= 1 ms (1000000), got {getattr(self, name)}")
+        for name in ("stall_timeout_ns", "max_failed_reads", "reconnect_initial_ns",
+                     "reconnect_max_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.reconnect_max_ns >= self.reconnect_initial_ns,
+                f"reconnect_max_ns ({self.reconnect_max_ns}) must be >= reconnect_initial_ns "
+                f"({self.reconnect_initial_ns})")
+
+
 # ---------------------------------------------------------------------------
 # Simulator components.
 # ---------------------------------------------------------------------------
@@ -607,8 +648,13 @@ class TeachConfig:
     junction_min_matches: int = 40
     """A path's end joins a key image of another path with at least this many matches
     (two unrelated views share up to about 25 chance matches without a search window)."""
+    min_path_length_m: float = 0.2
+    """A path taught over the link must span at least this much odometry, m; a shorter
+    drive (a teach started and stopped in place) is refused instead of stored."""
 
     def __post_init__(self) -> None:
+        require(self.min_path_length_m >= 0,
+                f"min_path_length_m must be >= 0, got {self.min_path_length_m}")
         require(
             self.min_tracked_points >= 1,
             f"min_tracked_points must be >= 1, got {self.min_tracked_points}",
@@ -1135,6 +1181,25 @@ class LogConfig:
 
 
 @dataclass(frozen=True, slots=True)
+class TeleopConfig:
+    """Driving by hand over the link (MANUAL_CONTROL in MANUAL mode, ``robot.runtime``)."""
+
+    max_speed_m_s: float = 0.4
+    """Forward speed at full stick (x = +-1000), m/s."""
+    max_omega_rad_s: float = 0.7853981633974483
+    """Turn rate at full stick (r = +-1000), rad/s (45 deg/s)."""
+    deadman_ns: int = 500_000_000
+    """No MANUAL_CONTROL for this long stops the robot, ns (ground stations send 10-50 Hz;
+    QGroundControl's joystick sends at least every 50 ms while held)."""
+    frame_timeout_ns: int = 500_000_000
+    """No camera frame for this long stops the base until frames return, ns."""
+
+    def __post_init__(self) -> None:
+        for name in ("max_speed_m_s", "max_omega_rad_s", "deadman_ns", "frame_timeout_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+
+
+@dataclass(frozen=True, slots=True)
 class VmnavConfig:
     """The whole configuration file: one table per component."""
 
@@ -1150,8 +1215,10 @@ class VmnavConfig:
     switching: SwitchingConfig = field(default_factory=SwitchingConfig)
     mission: MissionConfig = field(default_factory=MissionConfig)
     pioneer: PioneerDriverConfig = field(default_factory=PioneerDriverConfig)
+    camera: CameraSourceConfig = field(default_factory=CameraSourceConfig)
     mavlink: MavlinkConfig = field(default_factory=MavlinkConfig)
     log: LogConfig = field(default_factory=LogConfig)
+    teleop: TeleopConfig = field(default_factory=TeleopConfig)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:

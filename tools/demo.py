@@ -4,7 +4,7 @@ It couples the simulator and the robot application, so it lives in tools/:
 
 1. **Teach** (:func:`taught_memory`): the routes of the world are driven by the
    scripted teach driver and stored into one visual memory in ``OUT/memory``
-   (:func:`tools.teach_cmd.teach_in_sim`, :func:`tools.teach_cmd.join_path`); the
+   (:func:`tools.teach_cmd.teach_in_sim`, :func:`robot.memory.junctions.join_path`); the
    true poses of the key images go to ``OUT/teach.json`` for the evaluation. A
    memory already there, taught in the same world with the same seed, routes and
    camera, is reused; a memory there taught otherwise is an error (never overwritten).
@@ -114,10 +114,11 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
     Raises:
         InputError: an unknown route, or a route the teach driver could not finish.
     """
+    from robot.memory.junctions import join_path
     from shared.calibration import camera_to_dict
     from shared.memory import VisualMemory, read_memory, write_memory
     from sim.world import load_world
-    from tools.teach_cmd import find_route, join_path, teach_in_sim
+    from tools.teach_cmd import find_route, teach_in_sim
 
     world = load_world(sim_config.world)
     wanted = list(world.routes) if routes is None else [find_route(world, n) for n in routes]
@@ -143,7 +144,7 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
     for route in wanted:
         taught = teach_in_sim(world, route, config, teach_config, camera)
         path = memory.add_path(route.name, [k.record for k in taught.key_images])
-        join_path(memory, path, config)
+        join_path(memory, path, config.features, config.localize, config.teach)
         true_poses.update(zip(path.keyframe_ids, taught.true_poses, strict=True))
         path_ids.append(path.id)
     write_memory(directory, memory)

@@ -16,7 +16,7 @@ pose and are left out (counted). The frames then go through
 :func:`robot.teach.select_key_images` as in ``vmnav teach --sim``; the key images
 become a new path of the memory in DIR (a new memory with ``--camera``'s or the
 default camera if DIR holds none), joined to its other paths by
-:func:`tools.teach_cmd.join_path`, and :func:`shared.memory.write_memory` stores it
+:func:`robot.memory.junctions.join_path`, and :func:`shared.memory.write_memory` stores it
 (manifest last, so an interrupted write leaves the memory as it was). Bad input (not
 MCAP, no frames, no odometry, a frame of the wrong size) is found before anything is
 written.
@@ -229,9 +229,9 @@ def build_path(log: Path, directory: Path, name: str, camera_file: str | None,
     Raises:
         InputError: bad input (see the module docstring); the memory is not written.
     """
+    from robot.memory.junctions import join_path
     from robot.teach import select_key_images
     from shared.memory import write_memory
-    from tools.teach_cmd import join_path
 
     check_log_topics(log)
     odometry = read_odometry(log)
@@ -242,7 +242,7 @@ def build_path(log: Path, directory: Path, name: str, camera_file: str | None,
         raise InputError(log, f"no camera frame lies within the odometry's span "
                          f"({frames.without_odometry} frames without a pose)")
     path = memory.add_path(name, [k.record for k in key_images])
-    attempts = join_path(memory, path, config)
+    attempts = join_path(memory, path, config.features, config.localize, config.teach)
     write_memory(directory, memory)
     return BuiltPath(path, tuple(key_images), frames.frames, frames.without_odometry,
                      tuple(attempts)), memory

@@ -99,6 +99,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach the route, store the path and print a summary."""
+    from robot.memory.junctions import join_path
     from shared.config import load_config
     from shared.memory import write_memory
     from sim.world import load_world
@@ -121,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         log_stats = None if teach_log is None else teach_log.close()
     path = memory.add_path(route.name, [k.record for k in taught.key_images])
-    attempts = join_path(memory, path, config)
+    attempts = join_path(memory, path, config.features, config.localize, config.teach)
     write_memory(args.memory, memory)
     wall_s = time.perf_counter() - started
     print(summary_text(taught, path, memory, attempts, config, args.memory, wall_s))
@@ -285,21 +286,6 @@ def teach_in_sim(
         frames=frames,
         sim_time_s=sim.now_ns / 1e9,
     )
-
-
-def join_path(
-    memory: VisualMemory, path: VisualPath, config: VmnavConfig
-) -> list[JunctionAttempt]:
-    """Localize the new path's ends in the memory (and the others' along it); add the junctions."""
-    from robot.memory.junctions import junction_attempts
-
-    attempts = junction_attempts(
-        memory, path.id, config.features, config.localize, config.teach.junction_min_matches
-    )
-    for attempt in attempts:
-        if attempt.accepted:
-            memory.add_junction(attempt.junction())
-    return attempts
 
 
 def summary_text(

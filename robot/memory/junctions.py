@@ -27,8 +27,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from robot.memory.localize import Localizer
-from shared.config import FeatureConfig, LocalizeConfig
-from shared.memory import Junction, VisualMemory
+from shared.config import FeatureConfig, LocalizeConfig, TeachConfig
+from shared.memory import Junction, VisualMemory, VisualPath
 
 
 class JunctionOutcome(enum.Enum):
@@ -69,6 +69,22 @@ class JunctionAttempt:
         if not self.accepted or self.best_id is None:
             raise ValueError(f"the attempt from key image {self.end_id} was not accepted")
         return Junction(from_id=self.end_id, to_id=self.best_id, matches=self.matches)
+
+
+def join_path(memory: VisualMemory, path: VisualPath, feature_config: FeatureConfig,
+              localize_config: LocalizeConfig, teach_config: TeachConfig) -> list[JunctionAttempt]:
+    """Localize the new path's ends in the memory (and the others' along it) and add the
+    junctions found (:func:`junction_attempts` with ``teach_config.junction_min_matches``).
+
+    Returns:
+        Every attempt, the accepted ones added to ``memory``.
+    """
+    attempts = junction_attempts(memory, path.id, feature_config, localize_config,
+                                 teach_config.junction_min_matches)
+    for attempt in attempts:
+        if attempt.accepted:
+            memory.add_junction(attempt.junction())
+    return attempts
 
 
 def junction_attempts(

@@ -158,3 +158,8 @@ class VehicleApp(Protocol):
     def gcs_regained(self) -> None:
         """The ground heartbeat is back (the robot stays where ``gcs_lost`` left it)."""
         ...
+
+    def next_notice(self) -> tuple[int, str] | None:
+        """The oldest news for the operator not taken yet, as (``logging`` level, one line),
+        e.g. a taught path saved or a photo not found in the memory; None when none."""
+        ...

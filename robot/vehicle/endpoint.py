@@ -36,7 +36,8 @@ Rules:
 6. Telemetry streams by default (``telemetry.default_periods_ns``), adjustable
    with SET_MESSAGE_INTERVAL; REQUEST_MESSAGE answers any of them, and
    AUTOPILOT_VERSION. Mission progress and events go out as MISSION_ITEM_REACHED,
-   MISSION_CURRENT and STATUSTEXT (``progress``).
+   MISSION_CURRENT and STATUSTEXT (``progress``); the application's notices
+   (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
@@ -95,6 +96,11 @@ COMPONENT_ID = 1
 #: Messages accepted unsigned on a signed link: a radio modem's own reports.
 UNSIGNED_ALLOWED = (mavlink.MAVLINK_MSG_ID_RADIO_STATUS,)
 _HEARTBEAT = mavlink.MAVLINK_MSG_ID_HEARTBEAT
+#: ``logging`` level of an application notice -> STATUSTEXT severity.
+_SEVERITIES = {logging.DEBUG: mavlink.MAV_SEVERITY_DEBUG, logging.INFO: mavlink.MAV_SEVERITY_INFO,
+               logging.WARNING: mavlink.MAV_SEVERITY_WARNING,
+               logging.ERROR: mavlink.MAV_SEVERITY_ERROR,
+               logging.CRITICAL: mavlink.MAV_SEVERITY_CRITICAL}
 _INT16_MAX = 0x7FFF
 
 
@@ -212,6 +218,8 @@ class VehicleEndpoint:
         out, self._outbox = self._outbox, []
         t = self._app.telemetry()
         out += self._progress.update(t)
+        while (notice := self._app.next_notice()) is not None:
+            out += self._notice(_SEVERITIES.get(notice[0], mavlink.MAV_SEVERITY_INFO), notice[1])
         out += self._check_gcs(t, now_ns)
         out += self._streams.due(t, now_ns, self._time_usec())
         for core in (self._mission, self._params):

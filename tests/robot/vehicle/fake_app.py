@@ -38,6 +38,7 @@ class FakeApp:
         self.calls: list[tuple[Any, ...]] = []
         self.configs: list[VmnavConfig] = []
         self.accept = True  # what requests return
+        self.notices: list[tuple[int, str]] = []  # what next_notice hands out, oldest first
 
     def update(self, **changes: Any) -> None:
         """Change the telemetry snapshot."""
@@ -107,3 +108,6 @@ class FakeApp:
 
     def gcs_regained(self) -> None:
         self.calls.append(("gcs_regained",))
+
+    def next_notice(self) -> tuple[int, str] | None:
+        return self.notices.pop(0) if self.notices else None

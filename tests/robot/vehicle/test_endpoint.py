@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from shared.mavlink.dialect import mavlink  # isort: skip  (sets MAVLINK20 before mavutil)
 
+import logging
 import math
 
 from pymavlink import mavutil
@@ -182,3 +183,16 @@ class TestTelemetry:
         assert rate_over(2.0) == 8
         assert net.command(interval, mavlink.MAVLINK_MSG_ID_ATTITUDE, 100_000).result == \
             mavlink.MAV_RESULT_DENIED  # not a stream of ours
+
+
+class TestNotices:
+    def test_application_notices_go_out_as_statustext_at_their_level(
+            self, net: Net, app: FakeApp) -> None:
+        next_heartbeat(net)  # the listening vehicle knows where the ground is
+        app.notices += [(logging.INFO, "path 2 'yard' saved: 14 key images"),
+                        (logging.ERROR, "photo 3: not found in the memory")]
+        net.run(lambda: len(net.ground.of_type("STATUSTEXT")) >= 2)
+        texts = [(m.severity, m.text) for m in net.ground.of_type("STATUSTEXT")]
+        assert texts == [(mavlink.MAV_SEVERITY_INFO, "path 2 'yard' saved: 14 key images"),
+                         (mavlink.MAV_SEVERITY_ERROR, "photo 3: not found in the memory")]
+        assert app.notices == []

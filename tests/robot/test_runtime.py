@@ -1,0 +1,284 @@
+"""RobotRuntime in the simulator, lock-step: teleoperation, teaching over the link, missions,
+photo goals, and the requests it refuses.
+
+The robot drives the emulated Pioneer through the real ARIA driver
+(:func:`tools.lockstep_pioneer.lockstep_pioneer`) and sees rendered frames; the runtime
+is called as the vehicle endpoint calls it (its VehicleApp methods) and as the robot's
+loop calls it (``step`` per frame, ``stall``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from robot.memory.junctions import join_path
+from robot.mission import MissionState
+from robot.runtime import RobotRuntime
+from shared.config import SimConfig, VmnavConfig
+from shared.mavlink.dialect import mavlink
+from shared.mavlink.goal import Goal
+from shared.mavlink.modes import Mode
+from shared.memory import VisualMemory, read_memory, write_memory
+from sim.sim_camera import SimFrameSource
+from sim.sim_clock import SimClock
+from sim.simulation import Simulation
+from sim.world import Pose2, load_world
+from tests.tools.short_routes import write_short_routes_world
+from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
+from tools.lockstep_pioneer import lockstep_pioneer
+from tools.sim_args import load_camera
+from tools.teach_cmd import find_route, teach_in_sim
+
+CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
+
+
+@pytest.fixture(scope="module")
+def taught(tmp_path_factory) -> tuple[Path, Path]:
+    """(world file, memory folder) with ``east_a`` taught (seed 1)."""
+    folder = tmp_path_factory.mktemp("runtime")
+    world_file = write_short_routes_world(folder)
+    world = load_world(world_file)
+    camera = load_camera(None)
+    sim_config = SimConfig(world=str(world_file), seed=1)
+    route = find_route(world, "east_a")
+    taught = teach_in_sim(world, route, CONFIG, sim_config, camera)
+    memory = VisualMemory(camera)
+    path = memory.add_path(route.name, [k.record for k in taught.key_images])
+    join_path(memory, path, CONFIG.features, CONFIG.localize, CONFIG.teach)
+    write_memory(folder / "memory", memory)
+    return world_file, folder / "memory"
+
+
+class SimRobot:
+    """The runtime on a lock-step simulation, placed at ``pose``."""
+
+    def __init__(self, world_file: Path, memory_dir: Path, pose: Pose2) -> None:
+        self.sim = Simulation(load_world(world_file), SimConfig(world=str(world_file), seed=1))
+        self.sim.place_robot(pose)
+        self.clock = SimClock(self.sim)
+        rng = np.random.default_rng(7)
+        self.base, _ = lockstep_pioneer(self.clock, CONFIG.pioneer, rng)
+        self.memory_dir = memory_dir
+        memory = read_memory(memory_dir)
+        self.frames = SimFrameSource(self.sim, memory.camera, self.clock)
+        self.runtime = RobotRuntime(memory, memory_dir, CONFIG, self.base, self.clock, rng)
+        self.notices: list[tuple[int, str]] = []
+
+    def run(self, seconds: float, until=lambda t: False) -> None:
+        """Step frame by frame for at most ``seconds`` of simulated time, or until
+        ``until(telemetry)``; collects the notices."""
+        period = self.sim.config.frame_period_ns
+        deadline = self.clock.now_ns()
+        end = deadline + round(seconds * 1e9)
+        while self.clock.now_ns() < end:
+            self.runtime.step(*self.frames.read())
+            while (notice := self.runtime.next_notice()) is not None:
+                self.notices.append(notice)
+            if until(self.runtime.telemetry()):
+                return
+            deadline += period
+            self.clock.sleep_until_ns(deadline)
+
+    def drive(self, seconds: float, x: float, r: float = 0.0) -> None:
+        """Teleoperate: a MANUAL_CONTROL every frame for ``seconds``."""
+        period = self.sim.config.frame_period_ns
+        for _ in range(round(seconds * 1e9 / period)):
+            self.runtime.manual_control(x, math.nan, math.nan, r, 0, 0)
+            self.run(period / 1e9)
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        return self.sim.body.pose_w
+
+
+@pytest.fixture
+def memory_dir(taught, tmp_path) -> Path:
+    """A copy of the taught memory the test may change."""
+    shutil.copytree(taught[1], tmp_path / "memory")
+    return tmp_path / "memory"
+
+
+#: The start of ``east_a``, facing along it.
+EAST_A = Pose2(2.0, 10.0, 0.0)
+
+
+class TestTeleoperation:
+    def test_manual_control_drives_and_the_dead_man_stops(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        assert robot.runtime.telemetry().mode is Mode.HOLD
+        robot.runtime.manual_control(1.0, math.nan, math.nan, 0.0, 0, 0)
+        robot.run(1.0)
+        assert robot.pose[0] == pytest.approx(2.0, abs=0.005)  # HOLD ignores the stick
+        assert robot.runtime.set_mode(Mode.MANUAL)
+        robot.drive(2.0, x=0.5)
+        moved = robot.pose[0] - 2.0
+        assert 0.2 < moved < 0.45  # 0.2 m/s after the ramp
+        assert robot.runtime.telemetry().velocity == pytest.approx((0.2, 0.0))
+        robot.run(2.0)  # no MANUAL_CONTROL: the dead-man stops it within 0.5 s + braking
+        stopped = robot.pose[0]
+        robot.run(1.0)
+        assert robot.pose[0] == pytest.approx(stopped, abs=1e-3)
+        assert robot.pose[0] - 2.0 < moved + 0.2
+        assert robot.runtime.telemetry().velocity == (0.0, 0.0)
+
+    def test_gcs_lost_in_manual_stops_at_once(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        robot.runtime.set_mode(Mode.MANUAL)
+        robot.drive(1.0, x=1.0)
+        robot.runtime.manual_control(1.0, math.nan, math.nan, 0.0, 0, 0)
+        robot.runtime.gcs_lost("stop")
+        robot.run(0.1)
+        assert robot.runtime.telemetry().velocity == (0.0, 0.0)
+
+
+class TestMissions:
+    def test_an_auto_mission_reaches_its_goals_in_order_then_holds(
+            self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, Pose2(2.0, 10.1, 5.0))
+        ids = robot.runtime.memory.paths[0].keyframe_ids
+        goals = (Goal(ids[len(ids) // 2]), Goal(ids[-1]))
+        assert robot.runtime.validate_goals(goals) is None
+        assert robot.runtime.start_mission(goals, first_seq=1)
+        robot.run(60.0, until=lambda t: t.mode is Mode.HOLD and t.reached_seqs)
+        t = robot.runtime.telemetry()
+        assert t.mission_state is MissionState.ARRIVED, t.mission_detail
+        assert t.reached_seqs == (1, 2) and t.mode is Mode.HOLD and t.goal_key == ids[-1]
+        assert robot.pose[0] == pytest.approx(4.5, abs=0.15)
+
+    def test_hold_aborts_the_run_and_auto_again_restarts_it(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        goal = (Goal(robot.runtime.memory.paths[0].keyframe_ids[-1]),)
+        robot.runtime.start_mission(goal, 0)
+        robot.run(4.0)
+        assert robot.runtime.telemetry().mission_state is MissionState.FOLLOWING
+        assert robot.runtime.set_mode(Mode.HOLD)
+        robot.run(1.0)
+        t = robot.runtime.telemetry()
+        assert t.mode is Mode.HOLD and t.mission_state is MissionState.ABORTED
+        assert "mode HOLD" in t.mission_detail
+        held = robot.pose
+        robot.run(1.0)
+        assert robot.pose[0] == pytest.approx(held[0], abs=1e-3)
+        robot.runtime.start_mission(goal, 0)
+        robot.run(60.0, until=lambda t: t.mode is Mode.HOLD)
+        assert robot.runtime.telemetry().mission_state is MissionState.ARRIVED
+
+    def test_goals_are_checked_against_the_memory(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        refusal = robot.runtime.validate_goals((Goal(0), Goal(999)))
+        assert refusal is not None and refusal.result == mavlink.MAV_MISSION_INVALID_PARAM1
+        assert "item 1: no key image 999" in refusal.reason
+
+    def test_disarmed_the_robot_refuses_missions_and_does_not_move(
+            self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        assert robot.runtime.arm(False, force=False)
+        robot.run(0.2)
+        assert not robot.runtime.telemetry().armed
+        assert not robot.runtime.start_mission((Goal(3),), 0)
+        robot.runtime.set_mode(Mode.MANUAL)
+        robot.drive(1.0, x=1.0)
+        assert robot.pose[0] == pytest.approx(2.0, abs=0.005)
+
+
+class TestPhotoGoal:
+    def test_a_photo_of_a_key_image_is_found_and_reached_in_guided(
+            self, taught, memory_dir, tmp_path) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        memory = robot.runtime.memory
+        goal = memory.paths[0].keyframe_ids[-3]
+        photo = tmp_path / "1.png"
+        cv2.imwrite(str(photo), memory.keyframe(goal).image)
+        assert robot.runtime.goto_image(photo)
+        robot.run(60.0, until=lambda t: t.mode is Mode.HOLD and t.goal_key is not None)
+        t = robot.runtime.telemetry()
+        assert t.goal_key == goal and t.mission_state is MissionState.ARRIVED
+        assert t.mission_seq is None and t.reached_seqs == ()
+        assert any(f"key image {goal}" in text for _, text in robot.notices)
+
+    def test_photos_not_in_the_memory_or_unreadable_are_reported(
+            self, taught, memory_dir, tmp_path) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        camera = robot.runtime.memory.camera
+        noise = np.random.default_rng(0).integers(0, 256, (camera.height, camera.width),
+                                                  dtype=np.uint8)
+        cv2.imwrite(str(tmp_path / "1.png"), noise)
+        cv2.imwrite(str(tmp_path / "2.png"), noise[:100, :100])
+        (tmp_path / "3.jpg").write_bytes(b"not an image")
+        for name in ("1.png", "2.png", "3.jpg"):
+            assert robot.runtime.goto_image(tmp_path / name)
+        robot.run(0.5)
+        texts = [text for _, text in robot.notices]
+        assert any(t.startswith("photo 1.png: not in the memory") for t in texts)
+        assert "photo 2.png: 100x100 px, the camera's images are 800x600" in texts
+        assert "photo 3.jpg: not a readable image" in texts
+        assert robot.runtime.telemetry().mode is Mode.HOLD
+
+
+class TestTeaching:
+    def test_a_path_taught_by_teleoperation_joins_the_memory(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, Pose2(4.5, 10.0, 0.0))
+        assert robot.runtime.teach_start("east_b")
+        robot.run(0.1)
+        assert robot.runtime.telemetry().teaching
+        assert robot.runtime.telemetry().mode is Mode.MANUAL
+        assert not robot.runtime.teach_start("again")
+        assert not robot.runtime.start_mission((Goal(0),), 0)
+        robot.drive(12.0, x=0.5)
+        assert robot.runtime.teach_stop()
+        robot.run(0.1)
+        assert not robot.runtime.telemetry().teaching
+        stored = read_memory(memory_dir)
+        assert [p.name for p in stored.paths.values()] == ["east_a", "east_b"]
+        assert len(stored.junctions) >= 1
+        assert robot.runtime.memory.paths.keys() == stored.paths.keys()
+        (level, text), = [n for n in robot.notices if n[1].startswith("path 1")]
+        assert level == logging.INFO and "'east_b'" in text and "1 junction" in text
+        # The new path is usable at once: a goal on it is accepted.
+        assert robot.runtime.validate_goals((Goal(stored.paths[1].keyframe_ids[-1]),)) is None
+
+    def test_a_drive_too_short_for_a_path_stores_nothing(self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        before = (memory_dir / "manifest.json").read_bytes()
+        assert not robot.runtime.teach_stop()
+        robot.runtime.teach_start("")
+        robot.run(0.1)
+        robot.runtime.teach_stop()
+        robot.run(0.1)
+        assert (memory_dir / "manifest.json").read_bytes() == before
+        assert any(level == logging.ERROR and "a path needs 0.20 m: nothing stored" in text
+                   for level, text in robot.notices)
+
+
+def test_a_camera_stall_stops_the_base_and_frames_resume_the_mission(taught, memory_dir) -> None:
+    robot = SimRobot(taught[0], memory_dir, EAST_A)
+    goal = (Goal(robot.runtime.memory.paths[0].keyframe_ids[-1]),)
+    robot.runtime.start_mission(goal, 0)
+    robot.run(5.0)
+    robot.runtime.stall(robot.clock.now_ns())
+    robot.clock.sleep_until_ns(robot.clock.now_ns() + 1_500_000_000)
+    robot.runtime.stall(robot.clock.now_ns())
+    assert robot.runtime.telemetry().velocity == (0.0, 0.0)
+    assert robot.runtime.telemetry().mode is Mode.AUTO
+    robot.run(60.0, until=lambda t: t.mode is Mode.HOLD)
+    assert robot.runtime.telemetry().mission_state is MissionState.ARRIVED
+    texts = [text for _, text in robot.notices]
+    assert texts.count("camera stalled: stopped until frames return") == 1
+    assert any(t.startswith("camera back after 1.5 s") for t in texts)
+
+
+def test_config_from_the_ground_applies_to_teleoperation(taught, memory_dir) -> None:
+    robot = SimRobot(taught[0], memory_dir, EAST_A)
+    robot.runtime.params_changed(replace(CONFIG, teleop=replace(CONFIG.teleop,
+                                                                max_speed_m_s=0.1)))
+    robot.runtime.set_mode(Mode.MANUAL)
+    robot.drive(1.0, x=1.0)
+    assert robot.runtime.telemetry().velocity == pytest.approx((0.1, 0.0))
