@@ -68,7 +68,7 @@ import numpy.typing as npt
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mission import MissionState
-from robot.mission_run import AppEvent, CycleRecord, MissionRun
+from robot.mission_run import AppEvent, CycleRecord, MissionResult, MissionRun
 from robot.teach import KeyImageSelector, OdomPose, SelectedKeyImage
 from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, ServoTelemetry, VehicleTelemetry
 from shared.clock import Clock
@@ -204,12 +204,18 @@ class RobotRuntime:
         self._teaching: _Teaching | None = None
         self._detail = ""
         self._last_state = MissionState.IDLE
+        self._last_result: MissionResult | None = None
         self._servo: ServoTelemetry | None = None
         self._twist = (0.0, 0.0)
         self._home: OdomPose | None = None
         self._last_key: int | None = None
         self._stalled_since_ns: int | None = None
         self._snapshot = VehicleTelemetry(mode=self._mode, armed=self._armed)
+
+    @property
+    def last_result(self) -> MissionResult | None:
+        """How the last mission run ended; None before one ended."""
+        return self._last_result
 
     @property
     def memory(self) -> VisualMemory:
@@ -440,7 +446,7 @@ class RobotRuntime:
     def _run_finished(self, run: MissionRun, t_ns: int) -> None:
         mission = self._mission
         assert mission is not None
-        result = run.result()
+        result = self._last_result = run.result()
         self._detail = f"{result.reason}: {result.detail}" if result.detail else result.reason
         self._run = None
         if result.state is MissionState.ARRIVED:

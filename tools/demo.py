@@ -10,20 +10,26 @@ It couples the simulator and the robot application, so it lives in tools/:
    camera, is reused; a memory there taught otherwise is an error (never overwritten).
 2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation (optionally with people
    and with a fraction of the landmarks removed), the robot placed off the taught
-   path, and :class:`robot.mission_run.MissionRun` on :class:`sim.sim_camera.SimFrameSource`,
-   :class:`sim.sim_base.SimBase` and :class:`sim.sim_clock.SimClock`, with a goal
-   key image on another path. Each cycle is recorded with the ground truth.
+   path: :class:`robot.runtime.RobotRuntime` on :class:`sim.sim_camera.SimFrameSource`,
+   the ARIA driver of the emulated Pioneer (:func:`tools.lockstep_pioneer.lockstep_pioneer`)
+   and :class:`sim.sim_clock.SimClock`, as a MAVLink vehicle on loopback UDP. A ground
+   station (:class:`tools.demo_ground.GroundDispatch`) sends the goal, a key image on
+   another path, as a one-item mission and starts it (AUTO); the robot localizes, plans
+   and follows until it stops in HOLD. Each mission cycle is recorded with the ground
+   truth.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ground.station import GroundError
 from shared.errors import InputError
 
 if TYPE_CHECKING:
@@ -33,6 +39,7 @@ if TYPE_CHECKING:
     from shared.memory import VisualMemory
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
+    from tools.demo_ground import DispatchResult
 
 #: Start offset from the taught path: left of it, m, and turned, degrees (issue 4).
 START_OFFSET_M = 0.3
@@ -49,8 +56,13 @@ DEMO_MAX_OMEGA_DEG = 25.0
 DEMO_LAW = "paper+ff"
 #: Mixed with the seed for the repeat's random draws (RANSAC, landmark removal).
 _REPEAT_STREAM = 0x52455045
-#: The mission gives up after this many times the route's length at the servo speed, plus
-#: ``_EXTRA_S``.
+#: The ground station must have dispatched the goal within this wall time, s.
+_DISPATCH_TIMEOUT_S = 20.0
+#: After the robot stopped, the ground station has this long to see the outcome, s (it
+#: comes with the next telemetry, at most one status period later).
+_OUTCOME_GRACE_S = 5.0
+#: The operator stops the mission after this many times the route's length at the servo
+#: speed, plus ``_EXTRA_S``.
 _TIME_MARGIN = 3.0
 _EXTRA_S = 30.0
 
@@ -89,13 +101,14 @@ class CycleSample:
 
 @dataclass(frozen=True, eq=False)
 class RepeatRun:
-    """A repeat: the mission's result and every cycle."""
+    """A repeat: the mission's result, every cycle, and what the ground station saw."""
 
     result: MissionResult
     start_pose: TruePose
     goal_id: int
     samples: tuple[CycleSample, ...]
     sim_time_s: float
+    dispatch: DispatchResult
 
 
 def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig,
@@ -194,10 +207,11 @@ def start_pose(taught: TaughtMemory) -> TruePose:
 
 
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
-                  sim_config: SimConfig, landmark_dropout: float,
+                  sim_config: SimConfig, landmark_dropout: float, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
-                  ) -> RepeatRun:
-    """Place the robot, localize, plan to ``goal_id`` and follow (see the module docstring).
+                  ground_log: Path | None = None) -> RepeatRun:
+    """Place the robot, dispatch the goal from the ground station, and let the robot
+    localize, plan and follow (see the module docstring).
 
     Args:
         taught: the memory and its truth.
@@ -205,27 +219,36 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         config: the robot's configs.
         sim_config: the repeat's simulation (people, seed, world).
         landmark_dropout: fraction of the landmarks removed before the repeat, [0, 1].
-        on_cycle: called after each cycle with the simulation and the frame (video).
+        out: the output folder; the vehicle keeps its parameters and uploads in
+            ``out/vehicle`` (parameters start from ``config`` on every run).
+        on_cycle: called after each mission cycle with the simulation and the frame (video).
+        ground_log: the ground station's log folder; None: no ground log.
 
     Raises:
         InputError: ``goal_id`` is not a key image of the memory, or the start
             pose overlaps an obstacle.
+        GroundError: the ground station could not dispatch the goal.
     """
-    from robot.mission_run import MissionRun
+    import numpy as np
+
+    from robot.runtime import RobotRuntime
+    from robot.vehicle.endpoint import VehicleEndpoint
+    from robot.vehicle.options import VehicleFiles
+    from robot.vehicle.udp_vehicle import UdpVehicle
+    from shared.clock import WallClock
+    from shared.mavlink.modes import Mode
     from sim.landmark_dropout import drop_landmarks
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
+    from sim.simulation import Simulation
     from sim.world import Pose2, load_world
+    from tools.demo_ground import GroundDispatch
     from tools.lockstep_pioneer import lockstep_pioneer
 
     memory = taught.memory
     if goal_id not in memory.keyframes:
         raise InputError("--goal", f"key image {goal_id} is not in the memory "
                                    f"(ids 0..{max(memory.keyframes)})")
-    import numpy as np
-
-    from sim.simulation import Simulation
-
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
     sim = Simulation(load_world(sim_config.world), sim_config)
     sim.landmarks = drop_landmarks(sim.landmarks, landmark_dropout, rng)
@@ -234,19 +257,47 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    run = MissionRun(memory, config, base, rng)
-    samples: list[CycleSample] = []
-
-    def observe(record: CycleRecord) -> None:
-        sample = CycleSample(record=record, pose_w=sim.body.pose_w)
-        samples.append(sample)
-        if on_cycle is not None and frames.last is not None:
-            on_cycle(sim, frames.last, sample)
-
+    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng)
+    files = VehicleFiles(out / "memory", out / "vehicle" / "upload",
+                         out / "vehicle" / "params.parm")
+    files.param_file.unlink(missing_ok=True)
+    endpoint = VehicleEndpoint(runtime, config, files)
     taught_m = sum(memory.keyframes[p.keyframe_ids[-1]].distance_m
                    for p in memory.paths.values())
-    limit_s = _TIME_MARGIN * taught_m / config.control.speed_m_s + _EXTRA_S
-    result = run.run(goal_id, frames, clock, sim_config.frame_period_ns, round(limit_s * 1e9),
-                     observe)
+    limit_ns = round((_TIME_MARGIN * taught_m / config.control.speed_m_s + _EXTRA_S) * 1e9)
+    samples: list[CycleSample] = []
+    with UdpVehicle.open("udpin:127.0.0.1:0", endpoint, WallClock()) as vehicle:
+        vehicle.start_thread()
+        ground = GroundDispatch(f"udpout:127.0.0.1:{vehicle.link.local_port}", goal_id,
+                                _DISPATCH_TIMEOUT_S + limit_ns / 1e9, ground_log)
+        ground.start()
+        wait_until = time.monotonic() + _DISPATCH_TIMEOUT_S
+        started_ns: int | None = None
+        deadline_ns = clock.now_ns()
+        while True:
+            record = runtime.step(*frames.read())
+            if record is not None:
+                sample = CycleSample(record=record, pose_w=sim.body.pose_w)
+                samples.append(sample)
+                if on_cycle is not None and frames.last is not None:
+                    on_cycle(sim, frames.last, sample)
+            mode = runtime.telemetry().mode
+            if started_ns is None:
+                if mode is Mode.AUTO:
+                    started_ns = clock.now_ns()
+                elif time.monotonic() > wait_until:
+                    break
+            elif mode is Mode.HOLD:
+                break
+            elif clock.now_ns() - started_ns > limit_ns:
+                runtime.set_mode(Mode.HOLD)  # the operator's abort at the time limit
+            deadline_ns += sim_config.frame_period_ns
+            clock.sleep_until_ns(deadline_ns)
+        dispatch = ground.finish(_OUTCOME_GRACE_S)
+    runtime.close()
+    result = runtime.last_result
+    if result is None:
+        raise GroundError(dispatch.error or f"the ground station dispatched no goal in "
+                                            f"{_DISPATCH_TIMEOUT_S:.0f} s")
     return RepeatRun(result=result, start_pose=start, goal_id=goal_id, samples=tuple(samples),
-                     sim_time_s=sim.now_ns / 1e9)
+                     sim_time_s=sim.now_ns / 1e9, dispatch=dispatch)

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.demo import CycleSample
+    from tools.demo_ground import DispatchResult
 
 OnCycle = Callable[["Simulation", "RenderedFrame", "CycleSample"], None]
 
@@ -57,7 +58,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       "curvature fed forward [default: %(default)s]")
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
     demo.add_argument("--no-log", action="store_true",
-                      help="do not write the robot's MCAP log (OUT/logs/robot-NNNN.mcap)")
+                      help="do not write the robot's and the ground station's logs "
+                      "(OUT/logs/robot-NNNN.mcap, ground-NNNN.mcap and a .tlog)")
     demo.set_defaults(run=run)
 
 
@@ -101,8 +103,8 @@ def run(args: argparse.Namespace) -> int:
     consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:
-        repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout,
-                               _chain(consumers))
+        repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout, out,
+                               _chain(consumers), None if args.no_log else out / "logs")
         if robot_log is not None:
             robot_log.log_events(repeat.result.events)
     finally:
@@ -116,6 +118,10 @@ def run(args: argparse.Namespace) -> int:
     report["landmark_dropout"] = args.landmark_dropout
     report["max_omega_deg"] = args.max_omega_deg
     report["control_law"] = config.control.law
+    report["dispatch"] = {"transport": "MAVLink over loopback UDP",
+                          "mission_upload_ms": (None if repeat.dispatch.upload_ms is None
+                                                else round(repeat.dispatch.upload_ms, 1)),
+                          "ground_saw_reached": repeat.dispatch.reached}
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     write_plots(out, repeat, taught)
     memory = taught.memory
@@ -123,9 +129,23 @@ def run(args: argparse.Namespace) -> int:
           f"images, {'reused' if taught.reused else f'taught in {teach_s:.1f} s'}")
     print(summary_text(report))
     print(f"wrote {out / 'report.json'}, plots{'' if video is None else ' and demo.mp4'}")
+    print(dispatch_text(repeat.dispatch, goal))
     if robot_log is not None:
         print(log_text(log_stats))
     return 0 if report["reached_goal"] else 1
+
+
+def dispatch_text(dispatch: DispatchResult, goal: int) -> str:
+    """What the ground station did and saw, and where its log went (one or two lines)."""
+    if dispatch.upload_ms is None:
+        return f"ground station: goal not dispatched ({dispatch.error})"
+    outcome = {True: "reached (MISSION_ITEM_REACHED)", False: "stopped short of it",
+               None: f"no outcome seen ({dispatch.error or 'the demo ended first'})"}
+    lines = [f"ground station: goal key image {goal} uploaded over UDP (MISSION_ACK after "
+             f"{dispatch.upload_ms:.0f} ms), mission started; {outcome[dispatch.reached]}"]
+    if dispatch.log_files:
+        lines.append("ground log " + ", ".join(str(p) for p in dispatch.log_files))
+    return "\n".join(lines)
 
 
 def log_text(stats: LogStats | None) -> str:

@@ -70,7 +70,8 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
         for law in plan.laws:
             law_config = follow_config(replace(config, sim=seeded), law, plan.max_omega_deg)
             started = time.perf_counter()
-            run = repeat_in_sim(taught, goal, law_config, seeded, plan.landmark_dropout)
+            run = repeat_in_sim(taught, goal, law_config, seeded, plan.landmark_dropout,
+                                out / f"seed{seed}")
             report = build_report(run, taught, law_config.control,
                                   time.perf_counter() - started)
             rows.append({"seed": seed, "law": law, "goal_key_image": goal,

@@ -73,12 +73,19 @@ class MissionUploaded:
     items: tuple[MissionItem, ...]
     source: Address
 
+    def __str__(self) -> str:
+        return (f"mission of {len(self.items)} item(s) uploaded by "
+                f"{self.source.system_id}/{self.source.component_id}")
+
 
 @dataclass(frozen=True, slots=True)
 class MissionCleared:
     """The mission was cleared (MISSION_CLEAR_ALL or an upload of 0 items)."""
 
     source: Address
+
+    def __str__(self) -> str:
+        return f"mission cleared by {self.source.system_id}/{self.source.component_id}"
 
 
 @dataclass(frozen=True, slots=True)

@@ -10,10 +10,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from pymavlink import mavutil
 
 from robot.mission import MissionState
 from robot.mission_run import CycleRecord
 from shared.interfaces import BaseState
+from shared.logs.reader import log_info
 from tools.cli import main
 from tools.demo import CycleSample
 from tools.demo_report import following_errors, plan_references, track_errors
@@ -37,6 +39,25 @@ def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
     assert report["sim_time_s"] > report["wall_time_s"]  # faster than real time
     assert [e["reason"] for e in report["events"] if e["kind"] == "transition"] == [
         "start", "localized", "arrived"]
+
+
+def test_the_goal_went_through_the_ground_station_over_udp(short_demo) -> None:
+    _, out, _ = short_demo
+    dispatch = json.loads((out / "report.json").read_text())["dispatch"]
+    assert dispatch["transport"] == "MAVLink over loopback UDP"
+    assert dispatch["ground_saw_reached"] is True
+    assert 0 < dispatch["mission_upload_ms"] < 1000
+    (tlog,) = (out / "logs").glob("ground-*.tlog")
+    types = []
+    reader = mavutil.mavlink_connection(str(tlog))
+    while (msg := reader.recv_match()) is not None:
+        types.append(msg.get_type())
+    for expected in ("MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ACK", "COMMAND_LONG",
+                     "MISSION_ITEM_REACHED"):
+        assert expected in types
+    info = log_info(out / "logs" / "ground-0001.mcap")
+    assert info.complete and info.message_count >= len(types)
+    assert "/mavlink/in/VISUAL_SERVO_STATUS" in {t.topic for t in info.topics}
 
 
 def test_it_writes_the_plots(short_demo) -> None:
