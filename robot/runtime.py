@@ -81,8 +81,6 @@ from shared.mavlink.mission_items import MissionRefusal
 from shared.mavlink.modes import Mode
 from shared.memory import VisualMemory, read_memory, write_memory
 
-logger = logging.getLogger(__name__)
-
 #: Modes in which a mission run drives the robot.
 _MISSION_MODES = frozenset({Mode.AUTO, Mode.GUIDED})
 #: Notices queued at most (the oldest go first when the link does not take them).
@@ -543,7 +541,6 @@ class RobotRuntime:
     # -- output -------------------------------------------------------------------------
 
     def _say(self, t_ns: int, level: int, text: str) -> None:
-        logger.log(level, "robot: %s", text)
         self._notices.append((level, text))
         if self._log is not None:
             self._log.note(t_ns, level, text)

@@ -69,7 +69,7 @@ def run_pioneer(args: argparse.Namespace) -> int:
     try:
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
-            raise TransportError(config.url, _why_not_connected(driver))
+            raise TransportError(config.url, why_not_connected(driver))
         identity = driver.status().identity
         assert identity is not None  # set by the handshake
         print(f"connected to {identity.name!r} ({identity.robot_class} {identity.subclass}) "
@@ -94,7 +94,7 @@ def run_pioneer(args: argparse.Namespace) -> int:
     return 0
 
 
-def _why_not_connected(driver: PioneerDriver) -> str:
+def why_not_connected(driver: PioneerDriver) -> str:
     """The last transport or handshake failure the driver reported, in one line."""
     from robot.pioneer.events import ConnectFailed, TransportFailed
 

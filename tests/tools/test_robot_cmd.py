@@ -1,0 +1,100 @@
+"""``vmnav robot`` as the field runs it: three processes on real transports.
+
+``vmnav sim serve`` is the emulated Pioneer on TCP and the camera as MJPEG over HTTP;
+``vmnav robot`` connects to both and calls this test's ground station over UDP. The
+ground station teaches a path by teleoperation (MANUAL_CONTROL), and the path lands in
+the robot's memory; SIGTERM then stops the robot cleanly.
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from ground.station import GroundStation
+from shared.clock import WallClock
+from shared.mavlink.modes import Mode
+from shared.memory import read_memory
+
+VMNAV = [sys.executable, "-m", "tools.cli"]
+
+
+def start(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
+    return subprocess.Popen([*VMNAV, *argv], stdout=log.open("wb"), stderr=subprocess.STDOUT)
+
+
+def wait_for(pattern: str, log: Path, process: subprocess.Popen[bytes],
+             timeout_s: float = 30.0) -> re.Match[str]:
+    """The first match of ``pattern`` in the process's output, waiting for it."""
+    limit = time.monotonic() + timeout_s
+    while time.monotonic() < limit:
+        found = re.search(pattern, log.read_text())
+        if found:
+            return found
+        assert process.poll() is None, log.read_text()
+        time.sleep(0.1)
+    raise AssertionError(f"no {pattern!r} in: {log.read_text()}")
+
+
+@pytest.fixture
+def sim_serve(tmp_path):
+    log = tmp_path / "sim.out"
+    process = start(["sim", "serve", "--aria", "tcp:0", "--video", "http:0"], log)
+    try:
+        aria = wait_for(r"ARIA on tcp 127\.0\.0\.1:(\d+)", log, process).group(1)
+        camera = wait_for(r"camera on (http://\S+/stream\.mjpg)", log, process).group(1)
+        yield f"socket://127.0.0.1:{aria}", camera
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.wait(10)
+
+
+def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
+    aria, camera = sim_serve
+    clock = WallClock()
+    with GroundStation.open("udpin:127.0.0.1:0", clock) as station:
+        log = tmp_path / "robot.out"
+        robot = start(["robot", "--aria", aria, "--camera", camera, "--mavlink",
+                       f"udpout:127.0.0.1:{station.link.local_port}",
+                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state")],
+                      log)
+        try:
+            station.wait_vehicle(30.0)
+            assert station.vehicle is not None and station.vehicle.mode is Mode.HOLD
+            station.teach_start("corridor_east")
+            for _ in range(40):  # 4 s at 0.2 m/s (half stick), MANUAL_CONTROL at 10 Hz
+                station.send_manual_control(0.5, 0.0)
+                station.run_until(lambda: False, 100_000_000)
+            station.teach_stop()
+            station.run_until(lambda: any(n.startswith("path 0") for n in station.vehicle.notices),
+                              15_000_000_000)
+            saved = [n for n in station.vehicle.notices if n.startswith("path 0")]
+            assert saved and "'corridor_east'" in saved[0], station.vehicle.notices
+            memory = read_memory(tmp_path / "memory")
+            (path,) = memory.paths.values()
+            assert path.name == "corridor_east" and len(path.keyframe_ids) >= 3
+            distance = memory.keyframes[path.keyframe_ids[-1]].distance_m
+            assert 0.5 < distance < 1.0
+        finally:
+            robot.send_signal(signal.SIGTERM)
+            code = robot.wait(15)
+    output = log.read_text()
+    assert code == 143, output
+    assert "Traceback" not in output
+    assert "pioneer: Closed()" in output
+
+
+def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
+    aria, _ = sim_serve
+    result = subprocess.run(
+        [*VMNAV, "robot", "--aria", aria, "--camera", str(tmp_path / "none.mp4"),
+         "--memory", str(tmp_path / "memory")], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1].endswith(
+        "none.mp4: no such video file (nor a device index or URL)")

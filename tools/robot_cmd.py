@@ -1,0 +1,169 @@
+"""``vmnav robot``: the robot process on real transports.
+
+It wires the parts the field runs, each on its own thread, around one loop:
+
+* the base: :class:`robot.pioneer.driver.PioneerDriver` on ``--aria URL`` (a serial
+  device, a pty, or ``socket://HOST:8101``: a robot's serial bridge or ``vmnav sim serve``);
+* the camera: :class:`robot.camera.VideoCaptureSource` on ``--camera SOURCE`` (a device
+  index, a file, or a URL such as ``vmnav sim serve``'s MJPEG stream);
+* the ground link: :class:`robot.vehicle.udp_vehicle.UdpVehicle` on ``--mavlink URL``
+  (pymavlink connection strings: ``udpin:0.0.0.0:14550`` waits for a ground station,
+  ``udpout:HOST:14550`` calls one);
+* the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``.
+
+The loop (:func:`serve`) hands each frame to the runtime and, when no frame comes
+within ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled (the base stops).
+Parameters set from the ground and goal photos live in ``--state DIR``. Ctrl-C and
+SIGTERM stop the base, send the Pioneer its CLOSE, and close the link and the camera.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from shared.errors import InputError, TransportError
+
+if TYPE_CHECKING:
+    from robot.camera import VideoCaptureSource
+    from robot.runtime import RobotRuntime
+    from shared.clock import Clock
+    from shared.memory import VisualMemory
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav robot``."""
+    parser = sub.add_parser(
+        "robot",
+        help="the robot process: Pioneer, camera, MAVLink vehicle",
+        description="The robot process: drive a Pioneer through ARIA, read the fisheye "
+        "camera, and be a MAVLink vehicle that teaches routes by teleoperation and follows "
+        "them to goals sent by a ground station (vmnav ground, MAVProxy, QGroundControl).",
+    )
+    parser.add_argument("--aria", metavar="URL",
+                        help="the Pioneer: /dev/ttyUSB0, a pty path, socket://HOST:8101 "
+                             "[default: the config's pioneer.url]")
+    parser.add_argument("--camera", metavar="SOURCE",
+                        help="cv2.VideoCapture source: device index, file or URL "
+                             "(http://127.0.0.1:8080/stream.mjpg) [default: the config's "
+                             "camera.source]")
+    parser.add_argument("--mavlink", metavar="URL", default="udpin:0.0.0.0:14550",
+                        help="ground link, pymavlink syntax [default: %(default)s]")
+    parser.add_argument("--memory", required=True, type=Path, metavar="DIR",
+                        help="the visual memory (created when teaching into an empty folder)")
+    parser.add_argument("--calibration", type=Path, metavar="FILE",
+                        help="camera calibration JSON for a new memory [default: the "
+                             "simulator's 800x600 camera]; a stored memory has its own")
+    parser.add_argument("--state", type=Path, default=Path("vmnav-state"), metavar="DIR",
+                        help="parameters set from the ground and uploaded goal photos "
+                             "[default: %(default)s]")
+    parser.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
+    parser.add_argument("--system", type=int, metavar="N",
+                        help="MAVLink system id [default: the config's mavlink.system_id]")
+    parser.add_argument("--key", type=Path, metavar="FILE",
+                        help="MAVLink 2 signing key file: sign everything, drop unsigned input")
+    parser.add_argument("--duration", type=float, metavar="S",
+                        help="stop after this long, s [default: until Ctrl-C or SIGTERM]")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Open every part (a clear error for the first that fails), serve, close."""
+    import numpy as np
+
+    from robot.camera import VideoCaptureSource
+    from robot.pioneer.driver import PioneerDriver
+    from robot.runtime import RobotRuntime
+    from robot.vehicle.endpoint import VehicleEndpoint
+    from robot.vehicle.options import SigningSetup, VehicleFiles
+    from robot.vehicle.udp_vehicle import UdpVehicle
+    from shared.clock import WallClock
+    from shared.config import load_config
+    from shared.mavlink.signing import read_key_file
+    from tools.pioneer_cmd import CONNECT_TIMEOUT_S, why_not_connected
+
+    config = load_config(args.config)
+    config = dataclasses.replace(
+        config,
+        pioneer=dataclasses.replace(config.pioneer, **({} if args.aria is None
+                                                       else {"url": args.aria})),
+        camera=dataclasses.replace(config.camera, **({} if args.camera is None
+                                                     else {"source": args.camera})),
+        mavlink=dataclasses.replace(config.mavlink, **({} if args.system is None
+                                                       else {"system_id": args.system})))
+    if args.duration is not None and not args.duration > 0:
+        raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    memory = open_robot_memory(args.memory, args.calibration)
+    signing = None
+    clock = WallClock()
+    if args.key is not None:
+        signing = SigningSetup(read_key_file(args.key), time.time_ns() - clock.now_ns())
+    with contextlib.ExitStack() as stack:
+        camera = stack.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
+        driver = stack.enter_context(PioneerDriver.from_config(config.pioneer, clock))
+        driver.start_thread()
+        if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
+            raise TransportError(config.pioneer.url, why_not_connected(driver))
+        runtime = RobotRuntime(memory, args.memory, config, driver, clock,
+                               np.random.default_rng())
+        stack.callback(runtime.close)
+        files = VehicleFiles(args.memory, args.state / "upload", args.state / "params.parm")
+        endpoint = VehicleEndpoint(runtime, config, files, signing=signing)
+        vehicle = stack.enter_context(UdpVehicle.open(args.mavlink, endpoint, clock))
+        vehicle.start_thread()
+        identity = driver.status().identity
+        width, height = camera.size_wh
+        print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
+              f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
+              f"MAVLink system {config.mavlink.system_id} on {args.mavlink}"
+              f"{' (signed)' if signing else ''}; memory {args.memory}: "
+              f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
+        end_ns = (None if args.duration is None
+                  else clock.now_ns() + round(args.duration * 1e9))
+        ended = serve(camera, runtime, clock, config.teleop.frame_timeout_ns, end_ns)
+    print(f"vmnav robot: {ended}; base stopped, links closed", flush=True)
+    return 0
+
+
+def serve(camera: VideoCaptureSource, runtime: RobotRuntime, clock: Clock,
+          frame_timeout_ns: int, end_ns: int | None) -> str:
+    """Hand frames to the runtime until the camera ends or ``end_ns`` (module docstring).
+
+    Returns:
+        Why it stopped, for the last line.
+    """
+    from robot.camera import FrameStall
+
+    while end_ns is None or clock.now_ns() < end_ns:
+        frame = camera.read_within(frame_timeout_ns)
+        if frame is None:
+            return "the camera ended"
+        if isinstance(frame, FrameStall):
+            runtime.stall(frame.t_ns)
+        else:
+            runtime.step(*frame)
+    return "the time given ran out"
+
+
+def open_robot_memory(directory: Path, calibration: Path | None) -> VisualMemory:
+    """The memory in ``directory`` (a writable folder), or a new empty one for
+    ``calibration``'s camera (default: the simulator's).
+
+    Raises:
+        InputError: ``directory`` is not a writable folder, or a calibration is given for
+            a stored memory taught with another camera.
+        MemoryFormatError: the stored memory does not load.
+    """
+    from shared.calibration import read_camera
+    from shared.camera_model import CameraModel
+    from shared.memory import read_memory
+    from tools.teach_cmd import open_memory
+
+    if calibration is None and (directory / "manifest.json").exists():
+        return read_memory(directory)
+    return open_memory(directory, CameraModel.default() if calibration is None
+                       else read_camera(calibration))
