@@ -2,7 +2,9 @@
 
 Registered under ``vmnav sim`` by :mod:`tools.sim_cmd`. The simulation steps to the
 wall clock and the ARIA server answers one client at a time (``sim.pioneer.server``)
-until Ctrl-C, SIGTERM or ``--duration``.
+until Ctrl-C, SIGTERM or ``--duration``. With ``--video`` the robot's fisheye camera
+is an MJPEG stream over HTTP (``sim.camera_server``), rendered from the same
+simulation every frame period.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from shared.errors import InputError
 from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 DEFAULT_ARIA = "tcp:8101"
+DEFAULT_VIDEO_PORT = 8080
 EMULATOR_SEED_CHILD = 3
 """The emulator's sonar noise draws from child 3 of the seed (the simulation uses 0-2)."""
 
@@ -48,14 +51,31 @@ def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
     if kind == "pty":
         return PtySpec(Path(rest) if rest else None)
     if kind == "tcp":
-        host, _, port_text = rest.rpartition(":")
-        port_text = port_text or DEFAULT_ARIA.split(":")[1]
-        if port_text.isdigit() and 0 <= int(port_text) <= 65535:
-            return TcpSpec(host or "127.0.0.1", int(port_text))
-        raise InputError("--aria", f"{text!r}: the TCP port must be 0-65535")
+        return _tcp_spec("--aria", text, rest, int(DEFAULT_ARIA.split(":")[1]))
     raise InputError(
         "--aria", f"{text!r} is not pty, pty:LINK, tcp:PORT or tcp:HOST:PORT"
     )
+
+
+def parse_video_spec(text: str) -> TcpSpec:
+    """A ``--video`` value: ``http``, ``http:PORT`` or ``http:HOST:PORT``.
+
+    Raises:
+        InputError: anything else (the message names ``--video`` and the value).
+    """
+    kind, _, rest = text.partition(":")
+    if kind == "http":
+        return _tcp_spec("--video", text, rest, DEFAULT_VIDEO_PORT)
+    raise InputError("--video", f"{text!r} is not http:PORT or http:HOST:PORT")
+
+
+def _tcp_spec(option: str, text: str, rest: str, default_port: int) -> TcpSpec:
+    """``[HOST:]PORT`` (``rest`` of ``text``), default host 127.0.0.1."""
+    host, _, port_text = rest.rpartition(":")
+    port_text = port_text or str(default_port)
+    if port_text.isdigit() and 0 <= int(port_text) <= 65535:
+        return TcpSpec(host or "127.0.0.1", int(port_text))
+    raise InputError(option, f"{text!r}: the TCP port must be 0-65535")
 
 
 def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -65,7 +85,9 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
         help="serve an emulated Pioneer 3-AT (ARIA server) on a pty and/or TCP, in real time",
         description="Run a simulated world in real time with its robot as an emulated "
         "Pioneer 3-AT-SH that ARIA clients (stock ARIA, vmnav's driver) connect to over a "
-        "serial pty or TCP. One client at a time; stop with Ctrl-C.",
+        "serial pty or TCP (one client at a time), and with --video its fisheye camera as an "
+        "MJPEG stream over HTTP that cv2.VideoCapture reads like a network camera. Stop with "
+        "Ctrl-C.",
     )
     add_sim_arguments(serve)
     serve.add_argument(
@@ -76,6 +98,17 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
         f"tcp:PORT, tcp:HOST:PORT (default host 127.0.0.1) [default: {DEFAULT_ARIA}]",
     )
     serve.add_argument(
+        "--video",
+        metavar="SPEC",
+        help="also serve the robot's camera as MJPEG over HTTP (for cv2.VideoCapture, "
+        "ffplay, a browser): http, http:PORT, http:HOST:PORT (default host 127.0.0.1, "
+        f"port {DEFAULT_VIDEO_PORT}; port 0 picks a free one) [default: no camera]",
+    )
+    serve.add_argument(
+        "--jpeg-quality", type=int, metavar="Q",
+        help="JPEG quality of the --video frames, 1-100 [default: 90, about 45 kB a frame]",
+    )
+    serve.add_argument(
         "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
     )
     serve.set_defaults(run=run_serve)
@@ -84,18 +117,22 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
 def run_serve(args: argparse.Namespace) -> int:
     """Open the transports, print where they are, serve until stopped, print the counts."""
     specs = [parse_aria_spec(text) for text in args.aria or [DEFAULT_ARIA]]
+    video = None if args.video is None else parse_video_spec(args.video)
+    if args.jpeg_quality is not None and not 1 <= args.jpeg_quality <= 100:
+        raise InputError("--jpeg-quality", f"must be 1-100, got {args.jpeg_quality}")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
-    config, _ = sim_config_from_args(args)
+    config, camera = sim_config_from_args(args)
 
     import numpy as np
 
     from shared.clock import WallClock
+    from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
     from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
     from sim.simulation import Simulation
     from sim.world import load_world
 
-    with ExitStack() as opened:  # closes what was opened if a later step fails
+    with ExitStack() as opened:  # closes everything, also if a step fails
         links, listeners = [], []
         for spec in specs:  # first: a port in use fails before the world is built
             if isinstance(spec, PtySpec):
@@ -103,12 +140,14 @@ def run_serve(args: argparse.Namespace) -> int:
             else:
                 listener = TcpListener(spec.host, spec.port)
                 listeners.append(opened.enter_context(closing(listener)))
+        video_server = None if video is None else opened.enter_context(
+            CameraServer(video.host, video.port, args.jpeg_quality or DEFAULT_JPEG_QUALITY))
         sim = Simulation(load_world(config.world), config)
         seed = np.random.SeedSequence(config.seed).spawn(EMULATOR_SEED_CHILD + 1)[-1]
         emulator = EmulatedPioneer(sim, config.emulator, np.random.default_rng(seed))
-        server = PioneerServer(emulator, links, listeners)
-        opened.pop_all()
-    with server:
+        server = opened.enter_context(PioneerServer(emulator, links, listeners))
+        if video_server is not None:
+            sim.add_step_hook(CameraFeed(sim, camera, video_server))
         print(f"vmnav sim serve: world {config.world} (seed {config.seed}), robot "
               f"'{emulator.identity.name}' ({emulator.identity.subclass})")
         for link in links:
@@ -116,6 +155,9 @@ def run_serve(args: argparse.Namespace) -> int:
             print(f"  ARIA on pty {link.path}{also}")
         for listener in listeners:
             print(f"  ARIA on tcp {listener.host}:{listener.port}")
+        if video_server is not None:
+            print(f"  camera on {video_server.stream_url} "
+                  f"(one frame: {video_server.snapshot_url})")
         print("  Ctrl-C stops", flush=True)
         duration_ns = None if args.duration is None else round(args.duration * 1e9)
         with _stopped_by_signals(server.stop):
@@ -124,6 +166,9 @@ def run_serve(args: argparse.Namespace) -> int:
     print(f"stopped after {sim.now_ns / 1e9:.1f} s of simulation: {s.sessions} session(s), "
           f"{s.sips_sent} SIPs, {s.commands} commands, {s.unknown_commands} unknown, "
           f"{s.bad_checksums} bad checksums, {server.refused_clients} client(s) refused")
+    if video_server is not None:
+        v = video_server.stats()
+        print(f"camera: {v.published} frames, {v.clients} stream client(s)")
     return 0
 
 
