@@ -76,6 +76,50 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     log.add_argument("--out", type=Path, metavar="DIR",
                      help="keep the logs written in DIR [default: a temporary folder]")
     log.set_defaults(run=run_log)
+    link = bench_sub.add_parser(
+        "link",
+        help="MAVLink link: goal dispatch to MISSION_ACK, ground CPU following N vehicles",
+        description="On loopback UDP, time one-goal mission uploads from the ground station "
+        "to a simulated vehicle until the final MISSION_ACK, then measure the ground "
+        "station's CPU time per wall second while it follows N simulated vehicles (other "
+        "processes) streaming their default telemetry. The vehicles run a kinematic load "
+        "generator, not the robot (tools/link_load.py). About 20 s at the defaults.",
+    )
+    link.add_argument("--vehicles", type=int, default=20, metavar="N",
+                      help="simulated vehicles, system ids 1..N [default: 20]")
+    link.add_argument("--window-s", type=float, default=10.0, metavar="S",
+                      help="measured window with every vehicle following, s [default: 10]")
+    link.add_argument("--dispatches", type=int, default=200, metavar="N",
+                      help="timed goal uploads [default: 200]")
+    link.add_argument("--vehicle-processes", type=int, default=2, metavar="N",
+                      help="processes the vehicles are spread over [default: 2]")
+    link.add_argument("--seed", type=int, default=0, help="seed of the dispatched goals")
+    link.set_defaults(run=run_link)
+    # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
+    every = bench_sub.add_parser(
+        "all",
+        help="every benchmark above, each in its own process: one JSON document and a "
+        "markdown table of figures beside their targets",
+        description="Run every benchmark (sim, vision, follow, log, link, ...) one after the "
+        "other as a subprocess; print one JSON document (benchmark -> figures, targets, its "
+        "own JSON or its error) and a markdown table (benchmark, figure, value, target, "
+        "pass/fail), also written to OUT/bench_all.json and OUT/bench_all.md. Exit code 0: "
+        "all ran and met their targets; 1: a benchmark failed; 3: a target was missed. "
+        "--quick takes about 3 min; the full run about 42 min, 40 of them follow's 20 "
+        "seeds (22 min once their memories are cached in OUT/follow).",
+    )
+    every.add_argument("--quick", action="store_true",
+                       help="reduced sizes (fewer frames, seeds, dispatches...): a smoke run")
+    every.add_argument("--only", metavar="NAMES",
+                       help="comma-separated benchmarks to run [default: all]")
+    every.add_argument("--bench-args", action="append", default=[], metavar="NAME=ARGS",
+                       help="extra arguments for one benchmark, e.g. 'follow=--world campus' "
+                       "(repeatable; they come last, so they override)")
+    every.add_argument("--out", type=Path, default=Path("out/bench_all"), metavar="DIR",
+                       help="results and follow's memory cache [default: out/bench_all]")
+    every.add_argument("--timeout-s", type=float, default=7200.0, metavar="S",
+                       help="time limit of each benchmark, s [default: 7200]")
+    every.set_defaults(run=run_all, registry=bench_sub.choices)
 
 
 def pin_to_one_core() -> list[int]:
@@ -174,3 +218,63 @@ def run_log(args: argparse.Namespace) -> int:
     result = bench_log(seconds=args.seconds, out_dir=args.out)
     print(json.dumps({"benchmark": "log", "load_average_at_start": load, **result}, indent=2))
     return 0
+
+
+def run_link(args: argparse.Namespace) -> int:
+    """Print the MAVLink link benchmark's JSON."""
+    from shared.errors import InputError
+    from tools.link_bench import LinkBenchPlan, bench_link
+
+    if not 1 <= args.vehicles <= 254:
+        raise InputError("--vehicles", f"must be in 1..254, got {args.vehicles}")
+    if not args.window_s > 0:
+        raise InputError("--window-s", f"must be > 0, got {args.window_s}")
+    for name in ("dispatches", "vehicle_processes"):
+        value = getattr(args, name)
+        if value < 1:
+            raise InputError(f"--{name.replace('_', '-')}", f"must be >= 1, got {value}")
+    load = [round(x, 2) for x in os.getloadavg()]
+    result = bench_link(LinkBenchPlan(
+        vehicles=args.vehicles, window_s=args.window_s, dispatches=args.dispatches,
+        vehicle_processes=args.vehicle_processes, seed=args.seed))
+    print(json.dumps({"benchmark": "link", "load_average_at_start": load, **result}, indent=2))
+    return 0
+
+
+def run_all(args: argparse.Namespace) -> int:
+    """Run every benchmark; print the document and the table; write both into ``--out``."""
+    import shlex
+    import sys
+
+    from shared.atomic_file import write_text_atomic
+    from shared.errors import InputError
+    from tools.bench_all import document, exit_code, markdown_table
+    from tools.bench_all import run_all as run_benchmarks
+
+    known = [name for name in args.registry if name != "all"]
+    names = known
+    if args.only is not None:
+        names = [name.strip() for name in args.only.split(",") if name.strip()]
+        unknown = [name for name in names if name not in known]
+        if unknown or not names:
+            what = f"unknown benchmark {', '.join(unknown)}" if unknown else "no benchmark"
+            raise InputError("--only", f"{what} (known: {', '.join(known)})")
+    extra: dict[str, list[str]] = {}
+    for item in args.bench_args:
+        name, sep, rest = item.partition("=")
+        if not sep or name not in known:
+            raise InputError("--bench-args", f"{item!r} is not NAME=ARGS with NAME one of "
+                             f"{', '.join(known)}")
+        extra.setdefault(name, []).extend(shlex.split(rest))
+    if not args.timeout_s > 0:
+        raise InputError("--timeout-s", f"must be > 0, got {args.timeout_s}")
+    runs = run_benchmarks(names, args.quick, args.out, extra, args.timeout_s,
+                          lambda line: print(f"vmnav bench all: {line}", file=sys.stderr))
+    text, table = json.dumps(document(runs), indent=2), markdown_table(runs)
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(args.out / "bench_all.json", text + "\n")
+    write_text_atomic(args.out / "bench_all.md", table + "\n")
+    print(text)
+    print()
+    print(table)
+    return exit_code(runs)
