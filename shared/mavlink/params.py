@@ -17,7 +17,10 @@ Rules:
 2. The vehicle always echoes a PARAM_SET with the value in force, also when it
    refuses the new one (out of range, not a whole number). There is no NAK in the
    protocol: a refusal or an unknown name also gets PARAM_ERROR (345, ignored by
-   older stations) and a STATUSTEXT saying why (reference sec. 1.5).
+   older stations) and a STATUSTEXT saying why (reference sec. 1.5). A refusal's
+   PARAM_ERROR goes out before its echo: MAVSDK takes an echo of another value for a
+   stale reply and sends the PARAM_SET again, so the vehicle would refuse (and
+   report) it twice, while PARAM_ERROR ends MAVSDK's set at once.
 3. Every value is REAL32 (``param_table.py``). PARAM_VALUE is a broadcast: the
    echo of one station's set tells every station.
 4. The ground fetches all values with one PARAM_REQUEST_LIST, then re-reads the
@@ -131,8 +134,8 @@ class ParamServer:
         problem = self.table.problem(name, value)
         if problem is not None:
             self._events.append(ParamRefused(name, value, problem, source))
-            return [self.value_message(index), *self._error(
-                msg, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE, f"param {name}: {problem}")]
+            return [*self._error(msg, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE,
+                                 f"param {name}: {problem}"), self.value_message(index)]
         previous = self.table.value_at(index)
         self.table.set(name, value)
         if value != previous:

@@ -1,4 +1,5 @@
-"""A vehicle endpoint on a real UDP socket, a ground station of our client cores, a FakeApp."""
+"""A vehicle endpoint on a real UDP socket, a ground station of our client cores, a FakeApp;
+or the vehicle alone on the wall clock, for stock ground stations."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from shared.clock import ManualClock
+from robot.vehicle.udp_vehicle import UdpVehicle
+from shared.clock import ManualClock, WallClock
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 
@@ -24,3 +26,13 @@ def net(tmp_path: Path, app: FakeApp, manual_clock: ManualClock) -> Iterator[Net
     network = Net(manual_clock, vehicle, Ground(f"udpout:127.0.0.1:{vehicle.link.local_port}"))
     yield network
     network.close()
+
+
+@pytest.fixture
+def live_vehicle(tmp_path: Path, app: FakeApp) -> Iterator[UdpVehicle]:
+    """The vehicle (udpin, ephemeral port, files under ``tmp_path``) running its own I/O
+    thread on the wall clock, as on the robot."""
+    vehicle = make_vehicle(tmp_path, app, WallClock())
+    vehicle.start_thread()
+    yield vehicle
+    vehicle.close()

@@ -5,29 +5,15 @@ from __future__ import annotations
 
 from shared.mavlink.dialect import mavlink  # isort: skip  (sets MAVLINK20 before mavutil)
 
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
 from pymavlink import mavutil
 
 from robot.vehicle.udp_vehicle import UdpVehicle
-from shared.clock import WallClock
 from shared.mavlink.modes import Mode
 from tests.robot.vehicle.fake_app import FakeApp
-from tests.robot.vehicle.harness import make_vehicle
 
 
-@pytest.fixture
-def vehicle(tmp_path: Path, app: FakeApp) -> Iterator[UdpVehicle]:
-    vehicle = make_vehicle(tmp_path, app, WallClock())
-    vehicle.start_thread()
-    yield vehicle
-    vehicle.close()
-
-
-def test_mavutil_sees_a_rover_with_mode_names(vehicle: UdpVehicle, app: FakeApp) -> None:
-    conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{vehicle.link.local_port}",
+def test_mavutil_sees_a_rover_with_mode_names(live_vehicle: UdpVehicle, app: FakeApp) -> None:
+    conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{live_vehicle.link.local_port}",
                                       source_system=255, source_component=230)
     try:
         conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)

@@ -103,6 +103,14 @@ def test_refused_set_echoes_the_value_in_force(name: str, value: float, problem:
     assert of_type(link.ground.received, "STATUSTEXT")[0].text == f"param {name}: {problem}"
 
 
+def test_refusal_sends_param_error_before_the_echo() -> None:
+    # MAVSDK resends a set whose echo carries another value; PARAM_ERROR first ends it.
+    link, client, _ = make_link(make_table())
+    finish(link, client, client.set("CTL_SPEED", 2.5, 0))
+    assert [m.get_type() for m in link.ground.received] == [
+        "PARAM_ERROR", "STATUSTEXT", "PARAM_VALUE"]
+
+
 def test_bounds_sent_as_float32_are_accepted() -> None:
     table = ParamTable([ParamSpec("GAIN", 0.5, 0.1, 0.7, "a gain")])
     link, client, _ = make_link(table)
