@@ -56,7 +56,7 @@ import logging
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -95,8 +95,9 @@ class RuntimeLog(Protocol):
         """A mission run to ``goal_id`` starts; ``rng_state`` is its generator's state."""
         ...
 
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8]) -> None:
-        """One mission cycle on its (H, W) uint8 frame."""
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
+              targets: Sequence[int] = ()) -> None:
+        """One mission cycle on its (H, W) uint8 frame; ``targets``: the route's key images."""
         ...
 
     def event(self, event: AppEvent) -> None:
@@ -173,7 +174,8 @@ class RobotRuntime:
             :meth:`params_changed`).
         base: the mobile base.
         clock: the loop's clock (the dead-man times MANUAL_CONTROL on it).
-        rng: draws the RANSAC samples of the mission runs.
+        rng: seeds each mission run's own generator (its RANSAC samples), whose state the
+            log records for replay.
         log: the field log; None records nothing.
         stopwatch: wall-time counter for the cycles' compute time, ns.
     """
@@ -410,10 +412,11 @@ class RobotRuntime:
         mission = self._mission
         assert mission is not None
         goal = mission.goals[mission.index].key_image_id
-        run = MissionRun(self._memory, self._config, self._base, self._rng,
+        rng = np.random.default_rng(self._rng.integers(2**63))  # the run's alone: replayable
+        run = MissionRun(self._memory, self._config, self._base, rng,
                          localizer=self._localizer, stopwatch=self._stopwatch)
         if self._log is not None:
-            self._log.mission_started(t_ns, goal, self._rng.bit_generator.state, self._config)
+            self._log.mission_started(t_ns, goal, rng.bit_generator.state, self._config)
         try:
             run.start(goal, t_ns)
         except VmnavError as e:  # the goal left the memory since the upload was checked
@@ -435,7 +438,7 @@ class RobotRuntime:
         elif record.localization is not None and record.localization.ok:
             self._last_key = record.localization.keyframe_id
         if self._log is not None:
-            self._log.cycle(record, image)
+            self._log.cycle(record, image, () if run.follower is None else run.follower.targets)
         self._forward_events(run)
         if run.finished:
             self._run_finished(run, t_ns)

@@ -1164,7 +1164,8 @@ class LogConfig:
     replay_frames: bool = False
     """Log every frame a mission cycle consumed losslessly (PNG, whatever ``frame_rate_hz``),
     so that ``vmnav replay`` reproduces the estimates exactly; JPEG frames replay only
-    approximately. Costs about 3 ms of the writer thread and 135-160 kB per 800x600 frame."""
+    approximately. An 800x600 simulated frame costs the writer thread about 4 ms and the file
+    180 kB as PNG (JPEG: 1 ms, 40 kB)."""
 
     def __post_init__(self) -> None:
         require(bool(self.output_dir.strip()), "output_dir must not be empty")

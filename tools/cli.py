@@ -27,13 +27,14 @@ from tools import (
     log_cmd,
     memory_cmd,
     pioneer_cmd,
+    replay_cmd,
     robot_cmd,
     sim_cmd,
     teach_cmd,
 )
 
 COMMANDS = (sim_cmd, calibrate, bench, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
-            log_cmd, ground_cmd)
+            log_cmd, replay_cmd, ground_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -33,6 +33,7 @@ from ground.station import GroundError
 from shared.errors import InputError
 
 if TYPE_CHECKING:
+    from robot.field_log import FieldLog
     from robot.mission_run import CycleRecord, MissionResult
     from shared.camera_model import CameraModel
     from shared.config import SimConfig, VmnavConfig
@@ -209,7 +210,7 @@ def start_pose(taught: TaughtMemory) -> TruePose:
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                   sim_config: SimConfig, landmark_dropout: float, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
-                  ground_log: Path | None = None) -> RepeatRun:
+                  robot_log: FieldLog | None = None, ground_log: Path | None = None) -> RepeatRun:
     """Place the robot, dispatch the goal from the ground station, and let the robot
     localize, plan and follow (see the module docstring).
 
@@ -222,6 +223,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         out: the output folder; the vehicle keeps its parameters and uploads in
             ``out/vehicle`` (parameters start from ``config`` on every run).
         on_cycle: called after each mission cycle with the simulation and the frame (video).
+        robot_log: the robot's field log (missions, cycles, events, notes, its MAVLink
+            traffic stamped on the simulation clock); None: no robot log.
         ground_log: the ground station's log folder; None: no ground log.
 
     Raises:
@@ -257,7 +260,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng)
+    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng, log=robot_log)
     files = VehicleFiles(out / "memory", out / "vehicle" / "upload",
                          out / "vehicle" / "params.parm")
     files.param_file.unlink(missing_ok=True)
@@ -267,6 +270,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     limit_ns = round((_TIME_MARGIN * taught_m / config.control.speed_m_s + _EXTRA_S) * 1e9)
     samples: list[CycleSample] = []
     with UdpVehicle.open("udpin:127.0.0.1:0", endpoint, WallClock()) as vehicle:
+        if robot_log is not None:
+            log = robot_log
+            vehicle.packet_taps.append(lambda way, data, _: log.mavlink(clock.now_ns(), way, data))
         vehicle.start_thread()
         ground = GroundDispatch(f"udpout:127.0.0.1:{vehicle.link.local_port}", goal_id,
                                 _DISPATCH_TIMEOUT_S + limit_ns / 1e9, ground_log)

@@ -96,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
     goal = default_goal(taught) if args.goal is None else args.goal
     video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
     robot_log = None if args.no_log else DemoLog(
-        out / "logs", taught.memory, sim_config.camera, config.log,
+        dataclasses.replace(config.log, output_dir=str(out / "logs"), replay_frames=True),
+        sim_config.camera,
         {"source": "vmnav demo (simulator, lock-step)", "goal_key_image": str(goal),
          "routes": ",".join(routes) if routes else "all", "seed": str(sim_config.seed),
          "control_law": config.control.law})
@@ -104,9 +105,8 @@ def run(args: argparse.Namespace) -> int:
     repeat_started = time.perf_counter()
     try:
         repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout, out,
-                               _chain(consumers), None if args.no_log else out / "logs")
-        if robot_log is not None:
-            robot_log.log_events(repeat.result.events)
+                               _chain(consumers), robot_log,
+                               None if args.no_log else out / "logs")
     finally:
         if video is not None:
             video.close()

@@ -1,7 +1,10 @@
 """``vmnav memory build LOG.mcap --memory DIR``: a visual path from a recorded teach drive.
 
 This is how a real robot's teach run becomes a memory (``vmnav teach --sim --log``
-records the same kind of log). The log needs two topics:
+records the same kind of log). The log is one file, several files, or the first file
+of a rotated series (``teach-x-0001.mcap`` stands for ``-0002``, ... of the same run),
+put in time order by :func:`shared.logs.series.log_series` (overlaps and gaps are
+errors). Together its files need two topics:
 
 * :data:`~shared.logs.topics.CAMERA_IMAGE`: ``foxglove.CompressedImage`` frames (JPEG,
   or anything ``cv2.imdecode`` reads), decoded to grey; each must be of the memory
@@ -24,10 +27,8 @@ written.
 
 from __future__ import annotations
 
-import base64
-import binascii
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -37,6 +38,7 @@ import numpy.typing as npt
 
 from shared.errors import InputError
 from shared.logs import topics
+from shared.logs.series import log_series, series_name
 
 if TYPE_CHECKING:
     from robot.memory.junctions import JunctionAttempt
@@ -77,6 +79,7 @@ class BuiltPath:
 
     Attributes:
         path: the new path.
+        files: the log's files, in time order.
         key_images: its key images as selected, in driving order.
         frames: camera frames given to the selector.
         without_odometry: camera frames left out (outside the odometry's span).
@@ -84,6 +87,7 @@ class BuiltPath:
     """
 
     path: VisualPath
+    files: tuple[Path, ...]
     key_images: tuple[SelectedKeyImage, ...]
     frames: int
     without_odometry: int
@@ -95,46 +99,54 @@ def yaw_from_quaternion(w: float, x: float, y: float, z: float) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
-def check_log_topics(log: Path) -> None:
-    """Check that ``log`` is an MCAP file with camera frames and transforms.
+def check_log_topics(files: Sequence[Path]) -> None:
+    """Check that the log's MCAP ``files`` hold camera frames and transforms between them.
 
     Raises:
-        InputError: naming ``log``: missing, not MCAP, or without one of the topics.
+        InputError: naming the log: a file missing or not MCAP, or no message on one
+            of the topics.
     """
     from shared.logs.reader import log_info
 
-    counts = {t.topic: t.message_count for t in log_info(log).topics}
+    counts: dict[str, int] = {}
+    for file in files:
+        for t in log_info(file).topics:
+            counts[t.topic] = counts.get(t.topic, 0) + t.message_count
     for topic, what in ((topics.CAMERA_IMAGE, "camera frames"), (topics.TF, "odometry")):
         if not counts.get(topic):
-            raise InputError(log, f"no {what} (no messages on {topic}); a teach log needs "
+            raise InputError(series_name(files), f"no {what} (no messages on {topic}); a teach "
+                             f"log needs "
                              f"camera frames on {topics.CAMERA_IMAGE} and the odometry "
                              f"{topics.FRAME_ODOM} -> {topics.FRAME_BASE} on {topics.TF}")
 
 
-def read_odometry(log: Path) -> Odometry:
-    """The ``odom`` -> ``base_link`` transforms of ``log`` (the last one where times repeat).
+def read_odometry(files: Sequence[Path]) -> Odometry:
+    """The ``odom`` -> ``base_link`` transforms of the log's ``files`` (the last one where
+    times repeat).
 
     Raises:
-        InputError: naming ``log``: unreadable, or no such transform.
+        InputError: naming the file: unreadable, or naming the log: no such transform.
     """
     from shared.logs.reader import read_messages
 
     poses: dict[int, tuple[float, float, float]] = {}
-    for message in read_messages(log, [topics.TF]):
-        for tf in message.data.get("transforms", []):
-            if (tf.get("parent_frame_id"), tf.get("child_frame_id")) != (topics.FRAME_ODOM,
-                                                                         topics.FRAME_BASE):
-                continue
-            try:
-                p, q = tf["translation"], tf["rotation"]
-                poses[message.log_time_ns] = (float(p["x"]), float(p["y"]), yaw_from_quaternion(
-                    float(q["w"]), float(q["x"]), float(q["y"]), float(q["z"])))
-            except (KeyError, TypeError, ValueError) as e:
-                raise InputError(log, f"{topics.TF} at {message.log_time_ns} ns: malformed "
-                                 f"transform ({e!r})") from None
+    for file in files:
+        for message in read_messages(file, [topics.TF]):
+            for tf in message.data.get("transforms", []):
+                if (tf.get("parent_frame_id"), tf.get("child_frame_id")) != (topics.FRAME_ODOM,
+                                                                             topics.FRAME_BASE):
+                    continue
+                try:
+                    p, q = tf["translation"], tf["rotation"]
+                    poses[message.log_time_ns] = (float(p["x"]), float(p["y"]),
+                                                  yaw_from_quaternion(float(q["w"]), float(q["x"]),
+                                                                      float(q["y"]), float(q["z"])))
+                except (KeyError, TypeError, ValueError) as e:
+                    raise InputError(file, f"{topics.TF} at {message.log_time_ns} ns: malformed "
+                                     f"transform ({e!r})") from None
     if not poses:
-        raise InputError(log, f"no odometry: no {topics.FRAME_ODOM} -> {topics.FRAME_BASE} "
-                         f"transform on {topics.TF}")
+        raise InputError(series_name(files), f"no odometry: no {topics.FRAME_ODOM} -> "
+                         f"{topics.FRAME_BASE} transform on {topics.TF}")
     times = sorted(poses)
     x, y, yaw = (np.array([poses[t][i] for t in times]) for i in range(3))
     return Odometry(np.array(times, dtype=np.int64), x, y, np.unwrap(yaw))
@@ -146,42 +158,39 @@ class LogFrames:
     Iterate once; afterwards :attr:`frames` and :attr:`without_odometry` count them.
 
     Args:
-        log: the MCAP file.
+        files: the log's MCAP files, in time order.
         camera: the camera the frames must fit (width x height).
         odometry: the log's odometry.
     """
 
-    def __init__(self, log: Path, camera: CameraModel, odometry: Odometry) -> None:
-        self._log = log
+    def __init__(self, files: Sequence[Path], camera: CameraModel, odometry: Odometry) -> None:
+        self._files = tuple(files)
         self._size = (camera.height, camera.width)
         self._odometry = odometry
         self.frames = 0
         self.without_odometry = 0
 
     def __iter__(self) -> Iterator[TeachFrame]:
-        import cv2
-
+        from shared.logs.messages import image_from_compressed
         from shared.logs.reader import read_messages
 
-        for message in read_messages(self._log, [topics.CAMERA_IMAGE]):
-            t_ns = message.log_time_ns
-            pose = self._odometry.pose_at(t_ns)
-            if pose is None:
-                self.without_odometry += 1
-                continue
-            where = f"{self._log}: camera frame at {t_ns} ns"
-            try:
-                data = base64.b64decode(message.data["data"], validate=True)
-            except (KeyError, TypeError, binascii.Error):
-                raise InputError(where, "no base64 'data' field") from None
-            image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
-            if image is None:
-                raise InputError(where, "cannot be decoded as an image")
-            if image.shape != self._size:
-                raise InputError(where, f"is {image.shape[1]}x{image.shape[0]} px; the memory's "
-                                 f"camera takes {self._size[1]}x{self._size[0]} px")
-            self.frames += 1
-            yield t_ns, image, pose
+        for file in self._files:
+            for message in read_messages(file, [topics.CAMERA_IMAGE]):
+                t_ns = message.log_time_ns
+                pose = self._odometry.pose_at(t_ns)
+                if pose is None:
+                    self.without_odometry += 1
+                    continue
+                where = f"{file}: camera frame at {t_ns} ns"
+                try:
+                    image, _ = image_from_compressed(message.data)
+                except ValueError as e:
+                    raise InputError(where, str(e)) from None
+                if image.shape != self._size:
+                    raise InputError(where, f"is {image.shape[1]}x{image.shape[0]} px; the "
+                                     f"memory's camera takes {self._size[1]}x{self._size[0]} px")
+                self.frames += 1
+                yield t_ns, image, pose
 
 
 def open_memory_for(directory: Path, camera_file: str | None) -> VisualMemory:
@@ -212,12 +221,12 @@ def open_memory_for(directory: Path, camera_file: str | None) -> VisualMemory:
     return memory
 
 
-def build_path(log: Path, directory: Path, name: str, camera_file: str | None,
+def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: str | None,
                config: VmnavConfig) -> tuple[BuiltPath, VisualMemory]:
-    """Select key images from the teach drive in ``log`` and add them to the memory.
+    """Select key images from the teach drive in ``logs`` and add them to the memory.
 
     Args:
-        log: the teach log (MCAP).
+        logs: the teach log: one MCAP file, several, or the first of a rotated series.
         directory: the memory's folder (created if needed).
         name: the new path's name.
         camera_file: see :func:`open_memory_for`.
@@ -233,25 +242,27 @@ def build_path(log: Path, directory: Path, name: str, camera_file: str | None,
     from robot.teach import select_key_images
     from shared.memory import write_memory
 
-    check_log_topics(log)
-    odometry = read_odometry(log)
+    files = log_series(logs)
+    check_log_topics(files)
+    odometry = read_odometry(files)
     memory = open_memory_for(directory, camera_file)
-    frames = LogFrames(log, memory.camera, odometry)
+    frames = LogFrames(files, memory.camera, odometry)
     key_images = select_key_images(frames, memory.camera, config.features, config.teach)
     if not key_images:
-        raise InputError(log, f"no camera frame lies within the odometry's span "
+        raise InputError(series_name(files), f"no camera frame lies within the odometry's span "
                          f"({frames.without_odometry} frames without a pose)")
     path = memory.add_path(name, [k.record for k in key_images])
     attempts = join_path(memory, path, config.features, config.localize, config.teach)
     write_memory(directory, memory)
-    return BuiltPath(path, tuple(key_images), frames.frames, frames.without_odometry,
+    return BuiltPath(path, files, tuple(key_images), frames.frames, frames.without_odometry,
                      tuple(attempts)), memory
 
 
-def summary_text(built: BuiltPath, memory: VisualMemory, log: Path, directory: Path) -> str:
+def summary_text(built: BuiltPath, memory: VisualMemory, directory: Path) -> str:
     """What ``vmnav memory build`` prints: the new path, its junctions, the memory."""
     from tools.teach_cmd import junction_lines
 
+    log = series_name(built.files)
     path = built.path
     length_m = memory.keyframes[path.keyframe_ids[-1]].distance_m
     skipped = (f" ({built.without_odometry} frames outside the odometry left out)"

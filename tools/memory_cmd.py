@@ -228,20 +228,24 @@ def run_route(args: argparse.Namespace) -> int:
 
 
 def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Register ``vmnav memory build LOG.mcap --memory DIR``."""
+    """Register ``vmnav memory build LOG.mcap [LOG ...] --memory DIR``."""
     build = memory_sub.add_parser(
         "build",
         help="build a visual path from a recorded teach drive (an MCAP log)",
         description="Select key images from the camera frames and odometry of a teach drive "
         "recorded in LOG (a robot field log, or 'vmnav teach --sim --log'), add them as a new "
         "path to the visual memory in DIR (created if needed) and join it to the paths already "
-        "there where its ends are localized.",
+        "there where its ends are localized. A log rotated into several files is given as its "
+        "files, or as its first file (NAME-0001.mcap stands for the files of the same run "
+        "numbered after it).",
     )
-    build.add_argument("log", type=Path, metavar="LOG", help="the teach log (MCAP)")
+    build.add_argument("log", type=Path, nargs="+", metavar="LOG",
+                       help="the teach log (MCAP): its files, or the first of a series")
     build.add_argument(
         "--memory", required=True, type=Path, metavar="DIR", help="the visual memory's folder"
     )
-    build.add_argument("--name", help="the new path's name [default: the log file's stem]")
+    build.add_argument("--name",
+                       help="the new path's name [default: the (first) log file's stem]")
     build.add_argument(
         "--camera",
         metavar="FILE",
@@ -260,9 +264,9 @@ def run_build(args: argparse.Namespace) -> int:
     from tools.memory_build import build_path, summary_text
 
     config = load_config(args.config)
-    name = args.log.stem if args.name is None else args.name
+    name = args.log[0].stem if args.name is None else args.name
     built, memory = build_path(args.log, args.memory, name, args.camera, config)
-    print(summary_text(built, memory, args.log, args.memory))
+    print(summary_text(built, memory, args.memory))
     return 0
 
 

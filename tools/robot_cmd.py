@@ -66,6 +66,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                         help="MAVLink system id [default: the config's mavlink.system_id]")
     parser.add_argument("--key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing key file: sign everything, drop unsigned input")
+    parser.add_argument("--log", type=Path, metavar="DIR",
+                        help="write the field log to DIR/robot-NNNN.mcap: frames, matches, "
+                             "servo state, commands, odometry, SIPs, MAVLink in and out, events "
+                             "[default: the config's log.output_dir]")
+    parser.add_argument("--no-log", action="store_true", help="write no field log")
     parser.add_argument("--duration", type=float, metavar="S",
                         help="stop after this long, s [default: until Ctrl-C or SIGTERM]")
     parser.set_defaults(run=run)
@@ -76,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from robot.camera import VideoCaptureSource
+    from robot.field_log import FieldLog
     from robot.pioneer.driver import PioneerDriver
     from robot.runtime import RobotRuntime
     from robot.vehicle.endpoint import VehicleEndpoint
@@ -108,12 +114,22 @@ def run(args: argparse.Namespace) -> int:
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
             raise TransportError(config.pioneer.url, why_not_connected(driver))
+        log = None
+        if not args.no_log:  # once camera and robot answered
+            log_config = (config.log if args.log is None
+                          else dataclasses.replace(config.log, output_dir=str(args.log)))
+            log = stack.enter_context(FieldLog(log_config, "robot", config.sim.camera,
+                                               {"source": "vmnav robot", "aria": config.pioneer.url,
+                                                "camera": config.camera.source}))
+            driver.sip_observers.append(log.sip)
         runtime = RobotRuntime(memory, args.memory, config, driver, clock,
-                               np.random.default_rng())
+                               np.random.default_rng(), log=log)
         stack.callback(runtime.close)
         files = VehicleFiles(args.memory, args.state / "upload", args.state / "params.parm")
         endpoint = VehicleEndpoint(runtime, config, files, signing=signing)
         vehicle = stack.enter_context(UdpVehicle.open(args.mavlink, endpoint, clock))
+        if log is not None:
+            vehicle.packet_taps.append(lambda way, data, t_ns: log.mavlink(t_ns, way, data))
         vehicle.start_thread()
         identity = driver.status().identity
         width, height = camera.size_wh

@@ -14,8 +14,8 @@ never imports sim/, sim/ never imports robot/):
 4. :func:`shared.memory.write_memory` stores it (adding to what ``DIR`` holds).
 
 With ``--log LOGDIR`` the drive's frames and odometry are also recorded, as a robot's
-teach run would be, in ``LOGDIR/teach-<route>-NNNN.mcap`` (:class:`TeachLog`), which
-``vmnav memory build`` turns into the same path.
+teach run is, in ``LOGDIR/teach-<route>-NNNN.mcap`` (:meth:`robot.field_log.FieldLog.teach_frame`),
+which ``vmnav memory build`` turns into the same path.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import argparse
 import dataclasses
 import os
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from robot.teach import OdomPose, SelectedKeyImage
     from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
-    from shared.config import CameraMountConfig, LogConfig, SimConfig, VmnavConfig
+    from shared.config import SimConfig, VmnavConfig
     from shared.logs.writer import LogStats
     from shared.memory import VisualMemory, VisualPath
     from sim.world import Route, World
@@ -99,6 +99,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach the route, store the path and print a summary."""
+    from robot.field_log import FieldLog
     from robot.memory.junctions import join_path
     from shared.config import load_config
     from shared.memory import write_memory
@@ -112,13 +113,14 @@ def run(args: argparse.Namespace) -> int:
     route = find_route(world, args.route)
     memory = open_memory(args.memory, camera)
     started = time.perf_counter()
-    teach_log = None if args.log is None else TeachLog(
-        args.log, route.name, sim_config.camera, config.log,
+    teach_log = None if args.log is None else FieldLog(
+        dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",
+        sim_config.camera,
         {"source": "vmnav teach --sim (lock-step)", "world": world.name, "route": route.name,
          "seed": str(sim_config.seed)})
     try:
         taught = teach_in_sim(world, route, config, sim_config, camera,
-                              None if teach_log is None else teach_log.add)
+                              None if teach_log is None else teach_log.teach_frame)
     finally:
         log_stats = None if teach_log is None else teach_log.close()
     path = memory.add_path(route.name, [k.record for k in taught.key_images])
@@ -129,48 +131,6 @@ def run(args: argparse.Namespace) -> int:
     if log_stats is not None:
         print(log_text(log_stats))
     return 0
-
-
-class TeachLog:
-    """The log of a teach drive, as a robot records it: what ``vmnav memory build`` reads.
-
-    On the topics and in the frames of :class:`tools.demo_log.DemoLog`: each frame as
-    JPEG on :data:`~shared.logs.topics.CAMERA_IMAGE` (at most ``LogConfig.frame_rate_hz``,
-    by default the simulated camera's rate), and on :data:`~shared.logs.topics.TF` at the
-    same time the odometry ``odom`` -> ``base_link`` with the static ``base_link`` ->
-    ``camera``. Files are ``folder/teach-<route>-NNNN.mcap``, numbered after any there.
-
-    Args:
-        folder: the log folder.
-        route_name: the route driven (in the file name).
-        mount: the simulated camera's mount.
-        config: frame rate, JPEG quality, flushing; its ``output_dir`` is replaced by ``folder``.
-        run: key-value metadata ``"run"`` stored in the file (world, route, seed).
-    """
-
-    def __init__(self, folder: Path, route_name: str, mount: CameraMountConfig,
-                 config: LogConfig, run: Mapping[str, str]) -> None:
-        from shared.logs.writer import LogWriter
-        from tools.demo_log import camera_transform
-
-        self._camera = camera_transform(mount)
-        self._writer = LogWriter(dataclasses.replace(config, output_dir=str(folder)),
-                                 f"teach-{route_name}")
-        self._writer.add_metadata("run", run)
-
-    def add(self, t_ns: int, image: GreyImage, odom_pose: OdomPose) -> None:
-        """Log one frame: (H, W) uint8 grey image and odometry (x_m, y_m, yaw_rad) at ``t_ns``."""
-        from shared.logs import topics
-        from shared.logs.messages import FrameTransform
-
-        self._writer.log_image(t_ns, topics.CAMERA_IMAGE, image)
-        self._writer.log_transform(t_ns, [
-            FrameTransform.planar(topics.FRAME_ODOM, topics.FRAME_BASE, *odom_pose),
-            self._camera])
-
-    def close(self) -> LogStats:
-        """Write what is queued, finish the file; returns the writer's counters."""
-        return self._writer.close()
 
 
 def log_text(stats: LogStats) -> str:
@@ -241,7 +201,7 @@ def teach_in_sim(
         sim_config: the simulation's config (its seed seeds the driver too).
         camera: the simulated camera.
         on_frame: called with each frame's (t_ns, image, odometry pose), e.g.
-            :meth:`TeachLog.add`.
+            :meth:`robot.field_log.FieldLog.teach_frame`.
 
     Raises:
         InputError: the drive did not reach the route's end in time.

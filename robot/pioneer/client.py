@@ -34,6 +34,7 @@ Rules:
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 
 from robot.pioneer.events import (
     Closed,
@@ -76,10 +77,14 @@ class PioneerClient:
 
     Args:
         config: driver policy; its ``link`` holds the session timers.
+        on_sip: called with (receive time, ns; the SIP) for every SIP as it is decoded,
+            after the odometry took it; None calls nothing.
     """
 
-    def __init__(self, config: PioneerDriverConfig | None = None) -> None:
+    def __init__(self, config: PioneerDriverConfig | None = None,
+                 on_sip: Callable[[int, Sip], None] | None = None) -> None:
         self.config = config if config is not None else PioneerDriverConfig()
+        self._on_sip_callback = on_sip
         self._session: AriaSession | None = None
         self._state = LinkState.DISCONNECTED
         self._outbox = bytearray()
@@ -375,6 +380,8 @@ class PioneerClient:
         self._sips += 1
         self._odometry.update(sip, self._params)
         self._last_sip, self._last_sip_ns = sip, now_ns
+        if self._on_sip_callback is not None:
+            self._on_sip_callback(now_ns, sip)
         before, self._flags = self._flags, sip.flags
         for bit, on_event, off_event in (
             (SipFlags.ESTOP_PRESSED, EStopPressed(), EStopReleased()),

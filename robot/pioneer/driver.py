@@ -46,6 +46,7 @@ from robot.pioneer.events import (
 )
 from robot.pioneer.serial_link import serial_link_factory
 from robot.pioneer.status import LinkCounters, LinkState, PioneerStatus
+from shared.aria.sip import Sip
 from shared.byte_link import ByteLink, LinkClosedError
 from shared.clock import Clock, service_loop
 from shared.config import PioneerDriverConfig
@@ -75,7 +76,13 @@ class PioneerDriver:
         self.config = config if config is not None else PioneerDriverConfig()
         self._link_factory = link_factory
         self._clock = clock
-        self._client = PioneerClient(self.config)
+        self.sip_observers: list[Callable[[int, Sip], None]] = []
+        """Called with (receive time, ns; the SIP) for every SIP decoded, on the thread that
+        services the link with the driver's lock held: return at once, call no driver
+        method (e.g. :meth:`robot.field_log.FieldLog.sip`). An exception is logged once
+        and ignored."""
+        self._observer_failed = False
+        self._client = PioneerClient(self.config, on_sip=self._sip_received)
         self._link: ByteLink | None = None
         self._next_open_ns = 0
         self._failures = 0  # failed connections in a row
@@ -211,6 +218,16 @@ class PioneerDriver:
             if isinstance(event, Connected):
                 self._failures = 0
             self._emit(event)
+
+    def _sip_received(self, now_ns: int, sip: Sip) -> None:
+        for observer in self.sip_observers:
+            try:
+                observer(now_ns, sip)
+            except Exception:  # an observer (a log) must never stop the robot's link
+                if not self._observer_failed:
+                    logger.exception("pioneer: a SIP observer failed; further failures "
+                                     "are not logged")
+                    self._observer_failed = True
 
     def _emit(self, event: PioneerEvent) -> None:
         logger.log(logging.WARNING if isinstance(event, _WARNINGS) else logging.INFO,

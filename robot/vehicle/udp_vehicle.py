@@ -10,7 +10,10 @@ Rules:
 2. A listening link (``udpin``) replies to the last ground station whose datagram
    held a message the endpoint accepted, so on a signed link a stranger's unsigned
    datagram cannot divert the replies. A ``udpout`` link always sends to its peer.
-3. Errors: a closed or failed socket raises
+3. Every datagram received and every packet sent goes to the ``packet_taps``
+   (``tap(direction, data, now_ns)``, direction ``"in"`` or ``"out"``), in the I/O
+   thread: the field log's MAVLink in and out.
+4. Errors: a closed or failed socket raises
    :class:`~shared.byte_link.LinkClosedError` from :meth:`service`; the thread logs
    it and ends.
 """
@@ -18,6 +21,7 @@ Rules:
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 
 from robot.vehicle.endpoint import VehicleEndpoint
 from shared.clock import Clock, service_loop
@@ -43,6 +47,8 @@ class UdpVehicle:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._closed = False
+        self.packet_taps: list[Callable[[str, bytes, int], None]] = []
+        """Called with every datagram in and packet out (rule 3)."""
 
     @classmethod
     def open(cls, url: str, endpoint: VehicleEndpoint, clock: Clock) -> UdpVehicle:
@@ -59,10 +65,14 @@ class UdpVehicle:
             if self._closed:
                 return
             for data, sender in self.link.receive():
+                for tap in self.packet_taps:
+                    tap("in", data, now_ns)
                 if self.endpoint.receive(data, now_ns) and self.link.listening:
                     self._reply_to = sender
             self.link.peer = self._reply_to
             for packet in self.endpoint.poll(now_ns):
+                for tap in self.packet_taps:
+                    tap("out", packet, now_ns)
                 self.link.send(packet)
 
     def start_thread(self) -> None:

@@ -7,7 +7,8 @@ Modules:
   ``messages``: pure builders of the messages.
 * ``writer``: :class:`~shared.logs.writer.LogWriter`, a bounded queue and a writer
   thread (``_mcap_files`` owns the files: rotation, flushing, error handling).
-* ``reader``: ``log_info``, ``read_messages`` and ``recover`` for finished, unfinished
-  and damaged files (``_scan`` walks records robustly).
+* ``reader``: ``log_info``, ``read_messages``, ``read_metadata`` and ``recover`` for
+  finished, unfinished and damaged files (``_scan`` walks records robustly);
+  ``series``: the files of a rotated log in order (``log_series``).
 * ``bench``: the CPU cost of logging, for ``vmnav bench log``.
 """

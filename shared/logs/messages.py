@@ -1,4 +1,5 @@
-"""Message builders: numbers and arrays in, JSON-ready dicts matching :mod:`.schemas` out.
+"""Message builders: numbers and arrays in, JSON-ready dicts matching :mod:`.schemas` out
+(and :func:`image_from_compressed`, the way back for images).
 
 Pure functions (no clock, no I/O); the log writer's thread calls them, so the
 control loop never pays for building or encoding a message. ``t_ns`` is the data's
@@ -9,16 +10,19 @@ capture time from the loop's clock, integer ns, >= 0; it becomes the Foxglove
 from __future__ import annotations
 
 import base64
+import binascii
 import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import cv2
 import numpy as np
 import numpy.typing as npt
 
 from shared.aria.sip import Sip, SipFlags, SipType
+from shared.interfaces import BaseState
 from shared.logs.schemas import LOG_LEVELS, POINTS_ANNOTATION_TYPES
 
 NS_PER_S = 1_000_000_000
@@ -57,6 +61,26 @@ def compressed_image(t_ns: int, frame_id: str, data: bytes, fmt: str = "jpeg") -
     """A ``foxglove.CompressedImage`` of encoded image bytes (``fmt``: jpeg, png, ...)."""
     return {"timestamp": time_from_ns(t_ns), "frame_id": frame_id,
             "data": base64.b64encode(data).decode("ascii"), "format": fmt}
+
+
+def image_from_compressed(message: Mapping[str, Any]) -> tuple[npt.NDArray[np.uint8], str]:
+    """The grey image of a ``foxglove.CompressedImage`` message, and its ``format``.
+
+    Returns:
+        (H, W) uint8 grey image (colour images are converted), and the format as logged
+        (``jpeg``, ``png``, ...; ``""`` when missing).
+
+    Raises:
+        ValueError: no base64 ``data`` field, or data that does not decode as an image.
+    """
+    try:
+        data = base64.b64decode(message["data"], validate=True)
+    except (KeyError, TypeError, binascii.Error):
+        raise ValueError("no base64 'data' field") from None
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
+    if image is None:
+        raise ValueError("cannot be decoded as an image")
+    return image, str(message.get("format", ""))
 
 
 def _color(rgba: Rgba) -> dict[str, float]:
@@ -143,6 +167,15 @@ def sip_fields(t_ns: int, sip: Sip) -> dict[str, Any]:
             "sonar_min_m": min(ranges) if ranges else None, "rot_vel_rad_s": sip.rot_vel_rad_s,
             "real_battery_v": sip.real_battery_v, "temperature_c": sip.temperature_c,
             "state_of_charge_pct": sip.state_of_charge_pct}
+
+
+def base_state_fields(t_ns: int, state: BaseState) -> dict[str, Any]:
+    """A ``vmnav.BaseState``: every field of ``state``, the odometry pose split in three."""
+    x_m, y_m, yaw_rad = state.odom_pose
+    return {"stamp_ns": t_ns, "x_m": x_m, "y_m": y_m, "yaw_rad": yaw_rad,
+            "odom_distance_m": state.odom_distance_m, "bumped": state.bumped,
+            "stalled": state.stalled, "battery_v": state.battery_v,
+            "motors_enabled": state.motors_enabled}
 
 
 def mavlink_fields(msg: Any) -> dict[str, Any]:

@@ -2,7 +2,8 @@
 
 * :func:`log_info`: topics, counts, schema names, duration and rates; from the
   summary of a finished file, by scanning an unfinished or damaged one.
-* :func:`read_messages`: the decoded JSON messages of a finished file, in log time order.
+* :func:`read_messages`: the decoded JSON messages of a finished file, in log time order;
+  :func:`read_metadata`: its metadata records.
 * :func:`recover`: rewrite an unfinished, truncated or damaged file into a valid,
   indexed one, keeping every message of every intact chunk; the source is only read.
 
@@ -260,6 +261,26 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
                 yield LogMessage(channel.topic, schema.name if schema else "", message.log_time,
                                  message.publish_time, message.sequence,
                                  json.loads(message.data))
+        except READ_ERRORS as e:
+            raise InputError(path, f"damaged: {e}; " + RECOVER_HINT.format(path=path)) from None
+
+
+def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
+    """The metadata records of the finished MCAP file at ``path`` by name (the last of a
+    name wins), e.g. ``{"run": {"route": "east_a", ...}}``.
+
+    Raises:
+        InputError: as :func:`read_messages`.
+    """
+    path = Path(path)
+    with _open_mcap(path) as (f, size):
+        if _info_from_summary(f, path, size) is None:
+            raise InputError(path, f"{_info_from_scan(f, path, size).problem}; "
+                             + RECOVER_HINT.format(path=path))
+        f.seek(0)
+        try:
+            return {m.name: dict(m.metadata)
+                    for m in SeekingReader(f, record_size_limit=size).iter_metadata()}
         except READ_ERRORS as e:
             raise InputError(path, f"damaged: {e}; " + RECOVER_HINT.format(path=path)) from None
 

@@ -206,6 +206,29 @@ MISSION_EVENT = _flat("vmnav.MissionEvent", "A mission event: goal set, started,
     "detail": ("string", "free text for the operator"),
 })
 
+BASE_STATE = _flat("vmnav.BaseState", "What the mobile base reported "
+                   "(shared.interfaces.BaseState), flattened", {
+    "stamp_ns": _STAMP,
+    "x_m": ("number", "odometry: x of base_link in odom, m"),
+    "y_m": ("number", "odometry: y of base_link in odom, m"),
+    "yaw_rad": ("number", "odometry: heading of base_link in odom, rad, counter-clockwise"),
+    "odom_distance_m": ("number", "distance driven since the odometry started, m"),
+    "bumped": ("boolean", "a bumper is pressed"),
+    "stalled": ("boolean", "a motor is stalled"),
+    "battery_v": (["number", "null"], "battery, V (null when not a number)"),
+    "motors_enabled": ("boolean", "the motors accept velocity commands"),
+})
+
+MISSION_START = _object("vmnav.MissionStart", "A mission run starts: what replay needs to "
+                        "rebuild it (robot.mission_run.MissionRun)", {
+    "stamp_ns": {"type": "integer", "description": "start time, ns (the loop's clock)"},
+    "goal_key_image_id": {"type": "integer", "description": "the goal key image"},
+    "rng_state": {"type": "object", "description": "the mission's numpy bit generator state "
+                  "(numpy.random.Generator.bit_generator.state)"},
+    "config": {"type": "object", "description": "the whole configuration "
+               "(dataclasses.asdict of shared.config.VmnavConfig)"},
+})
+
 MAVLINK_RAW = _flat("mavlink.Raw", "One MAVLink frame as it crossed the link", {
     "direction": ("string", "in (received) or out (sent)"),
     "msgid": ("integer", "message id"),
@@ -218,7 +241,7 @@ MAVLINK_RAW = _flat("mavlink.Raw", "One MAVLink frame as it crossed the link", {
 
 SCHEMAS: dict[str, Schema] = {s["title"]: s for s in (
     COMPRESSED_IMAGE, IMAGE_ANNOTATIONS, FRAME_TRANSFORM, FRAME_TRANSFORMS, LOG,
-    SERVO_STATE, COMMAND, SIP, MISSION_EVENT, MAVLINK_RAW)}
+    SERVO_STATE, COMMAND, SIP, MISSION_EVENT, BASE_STATE, MISSION_START, MAVLINK_RAW)}
 """Every fixed schema by name; MAVLink message schemas come from :func:`mavlink_schema`."""
 
 _MAVLINK_TYPES = {"float": "number", "double": "number"}

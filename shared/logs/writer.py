@@ -121,14 +121,16 @@ class LogWriter:
         atexit.register(self.close)
 
     def log_image(self, t_ns: int, topic: str, image: npt.NDArray[np.uint8],
-                  frame_id: str = topics.FRAME_CAMERA) -> bool:
-        """Log a grey frame as a JPEG ``foxglove.CompressedImage``, at most ``frame_rate_hz``.
+                  frame_id: str = topics.FRAME_CAMERA, *, lossless: bool = False) -> bool:
+        """Log a grey frame as a JPEG ``foxglove.CompressedImage``, at most ``frame_rate_hz``;
+        or, ``lossless``, as a PNG one whatever the rate (every frame replay needs).
 
         Args:
             t_ns: capture time, ns.
             topic: e.g. :data:`topics.CAMERA_IMAGE`.
             image: (H, W) uint8 grey; copied, so the caller may reuse its buffer.
             frame_id: the camera's frame.
+            lossless: PNG (decodes to ``image`` exactly), not rate-limited.
 
         Returns:
             Whether the frame was queued; log its annotations only if so.
@@ -136,10 +138,14 @@ class LogWriter:
         check_shape("image", np.shape(image), (None, None))
         if np.asarray(image).dtype != np.uint8:
             raise ValueError(f"image: expected uint8 grey, got {np.asarray(image).dtype}")
+        if lossless:
+            return self._put(_Job(t_ns, _image_records, (t_ns, topic, frame_id, np.array(image),
+                                                          "png", [])))
         if not self._frame_due(t_ns, topic):
             return False
-        return self._put(_Job(t_ns, _image_records, (t_ns, topic, frame_id, np.array(image),
-                                                      self.config.jpeg_quality)))
+        return self._put(_Job(t_ns, _image_records, (
+            t_ns, topic, frame_id, np.array(image), "jpeg",
+            [cv2.IMWRITE_JPEG_QUALITY, self.config.jpeg_quality])))
 
     def log_points(self, t_ns: int, topic: str, pixels_xy: npt.ArrayLike, *,
                    color: messages.Rgba = GREEN, thickness_px: float = 4.0,
@@ -209,6 +215,19 @@ class LogWriter:
         frame = msg.get_msgbuf()
         return self._put(_Job(t_ns, _mavlink_records,
                               (direction, msg, bytes(frame) if frame else b"")))
+
+    def log_mavlink_packet(self, t_ns: int, packet: bytes, direction: str) -> bool:
+        """Log one MAVLink packet given as its bytes, as :meth:`log_mavlink` does; the
+        writer thread parses it (a packet that does not parse is counted as lost).
+
+        Args:
+            t_ns: time it was received or sent, ns.
+            packet: one whole MAVLink 1 or 2 packet, header to checksum (signature included).
+            direction: ``"in"`` (received) or ``"out"`` (sent).
+        """
+        if direction not in topics.MAVLINK_DIRECTIONS:
+            raise ValueError(f"direction must be 'in' or 'out', got {direction!r}")
+        return self._put(_Job(t_ns, _packet_records, (direction, bytes(packet))))
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> bool:
         """Store key-value metadata (e.g. ``"run"``: route, mode, git sha) in every file."""
@@ -322,11 +341,24 @@ def _one(topic: str, schema: Schema, build: Callable[..., Mapping[str, Any]],
 
 
 def _image_records(t_ns: int, topic: str, frame_id: str, image: npt.NDArray[np.uint8],
-                   quality: int) -> list[Record]:
-    ok, jpeg = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
+                   fmt: str, params: list[int]) -> list[Record]:
+    ok, data = cv2.imencode(f".{fmt}", image, params)
     if not ok:
         raise ValueError(f"cv2.imencode failed on a {image.shape} image")
-    return [(topic, COMPRESSED_IMAGE, messages.compressed_image(t_ns, frame_id, jpeg.tobytes()))]
+    return [(topic, COMPRESSED_IMAGE, messages.compressed_image(t_ns, frame_id, data.tobytes(),
+                                                                fmt))]
+
+
+def _packet_records(direction: str, packet: bytes) -> list[Record]:
+    # Imported here: the dialect takes a third of a second to import, and only logs
+    # of MAVLink packets need it.
+    from shared.mavlink.dialect import make_codec
+
+    parsed = make_codec(0, 0).parse(packet)  # a fresh parser: no state across packets
+    if len(parsed) != 1:
+        raise ValueError(f"not one MAVLink packet: {len(packet)} bytes gave {len(parsed)} "
+                         f"messages")
+    return _mavlink_records(direction, parsed[0], packet)
 
 
 def _mavlink_records(direction: str, msg: Any, frame: bytes) -> list[Record]:

@@ -1,4 +1,5 @@
-"""``vmnav memory build`` (tools/memory_build.py) from a ``vmnav teach --sim --log`` drive."""
+"""``vmnav memory build`` (tools/memory_build.py) from a ``vmnav teach --sim --log`` drive,
+rotated into several files."""
 
 from __future__ import annotations
 
@@ -21,8 +22,9 @@ from tests.tools.test_teach_cmd import run
 from tools.memory_build import Odometry
 
 #: At the default JPEG quality (85) the artefacts cost tracks: east_a gave 12 key images
-#: from its log against 9 taught directly; at 95, 10.
-CONFIG = "[log]\njpeg_quality = 95\n"
+#: from its log against 9 taught directly; at 95, 10. The log rotates every 4 s of the
+#: drive: a series of files.
+CONFIG = "[log]\njpeg_quality = 95\nrotate_period_ns = 4000000000\n"
 
 
 @dataclass(frozen=True)
@@ -30,6 +32,7 @@ class Built:
     config: Path
     taught: Path
     log: Path
+    series: tuple[Path, ...]
     teach: tuple[int, str, str]
     built: Path
     build: tuple[int, str, str]
@@ -46,19 +49,22 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Built:
                  str(taught), "--log", str(logs), "--config", str(config)])
     log = logs / "teach-east_a-0001.mcap"
     build = run(["memory", "build", str(log), "--memory", str(memory), "--config", str(config)])
-    return Built(config, taught, log, teach, memory, build)
+    return Built(config, taught, log, tuple(sorted(logs.glob("teach-east_a-*.mcap"))), teach,
+                 memory, build)
 
 
 class TestBuild:
     def test_teach_records_its_log(self, built: Built) -> None:
         code, out, err = built.teach
         assert code == 0, err
-        assert f"log {built.log}: " in out and "dropped" not in out
+        assert len(built.series) > 2 and built.series[0] == built.log
+        assert f"log {', '.join(map(str, built.series))}: " in out and "dropped" not in out
 
     def test_the_log_builds_the_path_taught_directly(self, built: Built) -> None:
         code, out, err = built.build
         assert code == 0, err
-        assert out.startswith(f"built path 0 'teach-east_a-0001' from {built.log}: ")
+        assert out.startswith(f"built path 0 'teach-east_a-0001' from {built.log} "
+                              f"(+{len(built.series) - 1} files): ")
         assert "left out" not in out  # every frame has its odometry at the same time
         assert "junctions made: 0" in out and f"memory {built.built}: 1 paths" in out
         taught, memory = read_memory(built.taught), read_memory(built.built)
@@ -87,6 +93,16 @@ class TestBuild:
         joined = read_memory(memory)
         assert [p.name for p in joined.paths.values()] == ["east_a", "again"]
         assert joined.junctions  # its ends localize on the same route's ends
+
+
+    def test_the_files_of_a_series_given_in_any_order(self, built: Built,
+                                                      tmp_path: Path) -> None:
+        memory = tmp_path / "mem"
+        code, _, err = run(["memory", "build", *map(str, reversed(built.series)), "--memory",
+                              str(memory), "--name", "again", "--config", str(built.config)])
+        assert code == 0, err
+        (a,), (b,) = read_memory(built.built).paths.values(), read_memory(memory).paths.values()
+        assert a.keyframe_ids == b.keyframe_ids
 
 
 class TestOdometry:
@@ -153,6 +169,22 @@ class TestBadInput:
                             str(tmp_path / "mem")])
         assert code == 1 and "no camera frame lies within the odometry's span (1 frames" in err
         assert not (tmp_path / "mem").exists()
+
+    def test_a_gap_in_the_series(self, built: Built, tmp_path: Path) -> None:
+        memory = tmp_path / "mem"
+        first, missing, third = built.series[:3]
+        code, out, err = run(["memory", "build", str(first), str(third), "--memory",
+                              str(memory)])
+        assert code == 1 and out == "" and err.count("\n") == 1
+        assert (f"{missing}: missing from the series: a gap between {first.name} and "
+                f"{third.name}") in err
+        assert not memory.exists()
+
+    def test_two_drives_that_overlap(self, tmp_path: Path) -> None:
+        a = write_log(tmp_path / "a", True, True, (600, 800))
+        b = write_log(tmp_path / "b", True, True, (600, 800))
+        code, _, err = run(["memory", "build", str(a), str(b), "--memory", str(tmp_path / "m")])
+        assert code == 1 and f"{b}: overlaps {a}: it starts at 0.000 s" in err
 
     def test_not_an_mcap_file_leaves_the_memory_untouched(self, built: Built,
                                                           tmp_path: Path) -> None:

@@ -19,6 +19,7 @@ import pytest
 
 from ground.station import GroundStation
 from shared.clock import WallClock
+from shared.logs.reader import log_info
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
 
@@ -62,7 +63,8 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
         log = tmp_path / "robot.out"
         robot = start(["robot", "--aria", aria, "--camera", camera, "--mavlink",
                        f"udpout:127.0.0.1:{station.link.local_port}",
-                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state")],
+                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
+                       "--log", str(tmp_path / "logs")],
                       log)
         try:
             station.wait_vehicle(30.0)
@@ -88,6 +90,11 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     assert code == 143, output
     assert "Traceback" not in output
     assert "pioneer: Closed()" in output
+    info = log_info(tmp_path / "logs" / "robot-0001.mcap")
+    assert info.complete, info.problem
+    topics = {t.topic for t in info.topics}
+    assert {"/camera/image/compressed", "/tf", "/pioneer/sip", "/mavlink/in/MANUAL_CONTROL",
+            "/mavlink/out/HEARTBEAT", "/log"} <= topics
 
 
 def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:

@@ -317,3 +317,22 @@ def test_wait_connected_services_the_link_without_a_thread() -> None:
     rig.responder.answer_syncs = False
     assert not rig.driver.wait_connected(500 * MS)  # no robot end is served meanwhile
     assert rig.clock.now_ns() == 500 * MS
+
+
+def test_sip_observers_see_every_sip_and_a_failing_one_is_logged_once(
+        caplog: pytest.LogCaptureFixture) -> None:
+    rig = Rig()
+    seen: list[tuple[int, object]] = []
+
+    def failing(now_ns: int, sip: object) -> None:
+        raise RuntimeError("the log is broken")
+
+    rig.driver.sip_observers.extend([failing, lambda now_ns, sip: seen.append((now_ns, sip))])
+    rig.connect()
+    rig.responder.x_counts = 250
+    rig.run(1.0)
+    assert len(seen) == rig.driver.counters().sips > 5  # the failing observer stopped nothing
+    last_ns, last = seen[-1]
+    assert last_ns == rig.driver.status().last_sip_ns and last.x_counts == 250
+    assert [r.message for r in caplog.records if "SIP observer" in r.message] == [
+        "pioneer: a SIP observer failed; further failures are not logged"]

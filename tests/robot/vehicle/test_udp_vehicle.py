@@ -17,6 +17,8 @@ def test_udpout_vehicle_reaches_a_listening_ground(tmp_path: Path, app: FakeApp,
     ground = Ground("udpin:127.0.0.1:0", heartbeat=False)
     vehicle = make_vehicle(tmp_path, app, manual_clock,
                            url=f"udpout:127.0.0.1:{ground.link.local_port}")
+    taps: list[tuple[str, bytes, int]] = []
+    vehicle.packet_taps.append(lambda *packet: taps.append(packet))
     net = Net(manual_clock, vehicle, ground)
     try:
         net.advance(2.0)
@@ -24,6 +26,10 @@ def test_udpout_vehicle_reaches_a_listening_ground(tmp_path: Path, app: FakeApp,
             0, 1_000_000_000, 2_000_000_000]  # the first beat too: no need to hear first
         ground.send(*ground.params.get("CTL_SPEED", net.now_ns))  # and it answers
         assert net.until_event(ground.params).name == "CTL_SPEED"
+        outs = [(t, data[7]) for d, data, t in taps if d == "out"]  # (time, msg id low byte)
+        assert outs[0] == (0, 0) and all(data[0] == 0xFD for _, data, _ in taps)
+        (request,) = [data for d, data, _ in taps if d == "in"]
+        assert request[7] == 20  # PARAM_REQUEST_READ, the only datagram the ground sent
     finally:
         net.close()
 

@@ -103,6 +103,35 @@ def test_frames_over_the_rate_are_skipped(tmp_path: Path, rng: np.random.Generat
     assert writer.stats().skipped == 30
 
 
+def test_lossless_frames_are_png_exactly_and_every_one(tmp_path: Path,
+                                                        rng: np.random.Generator) -> None:
+    images = [textured(rng) for _ in range(4)]
+    with LogWriter(LogConfig(output_dir=str(tmp_path), frame_rate_hz=1.0)) as writer:
+        assert all(writer.log_image(i * 33_333_333, "/a", image, lossless=True)
+                   for i, image in enumerate(images))
+    rows = read_all(writer.stats().files[0])
+    assert [row[5]["format"] for row in rows] == ["png"] * 4
+    decoded = [cv2.imdecode(np.frombuffer(base64.b64decode(row[5]["data"]), np.uint8),
+                            cv2.IMREAD_GRAYSCALE) for row in rows]
+    assert all(np.array_equal(a, b) for a, b in zip(decoded, images, strict=True))
+
+
+def test_mavlink_packets_as_bytes_log_like_messages(tmp_path: Path) -> None:
+    vehicle = make_codec(1, 1)
+    heartbeat = mavlink.MAVLink_heartbeat_message(10, 8, 0, 0, 4, 3)
+    packet = vehicle.pack(heartbeat)
+    with LogWriter(LogConfig(output_dir=str(tmp_path / "bytes"))) as from_bytes:
+        assert from_bytes.log_mavlink_packet(5, packet, "in")
+        assert from_bytes.log_mavlink_packet(6, packet[:-3], "in")  # truncated: counted, lost
+    with LogWriter(LogConfig(output_dir=str(tmp_path / "message"))) as from_message:
+        from_message.log_mavlink(5, make_codec(0, 0).parse(packet)[0], "in")
+    stats = from_bytes.stats()
+    assert (stats.written, stats.lost) == (2, 1) and "not one MAVLink packet" in stats.last_error
+    assert read_all(stats.files[0]) == read_all(from_message.stats().files[0])
+    with pytest.raises(ValueError, match="direction must be 'in' or 'out'"):
+        from_bytes.log_mavlink_packet(7, packet, "sideways")
+
+
 def test_rotation_by_size_gives_several_valid_files(tmp_path: Path) -> None:
     config = LogConfig(output_dir=str(tmp_path), chunk_size_bytes=4096, rotate_size_bytes=16_000,
                        compression="none", queue_messages=1000)
