@@ -34,12 +34,10 @@ from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
-from tests.tools.short_routes import write_short_routes_world
+from tests.tools.short_routes import teach_east_a
 from tools.cli import main
 from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.lockstep_pioneer import lockstep_pioneer
-from tools.sim_args import load_camera
-from tools.teach_cmd import find_route, teach_in_sim
 
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 GOALS = (2, 4)
@@ -69,15 +67,11 @@ class RememberingFrames:
 @pytest.fixture(scope="module")
 def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     folder = tmp_path_factory.mktemp("replay")
-    world_file = write_short_routes_world(folder)
+    world_file = teach_east_a(folder, CONFIG)
     world = load_world(world_file)
-    camera = load_camera(None)
     sim_config = SimConfig(world=str(world_file), seed=1)
-    route = find_route(world, "east_a")
-    taught = teach_in_sim(world, route, CONFIG, sim_config, camera)
-    memory = VisualMemory(camera)
-    memory.add_path(route.name, [k.record for k in taught.key_images])
-    write_memory(folder / "memory", memory)
+    memory = read_memory(folder / "memory")
+    camera = memory.camera
 
     sim = Simulation(world, sim_config)
     sim.place_robot(Pose2(2.05, 10.05, 3.0))

@@ -19,23 +19,20 @@ import cv2
 import numpy as np
 import pytest
 
-from robot.memory.junctions import join_path
 from robot.mission import MissionState
 from robot.runtime import RobotRuntime
 from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
-from shared.memory import VisualMemory, read_memory, write_memory
+from shared.memory import read_memory
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
-from tests.tools.short_routes import write_short_routes_world
+from tests.tools.short_routes import teach_east_a
 from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.lockstep_pioneer import lockstep_pioneer
-from tools.sim_args import load_camera
-from tools.teach_cmd import find_route, teach_in_sim
 
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 
@@ -44,16 +41,7 @@ CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 def taught(tmp_path_factory) -> tuple[Path, Path]:
     """(world file, memory folder) with ``east_a`` taught (seed 1)."""
     folder = tmp_path_factory.mktemp("runtime")
-    world_file = write_short_routes_world(folder)
-    world = load_world(world_file)
-    camera = load_camera(None)
-    sim_config = SimConfig(world=str(world_file), seed=1)
-    route = find_route(world, "east_a")
-    taught = teach_in_sim(world, route, CONFIG, sim_config, camera)
-    memory = VisualMemory(camera)
-    path = memory.add_path(route.name, [k.record for k in taught.key_images])
-    join_path(memory, path, CONFIG.features, CONFIG.localize, CONFIG.teach)
-    write_memory(folder / "memory", memory)
+    world_file = teach_east_a(folder, CONFIG)
     return world_file, folder / "memory"
 
 
