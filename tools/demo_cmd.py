@@ -21,6 +21,7 @@ from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
+    from shared.config import SimConfig, VmnavConfig
     from shared.logs.writer import LogStats
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
@@ -42,8 +43,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "into OUT.",
     )
     add_sim_arguments(demo)
-    demo.add_argument("--out", type=Path, default=Path("out/demo"), metavar="DIR",
-                      help="output folder [default: out/demo]")
+    demo.add_argument("--out", type=Path, metavar="DIR",
+                      help="output folder [default: out/demo; with --hil out/hil]")
+    demo.add_argument("--hil", action="store_true",
+                      help="hardware-in-the-loop: vmnav sim serve, vmnav robot and a ground "
+                      "station as separate processes on TCP, HTTP and UDP; teach one route (the "
+                      "world's first, or --routes NAME) by teleoperation, then repeat it from "
+                      "the usual offset")
     demo.add_argument("--routes", default=None, metavar="A,B,...",
                       help="routes to teach, in order [default: all the world's, in its order]")
     demo.add_argument("--goal", type=int, default=None, metavar="ID",
@@ -86,10 +92,14 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     config = follow_config(dataclasses.replace(config, sim=sim_config), args.law,
                            args.max_omega_deg)
-    out: Path = args.out
+    out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
     if out.exists() and not out.is_dir():
         raise InputError(out, "is not a folder")
     out.mkdir(parents=True, exist_ok=True)
+    if args.hil:
+        if routes is not None and len(routes) != 1:
+            raise InputError("--routes", "--hil teaches one route")
+        return run_hil_demo(out, config, sim_config, None if routes is None else routes[0])
     started = time.perf_counter()
     taught = taught_memory(out, routes, config, sim_config, camera)
     teach_s = time.perf_counter() - started
@@ -132,6 +142,31 @@ def run(args: argparse.Namespace) -> int:
     print(dispatch_text(repeat.dispatch, goal))
     if robot_log is not None:
         print(log_text(log_stats))
+    return 0 if report["reached_goal"] else 1
+
+
+def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
+                 route: str | None) -> int:
+    """``vmnav demo --hil``: run it, write ``report.json``, print the summary."""
+    from tools.demo_hil import robot_config_text, run_hil
+    from tools.demo_report import cm_text, fixed_text
+
+    robot_config = out / "robot.toml"
+    robot_config.write_text(robot_config_text(config))
+    report = run_hil(out, config, sim_config, robot_config, route)
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    reached = "reached" if report["reached_goal"] else "did NOT reach"
+    print(f"hil: taught {report['route']!r} by teleoperation over MAVLink "
+          f"({report['key_images_taught']} key images, {report['teach_sim_time_s']:.0f} s); "
+          f"the robot {reached} the goal key image {report['goal_key_image']} "
+          f"in {report['repeat_sim_time_s']:.0f} s")
+    print(f"  after {report['settling_distance_m']:.2f} m settling: lateral RMS "
+          f"{cm_text(report['lateral_rms_m'])} cm, max {cm_text(report['lateral_max_m'])} cm; "
+          f"heading RMS {fixed_text(report['heading_rms_deg'], 2)} deg; final position error "
+          f"{cm_text(report['final_position_error_m'])} cm")
+    print(f"  mission upload to MISSION_ACK {report['mission_upload_ms']:.0f} ms; "
+          f"{report['wall_time_s']:.0f} s wall; processes exited {report['exit_codes']}")
+    print(f"wrote {out / 'report.json'}; logs in {out / 'logs'}, process outputs {out}/*.out")
     return 0 if report["reached_goal"] else 1
 
 

@@ -29,7 +29,7 @@ FloatArray = npt.NDArray[np.float64]
 #: Segments searched ahead of the previous closest one.
 _WINDOW = 8
 #: The settling band, m.
-_SETTLED_M = 0.05
+SETTLED_M = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,7 +127,7 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
                  wall_time_s: float) -> dict[str, object]:
     """The ``report.json`` content (issue 4, item 7)."""
     result = run.result
-    settle_m = settling_distance_m(control.pole_1_m, START_OFFSET_M, _SETTLED_M)
+    settle_m = settling_distance_m(control.pole_1_m, START_OFFSET_M, SETTLED_M)
     follow = [s.record for s in run.samples if s.record.follow is not None]
     matches = [r.follow.vision.matches for r in follow
                if r.follow is not None and r.follow.vision is not None]
@@ -156,11 +156,13 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
                     "detail": e.detail} for e in result.events],
     }
     report["plans"] = len(plan_references(run, taught))
-    report.update(_track_metrics(following_errors(run, taught), settle_m))
+    report.update(track_metrics(following_errors(run, taught), settle_m))
     return report
 
 
-def _track_metrics(errors: TrackErrors | None, settle_m: float) -> dict[str, object]:
+def track_metrics(errors: TrackErrors | None, settle_m: float) -> dict[str, object]:
+    """Distance followed, and lateral RMS / max and heading RMS of the samples beyond
+    ``settle_m`` (None without any)."""
     empty: dict[str, object] = {"distance_m": 0.0, "lateral_rms_m": None,
                                 "lateral_max_m": None, "heading_rms_deg": None}
     if errors is None:
@@ -184,27 +186,30 @@ def summary_text(report: dict[str, object]) -> str:
         f"repeat: {outcome} key image {report['goal_key_image']} ({report['state']}: "
         f"{report['detail']})",
         f"  {report['key_images_reached']}/{report['key_images_route']} key images, "
-        f"{_fixed(report['distance_m'], 2)} m in {_fixed(report['sim_time_s'], 1)} s simulated, "
-        f"{_fixed(report['wall_time_s'], 1)} s wall",
+        f"{fixed_text(report['distance_m'], 2)} m in "
+        f"{fixed_text(report['sim_time_s'], 1)} s simulated, "
+        f"{fixed_text(report['wall_time_s'], 1)} s wall",
     ]
     if report["lateral_rms_m"] is not None:
         lines.append(
-            f"  after {_fixed(report['settling_distance_m'], 2)} m settling: lateral RMS "
-            f"{_cm(report['lateral_rms_m'])} cm, max {_cm(report['lateral_max_m'])} cm; "
-            f"heading RMS {_fixed(report['heading_rms_deg'], 2)} deg; final position error "
-            f"{_cm(report['final_position_error_m'])} cm")
-    lines.append(f"  {_fixed(report['mean_matches'], 1)} matches per frame on average; servo "
-                 f"loop {_fixed(report['loop_ms_p50'], 1)} ms median, "
-                 f"{_fixed(report['loop_ms_p95'], 1)} ms p95; "
+            f"  after {fixed_text(report['settling_distance_m'], 2)} m settling: lateral RMS "
+            f"{cm_text(report['lateral_rms_m'])} cm, max {cm_text(report['lateral_max_m'])} cm; "
+            f"heading RMS {fixed_text(report['heading_rms_deg'], 2)} deg; final position error "
+            f"{cm_text(report['final_position_error_m'])} cm")
+    lines.append(f"  {fixed_text(report['mean_matches'], 1)} matches per frame on average; servo "
+                 f"loop {fixed_text(report['loop_ms_p50'], 1)} ms median, "
+                 f"{fixed_text(report['loop_ms_p95'], 1)} ms p95; "
                  f"{report['lost_events']} LOST events")
     return "\n".join(lines)
 
 
-def _cm(value: object) -> str:
-    return _fixed(100 * value, 1) if isinstance(value, float | int) else "n/a"
+def cm_text(value: object) -> str:
+    """A length in m as cm with one decimal ("n/a" for a missing value)."""
+    return fixed_text(100 * value, 1) if isinstance(value, float | int) else "n/a"
 
 
-def _fixed(value: object, digits: int) -> str:
+def fixed_text(value: object, digits: int) -> str:
+    """A number with ``digits`` decimals ("n/a" for a missing value)."""
     return f"{value:.{digits}f}" if isinstance(value, float | int) else "n/a"
 
 

@@ -22,6 +22,7 @@ from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 DEFAULT_ARIA = "tcp:8101"
 DEFAULT_VIDEO_PORT = 8080
+DEFAULT_CONTROL_PORT = 8081
 EMULATOR_SEED_CHILD = 3
 """The emulator's sonar noise draws from child 3 of the seed (the simulation uses 0-2)."""
 
@@ -57,16 +58,17 @@ def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
     )
 
 
-def parse_video_spec(text: str) -> TcpSpec:
-    """A ``--video`` value: ``http``, ``http:PORT`` or ``http:HOST:PORT``.
+def parse_video_spec(text: str, option: str = "--video",
+                     default_port: int = DEFAULT_VIDEO_PORT) -> TcpSpec:
+    """A ``--video`` (or ``--control``) value: ``http``, ``http:PORT`` or ``http:HOST:PORT``.
 
     Raises:
-        InputError: anything else (the message names ``--video`` and the value).
+        InputError: anything else (the message names ``option`` and the value).
     """
     kind, _, rest = text.partition(":")
     if kind == "http":
-        return _tcp_spec("--video", text, rest, DEFAULT_VIDEO_PORT)
-    raise InputError("--video", f"{text!r} is not http:PORT or http:HOST:PORT")
+        return _tcp_spec(option, text, rest, default_port)
+    raise InputError(option, f"{text!r} is not http:PORT or http:HOST:PORT")
 
 
 def _tcp_spec(option: str, text: str, rest: str, default_port: int) -> TcpSpec:
@@ -105,6 +107,13 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
         f"port {DEFAULT_VIDEO_PORT}; port 0 picks a free one) [default: no camera]",
     )
     serve.add_argument(
+        "--control",
+        metavar="SPEC",
+        help="also serve the simulator's truth and robot placement over HTTP (GET /truth, "
+        "POST /place; for vmnav demo --hil): http, http:PORT, http:HOST:PORT (port "
+        f"{DEFAULT_CONTROL_PORT} unless given) [default: none]",
+    )
+    serve.add_argument(
         "--jpeg-quality", type=int, metavar="Q",
         help="JPEG quality of the --video frames, 1-100 [default: 90, about 45 kB a frame]",
     )
@@ -118,6 +127,8 @@ def run_serve(args: argparse.Namespace) -> int:
     """Open the transports, print where they are, serve until stopped, print the counts."""
     specs = [parse_aria_spec(text) for text in args.aria or [DEFAULT_ARIA]]
     video = None if args.video is None else parse_video_spec(args.video)
+    control = (None if args.control is None
+               else parse_video_spec(args.control, "--control", DEFAULT_CONTROL_PORT))
     if args.jpeg_quality is not None and not 1 <= args.jpeg_quality <= 100:
         raise InputError("--jpeg-quality", f"must be 1-100, got {args.jpeg_quality}")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
@@ -128,6 +139,7 @@ def run_serve(args: argparse.Namespace) -> int:
 
     from shared.clock import WallClock
     from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
+    from sim.control_server import ControlHook, ControlServer
     from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
     from sim.simulation import Simulation
     from sim.world import load_world
@@ -148,6 +160,11 @@ def run_serve(args: argparse.Namespace) -> int:
         server = opened.enter_context(PioneerServer(emulator, links, listeners))
         if video_server is not None:
             sim.add_step_hook(CameraFeed(sim, camera, video_server))
+        control_server = None
+        if control is not None:
+            hook = ControlHook(sim)
+            sim.add_step_hook(hook)
+            control_server = opened.enter_context(ControlServer(hook, control.host, control.port))
         print(f"vmnav sim serve: world {config.world} (seed {config.seed}), robot "
               f"'{emulator.identity.name}' ({emulator.identity.subclass})")
         for link in links:
@@ -158,6 +175,8 @@ def run_serve(args: argparse.Namespace) -> int:
         if video_server is not None:
             print(f"  camera on {video_server.stream_url} "
                   f"(one frame: {video_server.snapshot_url})")
+        if control_server is not None:
+            print(f"  control on {control_server.url} (GET /truth, POST /place)")
         print("  Ctrl-C stops", flush=True)
         duration_ns = None if args.duration is None else round(args.duration * 1e9)
         with _stopped_by_signals(server.stop):

@@ -1,0 +1,161 @@
+"""The simulator's control endpoint: its ground truth and the hand that places the robot.
+
+What a person standing in the room has, and a robot never gets: where the robot
+really is, and the power to carry it somewhere. ``vmnav demo --hil`` drives through
+it: the scripted teleoperator steers by the true pose (as a person steers by eye),
+the evaluation compares true trajectories, and the robot is carried to the repeat's
+start.
+
+Rules:
+
+1. ``GET /truth``: ``{"t_ns": simulation time, "pose_w": [x_m, y_m, yaw_rad]}`` of
+   the robot's body in the world frame, as of the last simulation step.
+2. ``POST /place`` with ``{"pose_w": [x_m, y_m, yaw_rad]}``: the robot is put at rest
+   there (:meth:`sim.simulation.Simulation.place_robot`) at the next simulation step;
+   the reply (200 with the new truth, or 400 with a one-line reason: bad JSON, an
+   obstacle there) comes once it is done.
+3. Threads: the simulation is only touched in its own loop (:class:`ControlHook`, a
+   step hook); HTTP requests wait on it. Loopback by default; anything else is 404.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import queue
+import threading
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
+
+from shared.errors import TransportError, VmnavError
+from sim.simulation import Simulation
+from sim.world import Pose2
+
+TRUTH_PATH = "/truth"
+PLACE_PATH = "/place"
+#: How long a placement waits for the simulation loop, s.
+_PLACE_TIMEOUT_S = 5.0
+
+
+@dataclass(eq=False)
+class _Placement:
+    pose_w: tuple[float, float, float]
+    done: threading.Event = field(default_factory=threading.Event)
+    error: str | None = None
+
+
+class ControlHook:
+    """The simulation side (rule 3): publishes the truth, applies placements.
+
+    A step hook: ``sim.add_step_hook(hook)``.
+    """
+
+    def __init__(self, sim: Simulation) -> None:
+        self._sim = sim
+        self._placements: queue.SimpleQueue[_Placement] = queue.SimpleQueue()
+        self.truth: dict[str, Any] = self._truth()
+        """The last published truth (rule 1)."""
+
+    def __call__(self, now_ns: int, dt_ns: int) -> None:
+        while True:
+            try:
+                placement = self._placements.get_nowait()
+            except queue.Empty:
+                break
+            x, y, yaw = placement.pose_w
+            try:
+                self._sim.place_robot(Pose2(x, y, math.degrees(yaw)))
+            except VmnavError as e:
+                placement.error = str(e)
+            placement.done.set()
+        self.truth = self._truth()
+
+    def place(self, pose_w: tuple[float, float, float]) -> str | None:
+        """Place the robot at the next step (rule 2); None when done, else why not."""
+        placement = _Placement(pose_w)
+        self._placements.put(placement)
+        if not placement.done.wait(_PLACE_TIMEOUT_S):
+            return f"the simulation did not step within {_PLACE_TIMEOUT_S:.0f} s"
+        return placement.error
+
+    def _truth(self) -> dict[str, Any]:
+        return {"t_ns": self._sim.now_ns, "pose_w": list(self._sim.body.pose_w)}
+
+
+class ControlServer:
+    """The HTTP side (rules 1-3).
+
+    Args:
+        hook: the simulation's control hook.
+        host: address to listen on.
+        port: TCP port; 0 picks a free one (see :attr:`port`).
+
+    Raises:
+        TransportError: the port cannot be listened on.
+    """
+
+    def __init__(self, hook: ControlHook, host: str = "127.0.0.1", port: int = 0) -> None:
+        handler = type("Handler", (_Handler,), {"hook": hook})
+        try:
+            self._http = ThreadingHTTPServer((host, port), handler)
+        except OSError as e:
+            raise TransportError(f"http://{host}:{port}", f"cannot listen: {e.strerror}") from None
+        self._http.daemon_threads = True
+        self.port: int = self._http.server_address[1]
+        self.url = f"http://{host}:{self.port}"
+        self._thread = threading.Thread(target=self._http.serve_forever, name="sim-control",
+                                        kwargs={"poll_interval": 0.05}, daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        """Stop serving; idempotent."""
+        if self._thread.is_alive():
+            self._http.shutdown()
+            self._thread.join()
+        self._http.server_close()
+
+    def __enter__(self) -> ControlServer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class _Handler(BaseHTTPRequestHandler):
+    hook: ControlHook
+
+    def do_GET(self) -> None:
+        if self.path == TRUTH_PATH:
+            self._reply(200, self.hook.truth)
+        else:
+            self._reply(404, {"error": f"no {self.path}"})
+
+    def do_POST(self) -> None:
+        if self.path != PLACE_PATH:
+            self._reply(404, {"error": f"no {self.path}"})
+            return
+        try:
+            body = json.loads(self.rfile.read(int(self.headers.get("Content-Length", 0))))
+            x, y, yaw = (float(v) for v in body["pose_w"])
+            if not all(math.isfinite(v) for v in (x, y, yaw)):
+                raise ValueError("not finite")
+        except (ValueError, TypeError, KeyError) as e:
+            self._reply(400, {"error": f"want {{\"pose_w\": [x_m, y_m, yaw_rad]}}: {e}"})
+            return
+        error = self.hook.place((x, y, yaw))
+        if error is None:
+            self._reply(200, {"t_ns": self.hook.truth["t_ns"], "pose_w": [x, y, yaw]})
+        else:
+            self._reply(400, {"error": error})
+
+    def _reply(self, status: int, data: dict[str, Any]) -> None:
+        body = json.dumps(data).encode()
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+
+    def log_message(self, format: str, *args: Any) -> None:
+        """Quiet: requests are not news."""
