@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -105,3 +106,29 @@ def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1].endswith(
         "none.mp4: no such video file (nor a device index or URL)")
+
+
+def run_robot(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*VMNAV, "robot", *args], capture_output=True, text=True,
+                          timeout=timeout_s)
+
+
+def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) -> None:
+    aria, camera = sim_serve
+    memory = ["--memory", str(tmp_path / "memory"), "--no-log"]
+    bad_camera = run_robot("--aria", aria, "--camera", camera.replace("stream", "nothing"),
+                           *memory)
+    assert bad_camera.returncode == 1
+    assert "nothing.mjpg: cannot open with OpenCV" in bad_camera.stderr.splitlines()[-1]
+    started = time.monotonic()
+    no_robot = run_robot("--aria", "socket://127.0.0.1:9", "--camera", camera, *memory)
+    assert no_robot.returncode == 1 and time.monotonic() - started < 30
+    assert "socket://127.0.0.1:9: no Pioneer ready within 10 s" in no_robot.stderr
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        in_use = run_robot("--aria", aria, "--camera", camera, "--mavlink",
+                           f"udpin:127.0.0.1:{port}", *memory)
+    assert in_use.returncode == 1
+    assert f"udpin:127.0.0.1:{port}" in in_use.stderr.splitlines()[-1]
+    assert "Traceback" not in bad_camera.stderr + no_robot.stderr + in_use.stderr
