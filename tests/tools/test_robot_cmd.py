@@ -8,13 +8,10 @@ the robot's memory; SIGTERM then stops the robot cleanly.
 
 from __future__ import annotations
 
-import re
 import signal
 import socket
 import subprocess
-import sys
 import time
-from pathlib import Path
 
 import pytest
 
@@ -23,25 +20,7 @@ from shared.clock import WallClock
 from shared.logs.reader import log_info
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
-
-VMNAV = [sys.executable, "-m", "tools.cli"]
-
-
-def start(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
-    return subprocess.Popen([*VMNAV, *argv], stdout=log.open("wb"), stderr=subprocess.STDOUT)
-
-
-def wait_for(pattern: str, log: Path, process: subprocess.Popen[bytes],
-             timeout_s: float = 30.0) -> re.Match[str]:
-    """The first match of ``pattern`` in the process's output, waiting for it."""
-    limit = time.monotonic() + timeout_s
-    while time.monotonic() < limit:
-        found = re.search(pattern, log.read_text())
-        if found:
-            return found
-        assert process.poll() is None, log.read_text()
-        time.sleep(0.1)
-    raise AssertionError(f"no {pattern!r} in: {log.read_text()}")
+from tests.tools.processes import VMNAV, start, wait_for
 
 
 @pytest.fixture
