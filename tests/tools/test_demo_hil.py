@@ -20,7 +20,7 @@ def test_teach_by_teleoperation_then_repeat_over_real_transports(tmp_path, capsy
     assert code == 0, printed
     report = json.loads((out / "report.json").read_text())
     assert report["reached_goal"] and report["route"] == "east_a"
-    assert report["final_position_error_m"] < 0.10
+    assert report["final_position_error_m"] < 0.15  # as the lock-step demo test
     assert report["key_images_taught"] >= 5
     assert report["exit_codes"] == {"robot": 143, "sim": 0}  # SIGTERM; sim serve exits 0
     assert any(n.startswith("path 0 'east_a'") for n in report["notices"])
