@@ -95,6 +95,25 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="processes the vehicles are spread over [default: 2]")
     link.add_argument("--seed", type=int, default=0, help="seed of the dispatched goals")
     link.set_defaults(run=run_link)
+    faults = bench_sub.add_parser(
+        "faults",
+        help="issue 8's fault cases on the hardware-in-the-loop rig, each repeated",
+        description="Teach a 2.5 m route in lock-step, then run every fault case of issue 8 "
+        "(ARIA link cut, camera stall, ground station silent, SIGKILL, garbage at every "
+        "boundary) on the hardware-in-the-loop rig: the simulator's ARIA server and camera in "
+        "this process, vmnav robot as a subprocess, a ground station over UDP. Each case runs "
+        "--repeat times in a row, each time on a fresh rig; print JSON {case: {passed, runs, "
+        "failures, wall_s_max}}. One repetition of every case takes about 2 min.",
+    )
+    faults.add_argument("--repeat", type=int, default=10, metavar="N",
+                        help="runs of each case [default: 10, issue 8's 'passes 10 times in "
+                             "a row']")
+    faults.add_argument("--cases", metavar="NAMES",
+                        help="comma-separated cases to run [default: all]")
+    faults.add_argument("--out", type=Path, metavar="DIR",
+                        help="keep every run's folder (memory, parameters, logs, the robot's "
+                             "output) in DIR [default: a temporary folder, removed at the end]")
+    faults.set_defaults(run=run_faults)
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",
@@ -238,6 +257,35 @@ def run_link(args: argparse.Namespace) -> int:
         vehicles=args.vehicles, window_s=args.window_s, dispatches=args.dispatches,
         vehicle_processes=args.vehicle_processes, seed=args.seed))
     print(json.dumps({"benchmark": "link", "load_average_at_start": load, **result}, indent=2))
+    return 0
+
+
+def run_faults(args: argparse.Namespace) -> int:
+    """Print the fault benchmark's JSON (exit 0 whatever the cases did: the JSON says)."""
+    import sys
+    import tempfile
+
+    from shared.errors import InputError
+    from tools.fault_bench import CASES, bench_faults
+
+    if args.repeat < 1:
+        raise InputError("--repeat", f"must be >= 1, got {args.repeat}")
+    names = list(CASES)
+    if args.cases is not None:
+        names = [name.strip() for name in args.cases.split(",") if name.strip()]
+        unknown = [name for name in names if name not in CASES]
+        if unknown or not names:
+            what = f"unknown case {', '.join(unknown)}" if unknown else "no case"
+            raise InputError("--cases", f"{what} (known: {', '.join(CASES)})")
+
+    def progress(line: str) -> None:
+        print(f"vmnav bench faults: {line}", file=sys.stderr, flush=True)
+
+    with tempfile.TemporaryDirectory(prefix="vmnav-faults-") as scratch:
+        folder = args.out if args.out is not None else Path(scratch)
+        result = bench_faults(names, args.repeat, folder, progress,
+                              keep_passed=args.out is not None)
+    print(json.dumps(result, indent=2))
     return 0
 
 

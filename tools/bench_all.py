@@ -17,7 +17,8 @@ development machine (shared with other jobs): ``--quick`` measured 2 min 42 s (s
 log 3 s, link 8 s). The full run is estimated from those parts at about 42 min:
 follow 20 seeds x (teach 60 s + two laws x 30 s) = 40 min, vision about 1.5 min,
 link 20 s, log 10 s, sim 5 s. Follow caches each seed's memory in ``OUT/follow``,
-so a second full run takes about 22 min.
+so a second full run takes about 22 min. ``faults`` (issue 8) adds about 2 min per
+repetition of its cases: one with ``--quick``, ten in the full run (measured 20 min).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "follow": ("--seeds", "1", "--laws", DEMO_LAW),
     "log": ("--seconds", "2"),
     "link": ("--window-s", "2", "--dispatches", "50"),
+    "faults": ("--repeat", "1"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).
 EXIT_BENCH_FAILED = 1

@@ -1,9 +1,9 @@
 """Every benchmark's targets in one table, and their check against a benchmark's JSON.
 
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
-6: MAVLink link, 7: field logging; DESIGN.md sec. 6 gathers them). The simulator's
-and the vision benchmark's own modules hold theirs (their JSON prints them) and are
-read from there, not copied.
+6: MAVLink link, 7: field logging, 8: every fault case passes every run; DESIGN.md
+sec. 6 gathers them). The simulator's and the vision benchmark's own modules hold
+theirs (their JSON prints them) and are read from there, not copied.
 
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
@@ -22,6 +22,7 @@ from typing import Any
 
 from sim.bench import RENDER_FPS_TARGET
 from tools.demo import DEMO_LAW
+from tools.fault_bench import CASES as FAULT_CASES
 from tools.vision_bench import TARGETS as VISION_TARGETS
 
 #: comparison -> operator.
@@ -77,6 +78,8 @@ TARGETS: tuple[Target, ...] = (
     Target("log", "log_overhead_core_fraction", "<", 0.10, "issue 7"),
     Target("link", "dispatch_ack_ms_p95", "<", 50.0, "issue 6"),
     Target("link", "ground_cpu_fraction_20_vehicles", "<", 0.30, "issue 6"),
+    *(Target("faults", f"{case}.passed", ">=", f"{case}.runs", "issue 8")
+      for case in FAULT_CASES),
 )
 
 

@@ -38,6 +38,7 @@ Rules:
    AUTOPILOT_VERSION. Mission progress and events go out as MISSION_ITEM_REACHED,
    MISSION_CURRENT and STATUSTEXT (``progress``); the application's notices
    (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
+   SYS_STATUS ``errors_comm`` counts the corrupt packets received (:meth:`stats`).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
@@ -62,6 +63,7 @@ from robot.vehicle.telemetry import (
     Builder,
     TelemetryStreams,
     default_periods_ns,
+    sys_status_message,
     system_status,
 )
 from robot.vehicle.user_commands import user_handlers
@@ -165,6 +167,8 @@ class VehicleEndpoint:
         builders: dict[int, Builder] = {
             _HEARTBEAT: self._heartbeat,
             mavlink.MAVLINK_MSG_ID_MISSION_CURRENT: lambda t, us: self._mission.current_message(),
+            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda t, us: sys_status_message(
+                t, us, errors_comm=self.codec.bad_packets),
             **TELEMETRY_BUILDERS,
         }
         self._streams = TelemetryStreams(builders, self._period_ns)
@@ -195,14 +199,16 @@ class VehicleEndpoint:
 
     # -- the I/O surface ----------------------------------------------------------------
 
-    def receive(self, data: bytes, now_ns: int) -> int:
-        """Handle every packet in ``data`` (a datagram, or a chunk of a byte stream).
+    def receive(self, data: bytes, now_ns: int, datagram: bool = False) -> int:
+        """Handle every packet in ``data``: a chunk of a byte stream, or with ``datagram``
+        one whole datagram (a packet it leaves unfinished is corrupt, not continued by
+        the next one: :meth:`~shared.mavlink.dialect.MavlinkCodec.parse`).
 
         Returns:
             How many messages were accepted (0 when all were corrupt or unsigned).
         """
         self._tick(now_ns)
-        messages = self.codec.parse(data)
+        messages = self.codec.parse(data, datagram)
         for msg in messages:
             self._outbox += self._handle(msg, now_ns)
             self._outbox += self._drain_events()

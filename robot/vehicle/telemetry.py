@@ -74,8 +74,10 @@ def _millivolts(volts: float) -> int:
     return min(max(round(volts * 1000), 0), UINT16_MAX - 1)
 
 
-def sys_status_message(t: VehicleTelemetry, time_usec: int) -> Message:
-    """SYS_STATUS: motors (enabled when armed), battery voltage, vision (unhealthy when LOST).
+def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0) -> Message:
+    """SYS_STATUS: motors (enabled when armed), battery voltage, vision (unhealthy when LOST),
+    and ``errors_comm``: the packets received corrupt so far (common.xml: "dropped packets
+    on all links (packets that were corrupted on reception on the MAV)"), capped at 65535.
 
     The GEOFENCE health bit is set although there is no fence: MAVProxy otherwise prints
     a spurious "fence breach" (reference sec. 1.8).
@@ -87,7 +89,8 @@ def sys_status_message(t: VehicleTelemetry, time_usec: int) -> Message:
     if t.mission_state is not MissionState.LOST:
         health |= mavlink.MAV_SYS_STATUS_SENSOR_VISION_POSITION
     return mavlink.MAVLink_sys_status_message(
-        _SENSORS, enabled, health, 0, _millivolts(t.battery_v), -1, -1, 0, 0, 0, 0, 0, 0)
+        _SENSORS, enabled, health, 0, _millivolts(t.battery_v), -1, -1, 0,
+        min(errors_comm, UINT16_MAX), 0, 0, 0, 0)
 
 
 def battery_status_message(t: VehicleTelemetry, time_usec: int) -> Message:
@@ -172,9 +175,9 @@ def home_position_message(t: VehicleTelemetry, time_usec: int) -> Message | None
         0, 0, 0, x_m, -y_m, 0.0, _quat_wxyz_frd(yaw_rad), 0.0, 0.0, 0.0, time_usec)
 
 
-#: The builders of the streams that depend on the telemetry alone.
+#: The builders of the streams that depend on the telemetry alone (SYS_STATUS also counts
+#: the link's corrupt packets: the endpoint builds it).
 TELEMETRY_BUILDERS: dict[int, Builder] = {
-    mavlink.MAVLINK_MSG_ID_SYS_STATUS: sys_status_message,
     mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: battery_status_message,
     mavlink.MAVLINK_MSG_ID_ODOMETRY: odometry_message,
     mavlink.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT: nav_controller_message,

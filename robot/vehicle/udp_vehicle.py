@@ -3,7 +3,8 @@
 Rules:
 
 1. :meth:`UdpVehicle.service` does one round of I/O at ``now_ns``: every waiting
-   datagram into the endpoint, then every packet of ``endpoint.poll`` out, one
+   datagram into the endpoint (each parsed on its own: garbage in one cannot swallow
+   the packets of the next), then every packet of ``endpoint.poll`` out, one
    datagram each. Either the robot's loop calls it, or the vehicle's own thread
    (:meth:`start_thread`, every ``MavlinkConfig.service_period_ns`` on the injected
    clock); never both. The application's callbacks run in that thread.
@@ -67,7 +68,7 @@ class UdpVehicle:
             for data, sender in self.link.receive():
                 for tap in self.packet_taps:
                     tap("in", data, now_ns)
-                if self.endpoint.receive(data, now_ns) and self.link.listening:
+                if self.endpoint.receive(data, now_ns, datagram=True) and self.link.listening:
                     self._reply_to = sender
             self.link.peer = self._reply_to
             for packet in self.endpoint.poll(now_ns):

@@ -59,11 +59,20 @@ class MavlinkCodec(mavlink.MAVLink):
         self.total_bytes_sent += len(data)
         return data
 
-    def parse(self, data: bytes) -> list[Message]:
+    def parse(self, data: bytes, datagram: bool = False) -> list[Message]:
         """Decode every complete packet in ``data`` (plus bytes held from earlier calls).
 
+        Args:
+            data: bytes from the link.
+            datagram: ``data`` is one whole datagram (UDP), which carries whole packets: a
+                packet it leaves unfinished is corrupt (counted) and dropped, so that the
+                next datagram starts afresh. On a byte stream the rest would wait for more
+                bytes: after garbage that reads as the start of a long packet, that holds
+                up to 280 bytes of the good packets that follow.
+
         Returns:
-            The decoded messages in arrival order; partial packets wait for more bytes.
+            The decoded messages in arrival order; partial packets wait for more bytes
+            (unless ``datagram``).
         """
         messages = []
         for msg in self.parse_buffer(data) or ():
@@ -71,6 +80,10 @@ class MavlinkCodec(mavlink.MAVLink):
                 self.bad_packets += 1
             else:
                 messages.append(msg)
+        if datagram and self.buf_len() > 0:
+            self.bad_packets += 1
+            self.buf, self.buf_index = bytearray(), 0
+            self.expected_length = mavlink.HEADER_LEN_V1 + 2  # as a new parser expects
         return messages
 
 

@@ -23,6 +23,13 @@ Rules:
    :meth:`PioneerServer.stop` or the duration. Falling behind by more than
    :data:`MAX_LAG_NS` drops the backlog rather than racing to catch up.
 6. :meth:`PioneerServer.close` releases every link, listener and client; idempotent.
+7. **Faults** (issue 8's fault tests; callable from any thread, applied at the next
+   tick). :meth:`PioneerServer.cut` pulls the cable for a stretch of simulation
+   time: every byte is lost both ways (what clients send is read and dropped,
+   nothing is written to them), while connections open and close as usual; the
+   emulator's watchdog sees a silent client. :meth:`PioneerServer.inject` sends
+   bytes to the active client ahead of the next tick's output (line noise, or a
+   device that is no Pioneer); without an active client, or during a cut, they wait.
 """
 
 from __future__ import annotations
@@ -66,6 +73,10 @@ class PioneerServer:
         self._tcp_client: StreamLink | None = None
         self._active: ByteLink | None = None
         self._stop = threading.Event()
+        self._faults = threading.Lock()  # guards the two requests below (rule 7)
+        self._cut_request_ns: int | None = None
+        self._noise = bytearray()
+        self._cut_until_ns = 0  # the loop's: bytes are lost while sim time is before this
 
     def __enter__(self) -> PioneerServer:
         return self
@@ -85,13 +96,14 @@ class PioneerServer:
         simulation itself (a :class:`~sim.sim_clock.SimClock`), run it as a step hook,
         ``simulation.add_step_hook(lambda now_ns, dt_ns: server.pump())``."""
         sim, emulator = self.emulator.simulation, self.emulator
+        cut = self._cut_now(sim.now_ns)
         for link in self._readable():
             try:
                 data = link.read_available()
             except LinkClosedError as e:
                 self._drop(link, e.problem)
                 continue
-            if data:
+            if data and not cut:
                 self._activate(link)
                 emulator.receive_data(data, sim.now_ns)
         self._accept()  # after the reads: a client that just left has been noticed
@@ -99,6 +111,11 @@ class PioneerServer:
         active = self._active
         if active is None:
             return
+        if cut:
+            out = b""
+        elif self._noise:
+            with self._faults:
+                out, self._noise = bytes(self._noise) + out, bytearray()
         try:
             active.write(out)
         except LinkClosedError as e:
@@ -106,6 +123,14 @@ class PioneerServer:
             return
         if active is self._tcp_client and emulator.state is ConnState.CLOSED:
             self._drop(active, "closed after the client's CLOSE")
+
+    def _cut_now(self, now_ns: int) -> bool:
+        """Whether the cable is cut at ``now_ns`` (rule 7), starting a requested cut."""
+        if self._cut_request_ns is not None:
+            with self._faults:
+                self._cut_until_ns = now_ns + self._cut_request_ns
+                self._cut_request_ns = None
+        return now_ns < self._cut_until_ns
 
     def _readable(self) -> list[ByteLink]:
         client = self._tcp_client
@@ -141,6 +166,20 @@ class PioneerServer:
         if link is self._active:
             self._active = None
             self.emulator.reset_session()
+
+    # -- faults (rule 7) ------------------------------------------------------------
+
+    def cut(self, duration_ns: int) -> None:
+        """Lose every byte both ways for the next ``duration_ns`` of simulation time, from
+        the next tick (replaces a cut in progress; 0 mends it)."""
+        with self._faults:
+            self._cut_request_ns = duration_ns
+
+    def inject(self, data: bytes) -> None:
+        """Send ``data`` to the active client ahead of the next tick's output (after a cut
+        in progress)."""
+        with self._faults:
+            self._noise += data
 
     # -- the real-time loop ---------------------------------------------------------
 

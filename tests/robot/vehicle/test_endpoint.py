@@ -148,6 +148,17 @@ class TestTelemetry:
         current = net.ground.of_type("MISSION_CURRENT")[-1]
         assert (current.total, current.mission_state) == (0, mavlink.MISSION_STATE_NO_MISSION)
 
+    def test_corrupt_packets_are_counted_in_sys_status(self, net: Net) -> None:
+        packet = net.ground.codec.pack(mavlink.MAVLink_command_long_message(
+            1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 0, 0, 0, 0, 0, 0, 0))
+        flipped = packet[:-3] + bytes([packet[-3] ^ 0xFF]) + packet[-2:]  # a payload byte
+        for _ in range(3):
+            net.ground.link.send(flipped)
+        net.advance(2.0)
+        status = net.ground.of_type("SYS_STATUS")[-1]
+        assert status.errors_comm == net.vehicle.endpoint.stats().bad_packets == 3
+        assert not net.ground.of_type("COMMAND_ACK")  # the corrupt request was dropped
+
     def test_servo_state_and_cross_track_error(self, net: Net, app: FakeApp) -> None:
         app.update(mission_state=MissionState.FOLLOWING, goal_key=6, odom_pose=(1.0, 0.5, 0.1),
                    servo=ServoTelemetry(current_key=2, next_key=3, matches=87,

@@ -8,6 +8,7 @@ import pytest
 
 from shared.clock import ManualClock
 from shared.errors import IllegalEventError
+from shared.mavlink.dialect import mavlink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 
@@ -32,6 +33,13 @@ def test_udpout_vehicle_reaches_a_listening_ground(tmp_path: Path, app: FakeApp,
         assert request[7] == 20  # PARAM_REQUEST_READ, the only datagram the ground sent
     finally:
         net.close()
+
+
+def test_garbage_in_one_datagram_does_not_hold_up_the_next(net: Net) -> None:
+    net.ground.link.send(b"\xfd\xff\x00")  # the start of a 255-byte packet, cut short
+    ack = net.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_HEARTBEAT)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED and net.now_ns < 1_000_000_000
+    assert net.vehicle.endpoint.stats().bad_packets == 1
 
 
 def test_close_is_idempotent_and_final(tmp_path: Path, app: FakeApp,

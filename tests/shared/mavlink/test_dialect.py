@@ -69,3 +69,14 @@ def test_codec_resyncs_on_garbage_and_counts_corrupt_packets() -> None:
     assert [m.seq for m in received] == [i for i in range(20) if i != 5]
     assert [m.get_seq() for m in received][:3] == [0, 1, 2]
     assert ground.bad_packets >= 1
+
+
+def test_a_datagram_never_leaves_bytes_for_the_next_one() -> None:
+    packet = make_codec(1, 1).pack(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3))
+    garbage = b"\x00junk\xfd\xff\x00"  # ends like the start of a 255-byte packet
+    datagrams = make_codec(255, 190)
+    assert datagrams.parse(garbage, datagram=True) == []
+    assert [m.get_type() for m in datagrams.parse(packet, datagram=True)] == ["HEARTBEAT"]
+    assert datagrams.bad_packets == 2  # the junk, and the packet cut short
+    stream = make_codec(255, 190)
+    assert stream.parse(garbage) == [] and stream.parse(packet) == []  # a stream waits

@@ -139,6 +139,51 @@ class TestOneClientAtATime:
         assert host.session.state in OPEN_STATES and len(host.sips) == 10
 
 
+def driving_rig() -> Rig:
+    """A lock-step rig connected, motors on, VEL 300 mm/s for 1 s."""
+    rig = Rig()
+    rig.connect()
+    rig.command(Command.ENABLE, 1)
+    rig.command(Command.VEL, 300)
+    rig.run_for(1.0)
+    assert rig.sim.body.velocity_base[0] > 0.25
+    return rig
+
+
+class TestFaults:
+    def test_a_cut_loses_every_byte_and_the_watchdog_stops_the_robot(self) -> None:
+        rig = driving_rig()
+        rig.server.cut(3_000_000_000)
+        sips = len(rig.host.sips)
+        rig.run_for(1.4)  # the client's last packet came <= 0.5 s before the cut
+        assert len(rig.host.sips) == sips and rig.sim.body.velocity_base[0] > 0.25
+        rig.run_for(1.1)  # the watchdog trips 2 s after it; 0.3 m/s brakes to 0 in 0.3 s
+        assert rig.emulator.stats.watchdog_trips == 1
+        assert rig.sim.body.velocity_base[0] == pytest.approx(0.0, abs=1e-3)
+        rig.run_for(2.0)  # the cable is back at 3 s: the session and the motion resume
+        assert len(rig.host.sips) > sips and rig.host.session.state in OPEN_STATES
+        assert rig.sim.body.velocity_base[0] > 0.25 and rig.emulator.stats.sessions == 1
+
+    def test_a_zero_cut_mends_the_cable(self) -> None:
+        rig = driving_rig()
+        rig.server.cut(10_000_000_000)
+        rig.run_for(0.5)
+        sips = len(rig.host.sips)
+        rig.server.cut(0)
+        rig.run_for(0.5)
+        assert len(rig.host.sips) > sips
+
+    def test_injected_bytes_reach_the_client_and_the_sips_go_on(self) -> None:
+        rig = driving_rig()
+        noise = bytes(np.random.default_rng(5).integers(0, 256, 500, dtype=np.uint8))
+        rig.server.inject(noise)
+        sips = len(rig.host.sips)
+        rig.run_for(1.0)
+        session = rig.host.session
+        assert session.skipped_bytes + session.bad_checksums > 0
+        assert len(rig.host.sips) >= sips + 8 and session.state in OPEN_STATES
+
+
 class TestTcp:
     def test_drive_then_close_closes_the_socket(self) -> None:
         listener = TcpListener("127.0.0.1", 0)
