@@ -208,7 +208,6 @@ class RobotRuntime:
         self._servo: ServoTelemetry | None = None
         self._twist = (0.0, 0.0)
         self._home: OdomPose | None = None
-        self._last_key: int | None = None
         self._stalled_since_ns: int | None = None
         self._snapshot = VehicleTelemetry(mode=self._mode, armed=self._armed)
 
@@ -280,8 +279,11 @@ class RobotRuntime:
         return self._snapshot
 
     def validate_goals(self, goals: tuple[Goal, ...]) -> MissionRefusal | None:
+        """Every goal is a key image of the memory, and each leg between consecutive goals
+        has a route. Where the robot stands is checked when it localizes (a robot may have
+        been carried since its last key image): a first goal out of reach then ends the run."""
         memory = self._memory
-        previous = self._last_key
+        previous: int | None = None
         for seq, goal in enumerate(goals):
             key = goal.key_image_id
             if key not in memory.keyframes:
@@ -432,11 +434,6 @@ class RobotRuntime:
         if follow is not None:
             self._twist = (follow.twist.v_m_s, follow.twist.omega_rad_s)
             self._servo = _servo_telemetry(run, record)
-            targets = run.follower.targets if run.follower is not None else ()
-            if follow.switch is not None:
-                self._last_key = targets[follow.switch.reached_index]
-        elif record.localization is not None and record.localization.ok:
-            self._last_key = record.localization.keyframe_id
         if self._log is not None:
             self._log.cycle(record, image, () if run.follower is None else run.follower.targets)
         self._forward_events(run)

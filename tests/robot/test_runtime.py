@@ -270,3 +270,15 @@ def test_config_from_the_ground_applies_to_teleoperation(taught, memory_dir) -> 
     robot.runtime.set_mode(Mode.MANUAL)
     robot.drive(1.0, x=1.0)
     assert robot.runtime.telemetry().velocity == pytest.approx((0.1, 0.0))
+
+
+def test_an_unreachable_leg_is_refused_but_a_goal_behind_a_carried_robot_is_not(
+        taught, memory_dir) -> None:
+    robot = SimRobot(taught[0], memory_dir, EAST_A)
+    ids = robot.runtime.memory.paths[0].keyframe_ids
+    refusal = robot.runtime.validate_goals((Goal(ids[-1]), Goal(ids[0])))  # paths run one way
+    assert refusal is not None and refusal.result == mavlink.MAV_MISSION_DENIED
+    assert f"item 1: no route from key image {ids[-1]} to {ids[0]}" in refusal.reason
+    robot.runtime.start_mission((Goal(ids[-1]),), 0)
+    robot.run(60.0, until=lambda t: t.mode is Mode.HOLD)
+    assert robot.runtime.validate_goals((Goal(ids[2]),)) is None  # it may be carried back
