@@ -22,7 +22,8 @@ The story (:func:`run_hil`):
 3. Evaluation from the truth: the repeat's true trajectory against the teach's (lateral
    and heading errors after the same settling distance as the lock-step demo), the
    final position error against the teach's end, the mission's outcome as the ground
-   station saw it. ``OUT/report.json`` holds it all.
+   station saw it; from the robot's field log: key images reached, mean matches, LOST
+   events. ``OUT/report.json`` holds it all.
 
 Every process is stopped (SIGTERM, then SIGKILL after a grace period) on success,
 failure and Ctrl-C.
@@ -52,6 +53,8 @@ from robot.control_law import settling_distance_m
 from shared.clock import WallClock
 from shared.config import LogConfig, SimConfig, VmnavConfig
 from shared.errors import InputError, TransportError
+from shared.logs import topics
+from shared.logs.reader import read_messages
 from shared.mavlink.goal import Goal
 from shared.memory import read_memory
 from sim.teach_driver import TeachDriver
@@ -226,6 +229,7 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         notices = tuple(station.vehicle.notices) if station.vehicle is not None else ()
         outcome = station.mission_outcome
     exit_codes = processes.stop()
+    servo = servo_figures(sorted(logs.glob("robot-*.mcap")))
     settle_m = settling_distance_m(config.control.pole_1_m, START_OFFSET_M, SETTLED_M)
     errors = track_errors(repeat.poses_w, taught.poses_w) if len(repeat.t_s) >= 2 else None
     final, end = repeat.poses_w[-1], taught.poses_w[-1]
@@ -243,6 +247,7 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         "repeat_sim_time_s": round(float(repeat.t_s[-1] - repeat.t_s[0]), 2),
         "wall_time_s": round(wall_s, 2),
         "mission_upload_ms": round(upload_ms, 1),
+        **servo,
         "notices": list(notices),
         "exit_codes": exit_codes,
     }
@@ -321,6 +326,23 @@ def follow(station: GroundStation, sim: SimControl, goal: int,
     times.append(t_ns / 1e9)
     poses.append(pose)
     return Drive(np.array(times), np.array(poses)), upload_ms
+
+
+def servo_figures(robot_logs: list[Path]) -> dict[str, Any]:
+    """What the robot's field log says of the repeat (its ``/servo/state``): key images
+    reached (switches), mean matches while following, LOST events; the lock-step
+    report's figures that only the robot process knows."""
+    switches = lost = 0
+    matches: list[int] = []
+    for path in robot_logs:
+        for message in read_messages(path, [topics.SERVO_STATE]):
+            state = message.data
+            switches += state["switch_reason"] is not None
+            lost += bool(state["lost"])
+            if state["mission_state"] == "following":
+                matches.append(state["matched_points"])
+    return {"key_images_reached": switches, "lost_events": lost,
+            "mean_matches": round(float(np.mean(matches)), 1) if matches else None}
 
 
 def robot_config_text(config: VmnavConfig) -> str:

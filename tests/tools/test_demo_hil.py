@@ -22,6 +22,8 @@ def test_teach_by_teleoperation_then_repeat_over_real_transports(tmp_path, capsy
     assert report["reached_goal"] and report["route"] == "east_a"
     assert report["final_position_error_m"] < 0.15  # as the lock-step demo test
     assert report["key_images_taught"] >= 5
+    assert 1 <= report["key_images_reached"] <= report["key_images_taught"]
+    assert report["mean_matches"] > 20
     assert report["exit_codes"] == {"robot": 143, "sim": 0}  # SIGTERM; sim serve exits 0
     assert any(n.startswith("path 0 'east_a'") for n in report["notices"])
     assert "hil: taught 'east_a' by teleoperation over MAVLink" in printed
