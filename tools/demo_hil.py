@@ -59,9 +59,9 @@ from shared.mavlink.goal import Goal
 from shared.memory import read_memory
 from sim.teach_driver import TeachDriver
 from sim.world import load_world
-from tools.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M
+from tools.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M, TruePose
 from tools.demo_report import SETTLED_M, track_errors, track_metrics
-from tools.teach_cmd import find_route
+from tools.teach_cmd import DRIVER_STREAM, find_route
 
 #: The operator's command period, s (MANUAL_CONTROL at 10 Hz).
 OPERATOR_PERIOD_S = 0.1
@@ -69,10 +69,6 @@ OPERATOR_PERIOD_S = 0.1
 START_TIMEOUT_S = 60.0
 #: SIGTERM, then SIGKILL after this long, s.
 STOP_GRACE_S = 10.0
-#: Mixed with the seed for the operator's wander (as the lock-step teacher's stream).
-_DRIVER_STREAM = 0x54454143
-
-TruePose = tuple[float, float, float]
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,8 +256,8 @@ def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: Vmnav
     Raises:
         GroundError: the robot refused teaching, or did not store the path.
     """
-    driver = TeachDriver(waypoints, config.teach_driver,
-                         np.random.default_rng([seed, _DRIVER_STREAM]))
+    driver = TeachDriver(waypoints, config.teach_driver,  # the lock-step teacher's draws
+                         np.random.default_rng([seed, DRIVER_STREAM]))
     teleop = config.teleop
     station.teach_start(name)
     times, poses = [], []

@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from sim.world import Route, World
 
 #: Mixed with the simulation seed for the teach driver's random wander.
-_DRIVER_STREAM = 0x54454143
+DRIVER_STREAM = 0x54454143
 #: A drive may take this many times its length at the minimum cruise speed before it is abandoned.
 _DURATION_MARGIN = 3.0
 #: ... plus this, s (start and stop).
@@ -219,7 +219,7 @@ def teach_in_sim(
     renderer = FisheyeRenderer.for_simulation(sim, camera)
     driver_config = config.teach_driver
     driver = TeachDriver(
-        route.waypoints, driver_config, np.random.default_rng([sim_config.seed, _DRIVER_STREAM])
+        route.waypoints, driver_config, np.random.default_rng([sim_config.seed, DRIVER_STREAM])
     )
     slowest_m_s = driver_config.speed_m_s * (1.0 - driver_config.speed_variation)
     max_duration_s = _DURATION_MARGIN * driver.length_m / slowest_m_s + _DURATION_EXTRA_S
