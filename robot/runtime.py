@@ -47,7 +47,13 @@ Rules:
 7. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
    mission run carries on with the next frame.
 8. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
-   paths saved, photos found or not, refusals decided in the loop, camera stalls.
+   paths saved, photos found or not, refusals decided in the loop, camera stalls, the
+   base going quiet and coming back.
+9. The base not reporting (``BaseState.reporting`` False: a cut ARIA cable): the robot
+   stops (its commands may not arrive; the Pioneer's watchdog stops it too), teaching
+   skips those frames (the odometry is frozen), and a mission run follows
+   ``MissionConfig.base_lost_action``: "hold" ends it (HOLD, as an abort), "continue"
+   pauses it until the base reports again.
 """
 
 from __future__ import annotations
@@ -209,6 +215,7 @@ class RobotRuntime:
         self._twist = (0.0, 0.0)
         self._home: OdomPose | None = None
         self._stalled_since_ns: int | None = None
+        self._base_lost_since_ns: int | None = None
         self._snapshot = VehicleTelemetry(mode=self._mode, armed=self._armed)
 
     @property
@@ -238,17 +245,20 @@ class RobotRuntime:
                                           f"{(t_ns - self._stalled_since_ns) / 1e9:.1f} s")
             self._stalled_since_ns = None
         base = self._base.state()
-        if self._home is None:
+        if self._home is None and base.reporting:
             self._home = base.odom_pose
         self._apply_requests(t_ns, image)
+        self._watch_base(t_ns, base)
         record = None
-        if self._run is not None and self._mode in _MISSION_MODES and self._armed:
+        if self._base_lost_since_ns is not None:
+            self._stop()
+        elif self._run is not None and self._mode in _MISSION_MODES and self._armed:
             record = self._cycle(self._run, t_ns, image)
         elif self._mode is Mode.MANUAL and self._armed:
             self._drive_manual(t_ns)
         else:
             self._stop()
-        if self._teaching is not None:
+        if self._teaching is not None and self._base_lost_since_ns is None:
             self._teach_frame(self._teaching, t_ns, image, base)
         self._publish(base)
         return record
@@ -259,8 +269,10 @@ class RobotRuntime:
             self._stalled_since_ns = now_ns
             self._say(now_ns, logging.WARNING, "camera stalled: stopped until frames return")
         self._apply_requests(now_ns, None)
+        base = self._base.state()
+        self._watch_base(now_ns, base)
         self._stop()
-        self._publish(self._base.state())
+        self._publish(base)
 
     def close(self) -> None:
         """Stop the base; a mission run ends as the operator's abort; teaching is dropped."""
@@ -475,6 +487,24 @@ class RobotRuntime:
 
     # -- driving ------------------------------------------------------------------------
 
+    def _watch_base(self, t_ns: int, base: BaseState) -> None:
+        """Rule 9: notice the base going quiet and coming back; "hold" ends the run."""
+        lost_since = self._base_lost_since_ns
+        if not base.reporting and lost_since is None:
+            self._base_lost_since_ns = t_ns
+            if self._run is None:
+                self._say(t_ns, logging.WARNING, "base not reporting: stopped")
+            elif self._config.mission.base_lost_action == "hold":
+                self._say(t_ns, logging.WARNING, "base not reporting: stopped, mission held")
+                self._end_run(t_ns, "the base stopped reporting")
+            else:
+                self._say(t_ns, logging.WARNING, "base not reporting: stopped, mission paused")
+        elif base.reporting and lost_since is not None:
+            self._base_lost_since_ns = None
+            resumes = ", mission resumes" if self._run is not None else ""
+            self._say(t_ns, logging.INFO,
+                      f"base reporting again after {(t_ns - lost_since) / 1e9:.1f} s{resumes}")
+
     def _drive_manual(self, t_ns: int) -> None:
         manual = self._manual
         teleop = self._config.teleop
@@ -560,7 +590,7 @@ class RobotRuntime:
             mission_seq=(None if mission is None or mission.first_seq is None
                          else mission.first_seq + min(mission.index, len(mission.goals) - 1)),
             reached_seqs=() if mission is None else mission.reached,
-            home_pose=self._home)
+            home_pose=self._home, base_reporting=self._base_lost_since_ns is None)
 
 
 def _stick(value: float) -> float:

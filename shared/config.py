@@ -241,6 +241,10 @@ class PioneerDriverConfig:
     """Longest wait between re-open attempts, ns."""
     noise_report_period_ns: int = 1_000_000_000
     """Report corrupt and unexpected input at most this often, ns."""
+    report_timeout_ns: int = 1_000_000_000
+    """No SIP for this long and the base is "not reporting" (``BaseState.reporting``): the
+    robot stops and applies ``MissionConfig.base_lost_action``, ns. Ten SIP cycles, half
+    the robot's watchdog; the link itself is given up only after ``link.link_timeout_ns``."""
     max_speed_m_s: float = 0.6
     """SETV: translational speed limit, m/s."""
     max_omega_rad_s: float = math.radians(43)
@@ -259,8 +263,8 @@ class PioneerDriverConfig:
         for name in (
             "baud", "write_timeout_s", "service_period_ns", "config_retry_ns", "config_wait_ns",
             "command_refresh_ns", "reconnect_initial_ns", "reconnect_max_ns",
-            "noise_report_period_ns", "max_speed_m_s", "max_omega_rad_s", "accel_m_s2",
-            "decel_m_s2", "rot_accel_rad_s2", "rot_decel_rad_s2",
+            "noise_report_period_ns", "report_timeout_ns", "max_speed_m_s", "max_omega_rad_s",
+            "accel_m_s2", "decel_m_s2", "rot_accel_rad_s2", "rot_decel_rad_s2",
         ):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.reconnect_max_ns >= self.reconnect_initial_ns,
@@ -995,6 +999,14 @@ class SwitchingConfig:
         require(self.hold_frames >= 1, f"hold_frames must be >= 1, got {self.hold_frames}")
 
 
+#: What a mission run does when the base stops reporting (a cut ARIA cable, a Pioneer
+#: that went quiet; :attr:`MissionConfig.base_lost_action`). The robot stops either way
+#: (and the Pioneer's own watchdog stops it 2 s after the last packet it got): "hold"
+#: ends the run and waits in HOLD for the operator, "continue" pauses the run and goes
+#: on when the base reports again.
+BASE_LOST_ACTIONS = ("hold", "continue")
+
+
 @dataclass(frozen=True, slots=True)
 class MissionConfig:
     """Give-up policy of the mission state machine (``robot.mission``)."""
@@ -1008,11 +1020,16 @@ class MissionConfig:
     """LOST for this long without relocalizing fails the mission, ns."""
     relocalize_attempts: int = 10
     """This many failed relocalizations in one LOST episode fail the mission."""
+    base_lost_action: str = "continue"
+    """One of ``BASE_LOST_ACTIONS``: what a mission run does when the base stops reporting."""
 
     def __post_init__(self) -> None:
         for name in ("localize_timeout_ns", "localize_attempts", "relocalize_timeout_ns",
                      "relocalize_attempts"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.base_lost_action in BASE_LOST_ACTIONS,
+                f"base_lost_action must be one of {', '.join(BASE_LOST_ACTIONS)}, "
+                f"got {self.base_lost_action!r}")
 
 
 #: What the vehicle does when the ground station's heartbeat stops

@@ -52,6 +52,9 @@ class BaseState:
         stalled: a motor is stalled now.
         battery_v: battery voltage, V.
         motors_enabled: the motors accept velocity commands.
+        reporting: the base's reports are current (for a Pioneer: connected, and its
+            last SIP is recent); False means the fields above are stale and commands
+            may not arrive.
     """
 
     odom_pose: tuple[float, float, float]
@@ -60,6 +63,7 @@ class BaseState:
     stalled: bool
     battery_v: float
     motors_enabled: bool
+    reporting: bool = True
 
     def __post_init__(self) -> None:
         if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):

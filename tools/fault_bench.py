@@ -18,6 +18,7 @@ from typing import Any
 
 from tools.fault_cases import (
     aria_link_cut,
+    aria_link_cut_hold,
     camera_stall,
     gcs_silent_continue,
     gcs_silent_hold,
@@ -36,6 +37,7 @@ from tools.hil_rig import Taught, teach
 #: Every case by name, in the order they run.
 CASES: dict[str, Callable[[Taught, Path], None]] = {
     "aria_link_cut": aria_link_cut,
+    "aria_link_cut_hold": aria_link_cut_hold,
     "camera_stall": camera_stall,
     "gcs_silent_hold": gcs_silent_hold,
     "gcs_silent_continue": gcs_silent_continue,

@@ -23,7 +23,13 @@ from collections import Counter
 from pathlib import Path
 
 from shared.clock import NS_PER_S
-from shared.config import GCS_LOST_ACTIONS, AriaLinkConfig, MavlinkConfig, TeleopConfig
+from shared.config import (
+    BASE_LOST_ACTIONS,
+    GCS_LOST_ACTIONS,
+    AriaLinkConfig,
+    MavlinkConfig,
+    TeleopConfig,
+)
 from shared.logs import topics
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
@@ -67,22 +73,59 @@ def go_silent(hil: Hil, seconds: float) -> int:
 # -- the cases ----------------------------------------------------------------------------
 
 
+def cut_aria_link(hil: Hil) -> None:
+    """Cut the ARIA cable for :data:`CUT_S` and wait until the robot says its base reports
+    again. Checks that the Pioneer's watchdog stopped the base (the robot's own stop cannot
+    reach it through a cut cable), and that the robot said the base went quiet."""
+    cut_ns, cut_length_ns = hil.sim.now_ns, round(CUT_S * NS_PER_S)
+    hil.sim.server.cut(cut_length_ns)
+    hil.wait_sim(cut_ns + cut_length_ns)
+    watchdog_ns = hil.sim.emulator.config.link.watchdog_timeout_ns
+    moving = hil.sim.truth.still(cut_ns + watchdog_ns + BRAKE_NS, cut_ns + cut_length_ns)
+    expect(moving is None, f"the base did not stop within the watchdog time: {moving}")
+    expect(hil.sim.emulator.stats.watchdog_trips >= 1, "the emulator's watchdog never tripped")
+    expect(hil.notice("base not reporting: stopped") is not None,
+           f"no 'base not reporting' notice: {hil.notices()}")
+    hil.run_until(lambda: hil.notice("base reporting again") is not None, 20.0,
+                  "the robot's 'base reporting again'")
+    connects = hil.robot.output().count("pioneer: connected to")
+    expect(connects >= 2, f"the driver connected {connects} time(s): no reconnection")
+
+
 def aria_link_cut(taught: Taught, folder: Path) -> None:
-    """The ARIA link is cut mid-route for :data:`CUT_S`: the emulator's watchdog stops the
-    base, the driver gives the link up and reconnects, the mission resumes to its goal."""
+    """The ARIA link is cut mid-route for :data:`CUT_S` (``FS_BASE_ACTION`` continue, the
+    default): the robot stops when the SIPs stop, the driver gives the link up and
+    reconnects, the mission resumes to its goal."""
     goal = taught.keyframe_ids[6]
     with open_hil(taught, folder) as hil:
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
-        cut_ns, cut_length_ns = hil.sim.now_ns, round(CUT_S * NS_PER_S)
-        hil.sim.server.cut(cut_length_ns)
-        hil.wait_sim(cut_ns + cut_length_ns)
-        watchdog_ns = hil.sim.emulator.config.link.watchdog_timeout_ns
-        moving = hil.sim.truth.still(cut_ns + watchdog_ns + BRAKE_NS, cut_ns + cut_length_ns)
-        expect(moving is None, f"the base did not stop within the watchdog time: {moving}")
-        expect(hil.sim.emulator.stats.watchdog_trips >= 1, "the emulator's watchdog never tripped")
+        cut_aria_link(hil)
+        expect(hil.notice("base not reporting: stopped, mission paused") is not None,
+               f"no 'mission paused' notice: {hil.notices()}")
+        expect(hil.notice(r"base reporting again after [\d.]+ s, mission resumes") is not None,
+               f"no 'mission resumes' notice: {hil.notices()}")
         hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
-        connects = hil.robot.output().count("pioneer: connected to")
-        expect(connects >= 2, f"the driver connected {connects} time(s): no reconnection")
+
+
+def aria_link_cut_hold(taught: Taught, folder: Path) -> None:
+    """As :func:`aria_link_cut` with ``FS_BASE_ACTION`` set to "hold" from the ground: the
+    mission ends in HOLD, the robot stays put when the base is back, MISSION_START resumes."""
+    goal = taught.keyframe_ids[6]
+    with open_hil(taught, folder) as hil:
+        hil.station.set_param("FS_BASE_ACTION", float(BASE_LOST_ACTIONS.index("hold")))
+        hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
+        cut_aria_link(hil)
+        back_ns = hil.sim.now_ns
+        expect(hil.notice("base not reporting: stopped, mission held") is not None,
+               f"no 'mission held' notice: {hil.notices()}")
+        expect(hil.vehicle.mode is Mode.HOLD, f"mode {hil.vehicle.mode_name} after the cut")
+        expect(hil.station.mission_outcome is False,
+               f"mission outcome {hil.station.mission_outcome} after the hold, expected False")
+        hil.wait_sim(back_ns + round(STALL_S * NS_PER_S))
+        moving = hil.sim.truth.still(back_ns, back_ns + round(STALL_S * NS_PER_S))
+        expect(moving is None, f"the robot moved in HOLD after the base came back: {moving}")
+        hil.station.start_mission()
+        hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
 
 
 def camera_stall(taught: Taught, folder: Path) -> None:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from robot.pioneer.driver import PioneerDriver
-from shared.byte_link import pipe_pair
+from shared.byte_link import ByteLink, pipe_pair
 from shared.config import PioneerDriverConfig
 from shared.errors import TransportError
 from sim.pioneer.emulator import EmulatedPioneer
@@ -29,7 +29,7 @@ CONNECT_TIMEOUT_NS = 5_000_000_000
 
 
 def lockstep_pioneer(clock: SimClock, config: PioneerDriverConfig,
-                     rng: np.random.Generator) -> tuple[PioneerDriver, EmulatedPioneer]:
+                     rng: np.random.Generator) -> tuple[PioneerDriver, PioneerServer]:
     """Connect a driver to an emulated Pioneer on ``clock``'s simulation, motors enabled.
 
     Args:
@@ -38,16 +38,23 @@ def lockstep_pioneer(clock: SimClock, config: PioneerDriverConfig,
         rng: the emulator's sonar noise.
 
     Returns:
-        The connected driver (the robot's base) and the emulator (for its counters).
+        The connected driver (the robot's base) and the emulator's server (its
+        ``emulator`` has the counters; its faults, ``cut`` and ``inject``, act in lock-step).
 
     Raises:
         TransportError: the handshake did not complete within :data:`CONNECT_TIMEOUT_NS`.
     """
     sim = clock.simulation
-    robot_end, host_end = pipe_pair()
     emulator = EmulatedPioneer(sim, sim.config.emulator, rng)
-    server = PioneerServer(emulator, links=[robot_end])
-    driver = PioneerDriver(lambda: host_end, clock, config)
+    server = PioneerServer(emulator, links=[])
+
+    def plug_in() -> ByteLink:
+        """A new cable for every (re)connection, as a serial adapter re-opened."""
+        robot_end, host_end = pipe_pair()
+        server.links.append(robot_end)
+        return host_end
+
+    driver = PioneerDriver(plug_in, clock, config)
 
     def exchange(now_ns: int, dt_ns: int) -> None:
         driver.service(now_ns)
@@ -57,4 +64,4 @@ def lockstep_pioneer(clock: SimClock, config: PioneerDriverConfig,
     if not driver.wait_connected(CONNECT_TIMEOUT_NS):
         raise TransportError("pipe", f"the emulated Pioneer did not connect within "
                                      f"{CONNECT_TIMEOUT_NS / 1e9:.0f} s ({driver.status()})")
-    return driver, emulator
+    return driver, server

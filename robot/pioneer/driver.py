@@ -116,8 +116,10 @@ class PioneerDriver:
             self._client.stop(self._clock.now_ns())
 
     def state(self) -> BaseState:
-        """Odometry, bumpers (front or rear), stall (either wheel), battery, motors."""
+        """Odometry, bumpers (front or rear), stall (either wheel), battery, motors; not
+        ``reporting`` unless connected with a SIP within ``config.report_timeout_ns``."""
         s = self.status()
+        now_ns = self._clock.now_ns()
         return BaseState(
             odom_pose=s.odom_pose,
             odom_distance_m=s.odom_distance_m,
@@ -125,6 +127,8 @@ class PioneerDriver:
             stalled=s.left_stalled or s.right_stalled,
             battery_v=s.battery_v,
             motors_enabled=s.motors_enabled,
+            reporting=(s.link is LinkState.CONNECTED and s.last_sip_ns is not None
+                       and now_ns - s.last_sip_ns <= self.config.report_timeout_ns),
         )
 
     # -- more than a MobileBase ---------------------------------------------------------

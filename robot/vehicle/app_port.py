@@ -80,6 +80,7 @@ class VehicleTelemetry:
             starts again starts from ``()``.
         home_pose: (x_m, y_m, yaw_rad) of the home in the odometry frame (where the
             robot started); None while unknown.
+        base_reporting: the mobile base's reports are current (``BaseState.reporting``).
     """
 
     mode: Mode
@@ -95,6 +96,7 @@ class VehicleTelemetry:
     mission_seq: int | None = None
     reached_seqs: tuple[int, ...] = ()
     home_pose: tuple[float, float, float] | None = None
+    base_reporting: bool = True
 
     @property
     def mission_running(self) -> bool:

@@ -58,9 +58,9 @@ def default_periods_ns(config: MavlinkConfig) -> dict[int, int]:
 
 
 def system_status(t: VehicleTelemetry, gcs_lost: bool) -> int:
-    """HEARTBEAT ``system_status``: CRITICAL in the GCS failsafe, ACTIVE while driving to a
-    goal or teaching, else STANDBY."""
-    if gcs_lost:
+    """HEARTBEAT ``system_status``: CRITICAL in the GCS failsafe or while the base does not
+    report, ACTIVE while driving to a goal or teaching, else STANDBY."""
+    if gcs_lost or not t.base_reporting:
         return mavlink.MAV_STATE_CRITICAL
     if t.teaching or t.mission_state in ACTIVE_STATES:
         return mavlink.MAV_STATE_ACTIVE
@@ -75,7 +75,8 @@ def _millivolts(volts: float) -> int:
 
 
 def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0) -> Message:
-    """SYS_STATUS: motors (enabled when armed), battery voltage, vision (unhealthy when LOST),
+    """SYS_STATUS: motors (enabled when armed, unhealthy while the base does not report),
+    battery voltage, vision (unhealthy when LOST),
     and ``errors_comm``: the packets received corrupt so far (common.xml: "dropped packets
     on all links (packets that were corrupted on reception on the MAV)"), capped at 65535.
 
@@ -83,7 +84,9 @@ def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0
     a spurious "fence breach" (reference sec. 1.8).
     """
     enabled = _SENSORS if t.armed else _SENSORS & ~mavlink.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
-    health = mavlink.MAV_SYS_STATUS_GEOFENCE | mavlink.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
+    health = mavlink.MAV_SYS_STATUS_GEOFENCE
+    if t.base_reporting:
+        health |= mavlink.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
     if math.isfinite(t.battery_v):
         health |= mavlink.MAV_SYS_STATUS_SENSOR_BATTERY
     if t.mission_state is not MissionState.LOST:

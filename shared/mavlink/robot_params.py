@@ -18,7 +18,7 @@ import enum
 from dataclasses import dataclass
 from typing import Any
 
-from shared.config import CONTROL_LAWS, GCS_LOST_ACTIONS, VmnavConfig
+from shared.config import BASE_LOST_ACTIONS, CONTROL_LAWS, GCS_LOST_ACTIONS, VmnavConfig
 from shared.errors import ConfigError
 from shared.mavlink.param_table import ParamSpec, ParamTable
 
@@ -99,6 +99,9 @@ ROBOT_PARAMS: tuple[ParamBinding, ...] = (
     ParamBinding("FS_GCS_ACTION", "mavlink", "gcs_lost_action", 0, len(GCS_LOST_ACTIONS) - 1,
                  "What the robot does when the ground heartbeat stops", Kind.CHOICE,
                  GCS_LOST_ACTIONS),
+    ParamBinding("FS_BASE_ACTION", "mission", "base_lost_action", 0, len(BASE_LOST_ACTIONS) - 1,
+                 "What a mission does when the base stops reporting", Kind.CHOICE,
+                 BASE_LOST_ACTIONS),
 )
 
 

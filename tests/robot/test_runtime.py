@@ -48,16 +48,17 @@ def taught(tmp_path_factory) -> tuple[Path, Path]:
 class SimRobot:
     """The runtime on a lock-step simulation, placed at ``pose``."""
 
-    def __init__(self, world_file: Path, memory_dir: Path, pose: Pose2) -> None:
+    def __init__(self, world_file: Path, memory_dir: Path, pose: Pose2,
+                 config: VmnavConfig = CONFIG) -> None:
         self.sim = Simulation(load_world(world_file), SimConfig(world=str(world_file), seed=1))
         self.sim.place_robot(pose)
         self.clock = SimClock(self.sim)
         rng = np.random.default_rng(7)
-        self.base, _ = lockstep_pioneer(self.clock, CONFIG.pioneer, rng)
+        self.base, self.pioneer = lockstep_pioneer(self.clock, config.pioneer, rng)
         self.memory_dir = memory_dir
         memory = read_memory(memory_dir)
         self.frames = SimFrameSource(self.sim, memory.camera, self.clock)
-        self.runtime = RobotRuntime(memory, memory_dir, CONFIG, self.base, self.clock, rng)
+        self.runtime = RobotRuntime(memory, memory_dir, config, self.base, self.clock, rng)
         self.notices: list[tuple[int, str]] = []
 
     def run(self, seconds: float, until=lambda t: False) -> None:
@@ -175,6 +176,57 @@ class TestMissions:
         robot.runtime.set_mode(Mode.MANUAL)
         robot.drive(1.0, x=1.0)
         assert robot.pose[0] == pytest.approx(2.0, abs=0.005)
+
+
+class TestBaseLost:
+    """A cut ARIA cable mid-route (rule 9), longer than the driver's link timeout."""
+
+    CUT_NS = 10_000_000_000
+
+    def start_and_cut(self, robot: SimRobot) -> None:
+        """Start a mission to the path's end, cut the cable while following."""
+        goal = robot.runtime.memory.paths[0].keyframe_ids[-1]
+        robot.runtime.start_mission((Goal(goal),), 0)
+        robot.run(4.0)
+        assert robot.runtime.telemetry().mission_state is MissionState.FOLLOWING
+        robot.pioneer.cut(self.CUT_NS)
+        robot.run(3.0)  # the report timeout, then the Pioneer's 2 s watchdog and braking
+
+    def assert_still(self, robot: SimRobot, seconds: float) -> None:
+        held = robot.pose
+        robot.run(seconds)
+        assert robot.pose[:2] == pytest.approx(held[:2], abs=2e-3)
+
+    def test_continue_pauses_the_mission_and_resumes_it_when_the_base_is_back(
+            self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, EAST_A)
+        assert CONFIG.mission.base_lost_action == "continue"  # the default
+        self.start_and_cut(robot)
+        t = robot.runtime.telemetry()
+        assert not t.base_reporting and t.mode is Mode.AUTO
+        assert (logging.WARNING, "base not reporting: stopped, mission paused") in robot.notices
+        self.assert_still(robot, 4.0)
+        robot.run(60.0, until=lambda t: t.mode is Mode.HOLD)
+        t = robot.runtime.telemetry()
+        assert t.mission_state is MissionState.ARRIVED, t.mission_detail
+        assert t.base_reporting
+        back = [text for _, text in robot.notices if text.startswith("base reporting again")]
+        assert len(back) == 1 and back[0].endswith("mission resumes"), robot.notices
+        assert robot.pose[0] == pytest.approx(4.5, abs=0.15)
+
+    def test_hold_ends_the_mission_and_the_robot_stays_put_after_the_base_is_back(
+            self, taught, memory_dir) -> None:
+        config = replace(CONFIG, mission=replace(CONFIG.mission, base_lost_action="hold"))
+        robot = SimRobot(taught[0], memory_dir, EAST_A, config)
+        self.start_and_cut(robot)
+        t = robot.runtime.telemetry()
+        assert t.mode is Mode.HOLD and t.mission_state is MissionState.ABORTED
+        assert "the base stopped reporting" in t.mission_detail
+        assert (logging.WARNING, "base not reporting: stopped, mission held") in robot.notices
+        robot.run(20.0, until=lambda t: t.base_reporting)
+        assert robot.runtime.telemetry().base_reporting
+        self.assert_still(robot, 3.0)
+        assert robot.runtime.telemetry().mode is Mode.HOLD
 
 
 class TestPhotoGoal:

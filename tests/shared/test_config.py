@@ -57,6 +57,9 @@ class TestLoadConfig:
             ("[sim.people]\ncount = true\n", "sim.people.count: expected an integer"),
             ("[sim]\nframe_period_ns = 1000\n", "frame_period_ns (1000) must be >= physics_dt_ns"),
             ("[sim\n", "not valid TOML"),
+            ('[mission]\nbase_lost_action = "stop"\n',
+             "base_lost_action must be one of hold, continue, got 'stop'"),
+            ("[pioneer]\nreport_timeout_ns = 0\n", "report_timeout_ns must be > 0, got 0"),
         ],
     )
     def test_bad_input_names_file_key_and_problem(

@@ -58,8 +58,12 @@ class TestBuilders:
         assert not lost.onboard_control_sensors_health & vision
         assert lost.onboard_control_sensors_enabled & motors
         assert lost.onboard_control_sensors_health & mavlink.MAV_SYS_STATUS_GEOFENCE
+        assert lost.onboard_control_sensors_health & motors
         disarmed = sys_status_message(VehicleTelemetry(Mode.MANUAL), 0)
         assert not disarmed.onboard_control_sensors_enabled & motors
+        quiet = sys_status_message(VehicleTelemetry(Mode.AUTO, armed=True,
+                                                    base_reporting=False), 0)
+        assert not quiet.onboard_control_sensors_health & motors
 
     def test_no_nav_controller_output_without_the_follower(self) -> None:
         assert nav_controller_message(VehicleTelemetry(Mode.AUTO), 0) is None
@@ -78,6 +82,8 @@ class TestBuilders:
         assert system_status(idle, gcs_lost=False) == mavlink.MAV_STATE_STANDBY
         assert system_status(driving, gcs_lost=False) == mavlink.MAV_STATE_ACTIVE
         assert system_status(driving, gcs_lost=True) == mavlink.MAV_STATE_CRITICAL
+        quiet_base = VehicleTelemetry(Mode.AUTO, MissionState.FOLLOWING, base_reporting=False)
+        assert system_status(quiet_base, gcs_lost=False) == mavlink.MAV_STATE_CRITICAL
 
 
 class TestStreams:
