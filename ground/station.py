@@ -33,6 +33,11 @@ Rules:
 6. Taps: every packet parsed off the link and every packet sent (once per datagram)
    goes to each of :attr:`~GroundStation.packet_taps`, in wire order, with its bytes,
    its message and the clock's reading at that moment (e.g. ``ground.ground_log``).
+7. Each datagram received is parsed on its own
+   (:meth:`~shared.mavlink.dialect.MavlinkCodec.parse` with ``datagram``): a packet it
+   leaves unfinished is corrupt, counted in ``codec.bad_packets`` and dropped, so garbage
+   that reads as the start of a long packet cannot swallow the packets of the datagrams
+   after it.
 """
 
 from __future__ import annotations
@@ -163,10 +168,11 @@ class GroundStation:
     # -- the loop -----------------------------------------------------------------------
 
     def service(self) -> None:
-        """One round at the clock's now: every waiting datagram in, everything due out."""
+        """One round at the clock's now: every waiting datagram in (each on its own, rule 7),
+        everything due out."""
         now_ns = self.clock.now_ns()
         for data, sender in self.link.receive():
-            for msg in self.codec.parse(data):
+            for msg in self.codec.parse(data, datagram=True):
                 self._tap("in", bytes(msg.get_msgbuf()), msg)
                 self._handle(msg, sender, now_ns)
         if self._signing is not None and now_ns >= (self._signing.get_timer() or 0):

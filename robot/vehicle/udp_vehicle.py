@@ -8,9 +8,15 @@ Rules:
    datagram each. Either the robot's loop calls it, or the vehicle's own thread
    (:meth:`start_thread`, every ``MavlinkConfig.service_period_ns`` on the injected
    clock); never both. The application's callbacks run in that thread.
-2. A listening link (``udpin``) replies to the last ground station whose datagram
-   held a message the endpoint accepted, so on a signed link a stranger's unsigned
-   datagram cannot divert the replies. A ``udpout`` link always sends to its peer.
+2. A listening link (``udpin``) replies to the last sender whose datagram held a
+   verified message (:meth:`~shared.mavlink.dialect.MavlinkCodec.is_verified`: of our
+   dialect, so its CRC was checked, and on a signed link validly signed; the codec
+   checks both while the endpoint parses, before the reply address is chosen and
+   anything is sent). Corrupt packets and unknown message ids are counted
+   (``codec.bad_packets``, ``codec.unknown_packets``) but never move the reply address,
+   so neither garbage that happens to decode as an unknown message nor a stranger's
+   unsigned datagram (even one the signing policy lets through) diverts the telemetry.
+   A ``udpout`` link always sends to its peer.
 3. Every datagram received and every packet sent goes to the ``packet_taps``
    (``tap(direction, data, now_ns)``, direction ``"in"`` or ``"out"``), in the I/O
    thread: the field log's MAVLink in and out.
@@ -65,10 +71,13 @@ class UdpVehicle:
         with self._lock:
             if self._closed:
                 return
+            codec = self.endpoint.codec
             for data, sender in self.link.receive():
                 for tap in self.packet_taps:
                     tap("in", data, now_ns)
-                if self.endpoint.receive(data, now_ns, datagram=True) and self.link.listening:
+                verified = codec.verified_packets
+                self.endpoint.receive(data, now_ns, datagram=True)
+                if codec.verified_packets > verified and self.link.listening:
                     self._reply_to = sender
             self.link.peer = self._reply_to
             for packet in self.endpoint.poll(now_ns):

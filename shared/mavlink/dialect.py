@@ -43,13 +43,34 @@ class MavlinkCodec(mavlink.MAVLink):
     ``pack`` stamps our (system, component) ids and the next sequence number,
     and signs the packet when ``signing`` is set up. ``parse`` resynchronises
     after garbage (``robust_parsing``): corrupt packets are counted in
-    :attr:`bad_packets` and dropped, never raised.
+    :attr:`bad_packets` and dropped, never raised. Packets of a message id the dialect
+    lacks come out as ``UNKNOWN_<id>`` messages, counted in :attr:`unknown_packets`;
+    only :meth:`is_verified` messages count in :attr:`verified_packets`.
     """
 
     def __init__(self, system_id: int, component_id: int) -> None:
         super().__init__(None, srcSystem=system_id, srcComponent=component_id)
         self.robust_parsing = True
         self.bad_packets = 0
+        """Packets dropped as corrupt or by the signature check."""
+        self.unknown_packets = 0
+        """Packets of a message id the dialect lacks (returned, but unverified)."""
+        self.verified_packets = 0
+        """Packets that decoded as :meth:`is_verified` messages."""
+
+    def is_verified(self, msg: Message) -> bool:
+        """Whether ``msg``, as :meth:`parse` returned it, proved itself genuine: a message
+        of this dialect, whose CRC (seeded with its CRC_EXTRA) pymavlink checked, and,
+        when signing is set up, validly signed.
+
+        pymavlink returns a message id the dialect lacks before it can check the CRC
+        (no CRC_EXTRA) or the signature, so random bytes of the right length decode as
+        one; and on a signed link an unsigned message the unsigned policy lets through
+        (a radio's RADIO_STATUS) proves nothing about its sender. Neither is verified.
+        """
+        if isinstance(msg, mavlink.MAVLink_unknown):
+            return False
+        return self.signing.secret_key is None or msg.get_signed()
 
     def pack(self, msg: Message) -> bytes:
         """Encode one message as a MAVLink 2 packet and advance the sequence number."""
@@ -71,15 +92,20 @@ class MavlinkCodec(mavlink.MAVLink):
                 up to 280 bytes of the good packets that follow.
 
         Returns:
-            The decoded messages in arrival order; partial packets wait for more bytes
+            The decoded messages in arrival order, unknown ones included (counted, and
+            not verified: :meth:`is_verified`); partial packets wait for more bytes
             (unless ``datagram``).
         """
         messages = []
         for msg in self.parse_buffer(data) or ():
             if msg.get_type() == "BAD_DATA":
                 self.bad_packets += 1
-            else:
-                messages.append(msg)
+                continue
+            if isinstance(msg, mavlink.MAVLink_unknown):
+                self.unknown_packets += 1
+            elif self.is_verified(msg):
+                self.verified_packets += 1
+            messages.append(msg)
         if datagram and self.buf_len() > 0:
             self.bad_packets += 1
             self.buf, self.buf_index = bytearray(), 0

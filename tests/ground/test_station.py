@@ -1,5 +1,5 @@
 """GroundStation against real vehicle endpoints over loopback UDP: several vehicles, goal
-outcomes, signing, keyboard driving."""
+outcomes, signing, keyboard driving, garbage datagrams."""
 
 from __future__ import annotations
 
@@ -14,10 +14,11 @@ from ground.station import GroundError, GroundStation
 from ground.teleop import drive
 from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
-from shared.clock import WallClock
+from shared.clock import ManualClock, WallClock
 from shared.config import VmnavConfig
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
+from shared.mavlink.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import UNIX_OFFSET_NS, make_vehicle
 
@@ -56,6 +57,18 @@ def test_listening_station_picks_a_vehicle_by_system_id(tmp_path: Path) -> None:
     assert apps[1].configs[-1].control.speed_m_s != pytest.approx(0.5)
     assert apps[2].called("set_mode") == [(Mode.HOLD,)] and apps[1].called("set_mode") == []
     assert sorted(station.fleet.vehicles) == [1, 2]
+
+
+def test_garbage_in_one_datagram_does_not_swallow_the_next(tmp_path: Path,
+                                                            manual_clock: ManualClock) -> None:
+    with GroundStation.open("udpin:127.0.0.1:0", WallClock()) as station:
+        url = f"udpout:127.0.0.1:{station.link.local_port}"
+        with (UdpLink.open(url) as noise,
+              make_vehicle(tmp_path, FakeApp(), manual_clock, url=url) as vehicle):
+            noise.send(b"\xfd\xff\x00" + bytes(range(40)))  # starts a 255-byte packet
+            vehicle.service(0)  # its first HEARTBEAT, and no other until 1 s (never here)
+            assert station.wait_vehicle(0.5).system_id == 1
+    assert station.codec.bad_packets == 1  # the garbage, cut short by its datagram's end
 
 
 def test_wait_mission_done_from_telemetry(station: GroundStation, app: FakeApp) -> None:

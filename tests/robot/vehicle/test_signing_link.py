@@ -1,5 +1,6 @@
 """A signed link over real UDP: signed ground stations work; unsigned, wrongly signed and
-replayed packets take no effect and are counted; the vehicle's timestamp keeps up."""
+replayed packets take no effect and are counted; an unsigned RADIO_STATUS is handled but
+does not move the reply address; the vehicle's timestamp keeps up."""
 
 from __future__ import annotations
 
@@ -98,6 +99,21 @@ def test_unsigned_wrongly_signed_and_replayed_packets_take_no_effect(
     # Their datagrams did not divert the vehicle's replies from the genuine station.
     assert stranger.datagrams == impostor.datagrams == 0
     assert net.ground.of_type("HEARTBEAT", net.now_ns - 1_000_000_000)
+
+
+def test_an_unsigned_message_let_through_does_not_divert_the_replies(net: Net) -> None:
+    net.advance(0.5)
+    radio = Ground(f"udpout:127.0.0.1:{net.vehicle.link.local_port}", Address(51, 68),
+                   heartbeat=False)
+    net.ends.append(radio)
+    radio.send(mavlink.MAVLink_radio_status_message(200, 190, 100, 10, 5, 0, 0))
+    sent_ns = net.now_ns
+    net.advance(1.0)  # past the vehicle's next HEARTBEAT, which goes out first at 1 s
+    stats = net.vehicle.endpoint.stats()
+    assert stats.signing is not None and stats.signing.unsigned_accepted == 1  # handled
+    assert radio.datagrams == 0
+    assert [t for t, m in net.ground.received
+            if m.get_type() == "HEARTBEAT" and t > sent_ns] == [1_000_000_000]
 
 
 def test_the_timestamp_keeps_up_with_the_wall_clock(net: Net, app: FakeApp) -> None:

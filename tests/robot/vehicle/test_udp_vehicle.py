@@ -1,14 +1,17 @@
-"""UdpVehicle: the vehicle sending first (udpout) to a listening ground station, and closing."""
+"""UdpVehicle: the vehicle sending first (udpout) to a listening ground station, datagrams
+parsed on their own, the reply address moved only by verified messages, and closing."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shared.clock import ManualClock
 from shared.errors import IllegalEventError
 from shared.mavlink.dialect import mavlink
+from shared.mavlink.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 
@@ -40,6 +43,28 @@ def test_garbage_in_one_datagram_does_not_hold_up_the_next(net: Net) -> None:
     ack = net.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_HEARTBEAT)
     assert ack.result == mavlink.MAV_RESULT_ACCEPTED and net.now_ns < 1_000_000_000
     assert net.vehicle.endpoint.stats().bad_packets == 1
+
+
+def test_an_unknown_message_does_not_divert_a_listening_vehicle(
+        net: Net, rng: np.random.Generator) -> None:
+    net.advance(0.5)  # the ground's first HEARTBEAT made it the vehicle's peer
+    unknown_id = 0xABCDEF
+    assert unknown_id not in mavlink.mavlink_map
+    payload = rng.integers(0, 256, 20, dtype=np.uint8).tobytes()
+    # Random bytes that happen to frame as a MAVLink 2 packet: no CRC_EXTRA for the id, so
+    # pymavlink cannot check the (random) CRC and decodes it as UNKNOWN_11259375.
+    garbage = (bytes([0xFD, len(payload), 0, 0, 0, 42, 1]) + unknown_id.to_bytes(3, "little")
+               + payload + rng.integers(0, 256, 2, dtype=np.uint8).tobytes())
+    with UdpLink.open(f"udpout:127.0.0.1:{net.vehicle.link.local_port}") as stranger:
+        stranger.send(garbage)
+        sent_ns = net.now_ns
+        net.advance(1.0)  # past the vehicle's next HEARTBEAT, which goes out first at 1 s
+        assert net.vehicle.endpoint.codec.unknown_packets == 1  # it arrived and decoded
+        assert stranger.receive() == []
+    assert [t for t, m in net.ground.received
+            if m.get_type() == "HEARTBEAT" and t > sent_ns] == [1_000_000_000]
+    ack = net.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_HEARTBEAT)
+    assert ack.result == mavlink.MAV_RESULT_ACCEPTED
 
 
 def test_close_is_idempotent_and_final(tmp_path: Path, app: FakeApp,

@@ -13,6 +13,7 @@ from robot.mission import MissionState
 from shared.errors import InputError
 from shared.mavlink.dialect import make_codec, mavlink
 from shared.mavlink.generate import MODULE_PATH, generate_dialect
+from shared.mavlink.signing import UnsignedPolicy, configure_signing
 
 
 def test_committed_module_matches_a_fresh_generation(tmp_path: Path) -> None:
@@ -80,3 +81,27 @@ def test_a_datagram_never_leaves_bytes_for_the_next_one() -> None:
     assert datagrams.bad_packets == 2  # the junk, and the packet cut short
     stream = make_codec(255, 190)
     assert stream.parse(garbage) == [] and stream.parse(packet) == []  # a stream waits
+
+
+def test_only_messages_of_the_dialect_are_verified() -> None:
+    packet = bytearray(make_codec(1, 1).pack(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)))
+    packet[7:10] = (0xABCDEF).to_bytes(3, "little")  # an id the dialect lacks: CRC unchecked
+    ground = make_codec(255, 190)
+    (unknown,) = ground.parse(bytes(packet), datagram=True)
+    assert unknown.get_type() == "UNKNOWN_11259375" and not ground.is_verified(unknown)
+    (heartbeat,) = ground.parse(make_codec(1, 1).pack(mavlink.MAVLink_heartbeat_message(
+        6, 8, 0, 0, 4, 3)), datagram=True)
+    assert ground.is_verified(heartbeat)
+    assert (ground.unknown_packets, ground.verified_packets, ground.bad_packets) == (1, 1, 0)
+
+
+def test_on_a_signed_link_only_valid_signatures_are_verified() -> None:
+    key = bytes(range(32))
+    robot, ground, stranger = make_codec(1, 1), make_codec(255, 190), make_codec(51, 68)
+    configure_signing(robot, key, 0, 1_000, UnsignedPolicy([mavlink.MAVLINK_MSG_ID_RADIO_STATUS]))
+    configure_signing(ground, key, 1, 1_000)
+    (signed,) = robot.parse(ground.pack(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)))
+    radio = mavlink.MAVLink_radio_status_message(200, 190, 100, 10, 5, 0, 0)
+    (let_through,) = robot.parse(stranger.pack(radio))  # the policy accepts it unsigned
+    assert robot.is_verified(signed) and not robot.is_verified(let_through)
+    assert (robot.verified_packets, robot.bad_packets) == (1, 0)
