@@ -34,9 +34,6 @@ from __future__ import annotations
 import json
 import math
 import re
-import signal
-import subprocess
-import sys
 import time
 import urllib.error
 import urllib.request
@@ -62,6 +59,7 @@ from sim.world import load_world
 from tools.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M, TruePose
 from tools.demo_report import SETTLED_M, track_errors, track_metrics
 from tools.teach_cmd import DRIVER_STREAM, find_route
+from tools.vmnav_process import VmnavProcess
 
 #: The operator's command period, s (MANUAL_CONTROL at 10 Hz).
 OPERATOR_PERIOD_S = 0.1
@@ -112,20 +110,18 @@ class SimControl:
 
 
 class Processes:
-    """Child processes started with their output in files; all stopped on close."""
+    """``vmnav`` child processes (:class:`~tools.vmnav_process.VmnavProcess`) with their
+    output in files; all stopped on :meth:`stop`."""
 
     def __init__(self, folder: Path) -> None:
         self._folder = folder
-        self._children: list[tuple[str, subprocess.Popen[bytes]]] = []
+        self._children: list[tuple[str, VmnavProcess]] = []
 
     def start(self, name: str, argv: list[str]) -> Path:
         """Start ``vmnav ARGV...`` as ``name``; returns its output file."""
-        out = self._folder / f"{name}.out"
-        with out.open("wb") as sink:
-            process = subprocess.Popen([sys.executable, "-m", "tools.cli", *argv],
-                                       stdout=sink, stderr=subprocess.STDOUT)
-        self._children.append((name, process))
-        return out
+        child = VmnavProcess(argv, self._folder / f"{name}.out", STOP_GRACE_S)
+        self._children.append((name, child))
+        return child.out
 
     def wait_for(self, name: str, pattern: str) -> re.Match[str]:
         """The first match of ``pattern`` in ``name``'s output.
@@ -133,33 +129,22 @@ class Processes:
         Raises:
             TransportError: the process ended first, or nothing matched in time.
         """
-        process = dict(self._children)[name]
-        out = self._folder / f"{name}.out"
+        child = dict(self._children)[name]
         limit = time.monotonic() + START_TIMEOUT_S
         while time.monotonic() < limit:
-            found = re.search(pattern, out.read_text(errors="replace"))
+            found = re.search(pattern, child.output())
             if found:
                 return found
-            if process.poll() is not None:
+            if child.process.poll() is not None:
                 break
             time.sleep(0.1)
-        lines = out.read_text(errors="replace").strip().splitlines()
-        last = lines[-1] if lines else "no output"
-        raise TransportError(f"vmnav {name}", f"did not start: {last} (see {out})")
+        raise TransportError(f"vmnav {name}", f"did not start: {child.last_line()} "
+                                              f"(see {child.out})")
 
-    def stop(self) -> dict[str, int | None]:
+    def stop(self) -> dict[str, int]:
         """SIGTERM every child (last started first), SIGKILL those still running after
         the grace period; their exit codes."""
-        codes: dict[str, int | None] = {}
-        for name, process in reversed(self._children):
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-            try:
-                codes[name] = process.wait(STOP_GRACE_S)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                codes[name] = process.wait()
-        return codes
+        return {name: child.stop() for name, child in reversed(self._children)}
 
 
 def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_file: Path,

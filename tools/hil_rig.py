@@ -7,7 +7,7 @@ its truth:
 * :class:`SimSide`: the objects ``vmnav sim serve`` runs (the emulated Pioneer on a TCP
   port, the camera as MJPEG over HTTP, stepped in real time on a thread), with a
   :class:`TruthRecorder` on the simulation;
-* :class:`RobotProcess`: ``vmnav robot`` as a subprocess on their URLs;
+* ``vmnav robot`` as a subprocess on their URLs (:func:`start_robot`);
 * a :class:`~ground.station.GroundStation` here, which the robot calls over UDP.
 
 :func:`open_hil` starts the three on a copy of a taught memory (:class:`Taught`) and
@@ -23,16 +23,11 @@ import itertools
 import math
 import re
 import shutil
-import signal
-import subprocess
-import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
 
 from ground.fleet import VehicleState
 from ground.station import GroundStation
@@ -40,13 +35,14 @@ from shared.clock import NS_PER_S, WallClock
 from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.goal import Goal
 from shared.memory import read_memory
-from sim.camera_server import CameraFeed, CameraServer
-from sim.pioneer import EmulatedPioneer, PioneerServer, TcpListener
+from sim.camera_server import CameraServer
+from sim.pioneer import TcpListener
 from sim.simulation import Simulation
 from sim.world import load_world
 from tools.short_routes import teach_east_a
 from tools.sim_args import load_camera
-from tools.sim_serve import EMULATOR_SEED_CHILD
+from tools.sim_serve import pioneer_server
+from tools.vmnav_process import VmnavProcess
 
 #: How long ``vmnav robot`` may take to answer the ground station, s.
 ROBOT_START_S = 30.0
@@ -177,9 +173,10 @@ class TruthRecorder:
 
 
 class SimSide:
-    """``vmnav sim serve``'s objects in this process (``tools.sim_serve.run_serve`` builds the
-    same): the world in real time on a thread, the emulated Pioneer on a TCP port and the
-    camera on HTTP (ports picked free), with their fault hooks at hand.
+    """``vmnav sim serve``'s objects in this process (built by the same
+    :func:`tools.sim_serve.pioneer_server`): the world in real time on a thread, the
+    emulated Pioneer on a TCP port and the camera on HTTP (ports picked free), with their
+    fault hooks at hand.
 
     Args:
         world_file: the world.
@@ -197,13 +194,10 @@ class SimSide:
         with ExitStack() as opened:
             listener = opened.enter_context(closing(TcpListener("127.0.0.1", 0)))
             self.camera = opened.enter_context(CameraServer("127.0.0.1", 0))
-            self.sim = Simulation(load_world(world_file), config)
-            rng_seed = np.random.SeedSequence(config.seed).spawn(EMULATOR_SEED_CHILD + 1)[-1]
-            self.emulator = EmulatedPioneer(self.sim, config.emulator,
-                                            np.random.default_rng(rng_seed))
-            self.server = opened.enter_context(PioneerServer(self.emulator, [], [listener]))
-            self.sim.add_step_hook(CameraFeed(self.sim, load_camera(config.camera_file),
-                                              self.camera))
+            self.server = opened.enter_context(pioneer_server(
+                config, load_camera(config.camera_file), [], [listener], self.camera))
+            self.emulator = self.server.emulator
+            self.sim = self.emulator.simulation
             self.truth = TruthRecorder(self.sim)
             self.sim.add_step_hook(self.truth)
             self.aria_url = f"socket://127.0.0.1:{listener.port}"
@@ -235,47 +229,16 @@ class SimSide:
         self.close()
 
 
-class RobotProcess:
-    """``vmnav robot ARGV...`` as a subprocess, its output (stdout and stderr) in ``out``."""
-
-    def __init__(self, argv: list[str], out: Path) -> None:
-        self.out = out
-        with out.open("wb") as sink:
-            self.process = subprocess.Popen([sys.executable, "-m", "tools.cli", "robot", *argv],
-                                            stdout=sink, stderr=subprocess.STDOUT)
-
-    def output(self) -> str:
-        """Everything it printed so far."""
-        return self.out.read_text(errors="replace")
-
-    def last_line(self) -> str:
-        """Its last line of output, for messages."""
-        lines = self.output().strip().splitlines()
-        return lines[-1] if lines else "no output"
-
-    def kill(self) -> None:
-        """SIGKILL, and reap it."""
-        self.process.kill()
-        self.process.wait()
-
-    def stop(self) -> int:
-        """SIGTERM (a clean stop), SIGKILL after :data:`STOP_GRACE_S`; its exit code."""
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-        try:
-            return self.process.wait(STOP_GRACE_S)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            return self.process.returncode
-
-
-def robot_argv(sim: SimSide, station: GroundStation, folder: Path) -> list[str]:
-    """``vmnav robot``'s arguments on the rig's transports, with ``folder``'s ``memory``,
-    ``state`` and ``logs`` (the field log, as on the robot)."""
-    return ["--aria", sim.aria_url, "--camera", sim.camera.stream_url,
+def start_robot(sim: SimSide, station: GroundStation, folder: Path,
+                out_name: str) -> VmnavProcess:
+    """``vmnav robot`` on the rig's transports, with ``folder``'s ``memory``, ``state`` and
+    ``logs`` (the field log, as on the robot), its output in ``folder/out_name``; stopped
+    by SIGTERM, SIGKILL after :data:`STOP_GRACE_S`."""
+    argv = ["robot", "--aria", sim.aria_url, "--camera", sim.camera.stream_url,
             "--mavlink", f"udpout:127.0.0.1:{station.link.local_port}",
             "--memory", str(folder / "memory"), "--state", str(folder / "state"),
             "--log", str(folder / "logs")]
+    return VmnavProcess(argv, folder / out_name, STOP_GRACE_S)
 
 
 @dataclass(eq=False)
@@ -291,15 +254,14 @@ class Hil:
 
     sim: SimSide
     station: GroundStation
-    robot: RobotProcess
+    robot: VmnavProcess
     folder: Path
 
     def restart_robot(self, out_name: str) -> None:
         """Start ``vmnav robot`` again (after the last one ended) with output in
         ``folder/out_name``, and wait until it answers (:meth:`wait_robot`)."""
         since_ns = self.station.clock.now_ns()
-        self.robot = RobotProcess(robot_argv(self.sim, self.station, self.folder),
-                                  self.folder / out_name)
+        self.robot = start_robot(self.sim, self.station, self.folder, out_name)
         self.wait_robot(since_ns)
 
     def wait_robot(self, since_ns: int) -> None:
@@ -377,7 +339,7 @@ class Hil:
 @contextmanager
 def open_hil(taught: Taught, folder: Path) -> Iterator[Hil]:
     """The rig on a copy of ``taught``'s memory in ``folder/memory``: the robot started
-    (:func:`robot_argv`), its output in ``folder/robot.out``, and answering.
+    (:func:`start_robot`), its output in ``folder/robot.out``, and answering.
     Everything is stopped after, however the block ends (the robot by SIGTERM).
 
     Raises:
@@ -388,7 +350,7 @@ def open_hil(taught: Taught, folder: Path) -> Iterator[Hil]:
         sim = stack.enter_context(SimSide(taught.world_file))
         station = stack.enter_context(GroundStation.open("udpin:127.0.0.1:0", WallClock()))
         since_ns = station.clock.now_ns()
-        robot = RobotProcess(robot_argv(sim, station, folder), folder / "robot.out")
+        robot = start_robot(sim, station, folder, "robot.out")
         hil = Hil(sim, station, robot, folder)
         stack.callback(lambda: hil.robot.stop())
         hil.wait_robot(since_ns)

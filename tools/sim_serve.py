@@ -12,13 +12,21 @@ from __future__ import annotations
 import argparse
 import math
 import signal
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from shared.errors import InputError
 from tools.sim_args import add_sim_arguments, sim_config_from_args
+
+if TYPE_CHECKING:
+    from shared.byte_link import ByteLink
+    from shared.camera_model import CameraModel
+    from shared.config import SimConfig
+    from sim.camera_server import CameraServer
+    from sim.pioneer import PioneerServer, TcpListener
 
 DEFAULT_ARIA = "tcp:8101"
 DEFAULT_VIDEO_PORT = 8080
@@ -135,14 +143,10 @@ def run_serve(args: argparse.Namespace) -> int:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
     config, camera = sim_config_from_args(args)
 
-    import numpy as np
-
     from shared.clock import WallClock
-    from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
+    from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraServer
     from sim.control_server import ControlHook, ControlServer
-    from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
-    from sim.simulation import Simulation
-    from sim.world import load_world
+    from sim.pioneer import PtyLink, TcpListener
 
     with ExitStack() as opened:  # closes everything, also if a step fails
         links, listeners = [], []
@@ -154,12 +158,10 @@ def run_serve(args: argparse.Namespace) -> int:
                 listeners.append(opened.enter_context(closing(listener)))
         video_server = None if video is None else opened.enter_context(
             CameraServer(video.host, video.port, args.jpeg_quality or DEFAULT_JPEG_QUALITY))
-        sim = Simulation(load_world(config.world), config)
-        seed = np.random.SeedSequence(config.seed).spawn(EMULATOR_SEED_CHILD + 1)[-1]
-        emulator = EmulatedPioneer(sim, config.emulator, np.random.default_rng(seed))
-        server = opened.enter_context(PioneerServer(emulator, links, listeners))
-        if video_server is not None:
-            sim.add_step_hook(CameraFeed(sim, camera, video_server))
+        server = opened.enter_context(
+            pioneer_server(config, camera, links, listeners, video_server))
+        emulator = server.emulator
+        sim = emulator.simulation
         control_server = None
         if control is not None:
             hook = ControlHook(sim)
@@ -189,6 +191,36 @@ def run_serve(args: argparse.Namespace) -> int:
         v = video_server.stats()
         print(f"camera: {v.published} frames, {v.clients} stream client(s)")
     return 0
+
+
+def pioneer_server(config: SimConfig, camera: CameraModel, links: Sequence[ByteLink],
+                   listeners: Sequence[TcpListener],
+                   video: CameraServer | None) -> PioneerServer:
+    """The world of ``config`` with its robot as an emulated Pioneer served on ``links``
+    and ``listeners``, and filmed through ``camera`` for ``video`` when given.
+
+    The emulator's sonar noise draws from child :data:`EMULATOR_SEED_CHILD` of
+    ``config.seed``. The simulation is ``server.emulator.simulation``; its step hooks so
+    far are the emulator's, then the camera feed's (others go after). The server owns
+    ``links`` and ``listeners`` (closing it closes them) and has not started running.
+
+    Raises:
+        ConfigError: the world cannot be loaded.
+    """
+    import numpy as np
+
+    from sim.camera_server import CameraFeed
+    from sim.pioneer import EmulatedPioneer, PioneerServer
+    from sim.simulation import Simulation
+    from sim.world import load_world
+
+    sim = Simulation(load_world(config.world), config)
+    seed = np.random.SeedSequence(config.seed).spawn(EMULATOR_SEED_CHILD + 1)[-1]
+    server = PioneerServer(EmulatedPioneer(sim, config.emulator, np.random.default_rng(seed)),
+                           links, listeners)
+    if video is not None:
+        sim.add_step_hook(CameraFeed(sim, camera, video))
+    return server
 
 
 @contextmanager
