@@ -28,8 +28,9 @@ on the robot's clock:
 * :data:`~shared.logs.topics.SIP` (:meth:`FieldLog.sip`): the Pioneer's SIPs;
 * ``/mavlink/<in|out>/<NAME>`` and :data:`~shared.logs.topics.MAVLINK_RAW`
   (:meth:`FieldLog.mavlink`): every MAVLink packet received and sent;
-* :data:`~shared.logs.topics.LOG`: mission events (:meth:`FieldLog.event`) and the
-  runtime's notes (:meth:`FieldLog.note`) as ``foxglove.Log`` lines.
+* :data:`~shared.logs.topics.LOG`: mission events (:meth:`FieldLog.event`), the
+  runtime's notes (:meth:`FieldLog.note`) and how the Pioneer link ended
+  (:meth:`FieldLog.pioneer_closed`) as ``foxglove.Log`` lines.
 
 Metadata ``run`` (in every file): the caller's key-values plus ``series``, an id unique
 to this log, by which :func:`shared.logs.series.log_series` keeps a rotated series
@@ -49,6 +50,7 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from robot.mission_run import AppEvent, CycleRecord
+from robot.pioneer.status import LinkCounters, PioneerStatus
 from shared.aria.sip import Sip
 from shared.camera_mount import rotation_base_cam
 from shared.config import CameraMountConfig, LogConfig, VmnavConfig
@@ -57,9 +59,10 @@ from shared.logs.messages import FrameTransform, base_state_fields, sip_fields
 from shared.logs.series import RUN_METADATA, SERIES_KEY
 from shared.logs.writer import LogStats, LogWriter
 
-#: ``foxglove.Log`` name of mission events and of the runtime's notes.
+#: ``foxglove.Log`` name of mission events, of the runtime's notes and of the Pioneer's end.
 EVENT_SOURCE = "robot.mission_run"
 NOTE_SOURCE = "robot.runtime"
+PIONEER_SOURCE = "robot.pioneer"
 #: Log level of mission events by kind (others are INFO).
 _EVENT_LEVELS = {"lost": "WARNING"}
 #: Foxglove log levels from the lowest ``logging`` level each covers, highest first.
@@ -79,16 +82,17 @@ def camera_transform(mount: CameraMountConfig) -> FrameTransform:
 
 
 def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]:
-    """The flat ``vmnav.ServoState`` of one cycle.
+    """The flat ``vmnav.ServoState`` of one cycle: every field of
+    :data:`shared.logs.schemas.SERVO_STATE`, which describes them.
 
-    Besides the schema's fields: ``mission_state`` (:class:`robot.mission.MissionState`
-    value), ``switch_reason`` (the key image switch this cycle completed, else null),
-    ``err_image_max_px`` / ``err_points_px`` (the paper's errImageMax and errPoints;
-    null when not computed or without inliers), and the vision's raw estimate
-    ``lateral_error_raw_m``, ``angular_error_raw_rad``, ``progress_raw_m`` (null unless
-    usable) next to the filtered ones the law used. Outside FOLLOWING, ``target_index``
-    is -1 and the command is 0 (the application stops the base), and
-    ``matched_points`` are those of the localization.
+    Besides the servo's own state (the filtered y, theta, s the law used, the command,
+    matches): ``mission_state``, ``switch_reason`` (the key image switch this cycle
+    completed, else null), ``err_image_max_px`` / ``err_points_px`` (the paper's
+    errImageMax and errPoints; null when not computed or without inliers), and the
+    vision's raw estimate ``lateral_error_raw_m``, ``angular_error_raw_rad``,
+    ``progress_raw_m`` (null unless usable). Outside FOLLOWING, ``target_index`` is -1
+    and the command is 0 (the application stops the base), and ``matched_points`` are
+    those of the localization.
 
     Args:
         record: the cycle.
@@ -201,6 +205,24 @@ class FieldLog:
         ``logging`` level (DEBUG ... CRITICAL, which becomes FATAL)."""
         name = next((name for floor, name in _NOTE_LEVELS if level >= floor), "DEBUG")
         self._writer.log_text(t_ns, name, text, NOTE_SOURCE)
+
+    def pioneer_closed(self, t_ns: int, status: PioneerStatus, counters: LinkCounters) -> None:
+        """How the Pioneer link ended, once the driver closed (stop and CLOSE sent), as a
+        ``foxglove.Log`` line at ``t_ns``: the link state, the SIPs received and how long
+        before ``t_ns`` the last came (with :meth:`sip` observing the driver, the last
+        :data:`~shared.logs.topics.SIP` message), link losses, commands dropped.
+
+        Args:
+            t_ns: when the driver had closed, ns (the robot's clock).
+            status: the driver's :meth:`~robot.pioneer.driver.PioneerDriver.status`.
+            counters: the driver's :meth:`~robot.pioneer.driver.PioneerDriver.counters`.
+        """
+        last = ("" if status.last_sip_ns is None
+                else f" (the last {(t_ns - status.last_sip_ns) / 1e6:.1f} ms before)")
+        self._writer.log_text(
+            t_ns, "INFO", f"pioneer {status.link.value.lower()}: {counters.sips} SIPs{last}; "
+            f"{counters.link_losses} link losses, {counters.dropped_commands} commands dropped",
+            PIONEER_SOURCE)
 
     def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8],
                     odom_pose: tuple[float, float, float]) -> None:

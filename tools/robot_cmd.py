@@ -14,7 +14,9 @@ It wires the parts the field runs, each on its own thread, around one loop:
 The loop (:func:`serve`) hands each frame to the runtime and, when no frame comes
 within ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled (the base stops).
 Parameters set from the ground and goal photos live in ``--state DIR``. Ctrl-C and
-SIGTERM stop the base, send the Pioneer its CLOSE, and close the link and the camera.
+SIGTERM stop the base, send the Pioneer its CLOSE, and close the link and the camera;
+the field log records all that (ending with how the Pioneer link ended) and is finished
+last.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from shared.errors import InputError, TransportError
+from shared.errors import InputError, MemoryFormatError, TransportError
 
 if TYPE_CHECKING:
     from robot.camera import VideoCaptureSource
@@ -108,7 +110,11 @@ def run(args: argparse.Namespace) -> int:
     clock = WallClock()
     if args.key is not None:
         signing = SigningSetup(read_key_file(args.key), time.time_ns() - clock.now_ns())
-    with contextlib.ExitStack() as stack:
+    # The field log goes on `last`, which unwinds after `stack`: it still records while
+    # the runtime stops the base and the driver sends the Pioneer its CLOSE, then says
+    # how the link ended, and is finished after everything else (normal end, Ctrl-C,
+    # SIGTERM, or an error).
+    with contextlib.ExitStack() as last, contextlib.ExitStack() as stack:
         camera = stack.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
         driver = stack.enter_context(PioneerDriver.from_config(config.pioneer, clock))
         driver.start_thread()
@@ -118,10 +124,12 @@ def run(args: argparse.Namespace) -> int:
         if not args.no_log:  # once camera and robot answered
             log_config = (config.log if args.log is None
                           else dataclasses.replace(config.log, output_dir=str(args.log)))
-            log = stack.enter_context(FieldLog(log_config, "robot", config.sim.camera,
-                                               {"source": "vmnav robot", "aria": config.pioneer.url,
-                                                "camera": config.camera.source}))
+            log = last.enter_context(FieldLog(log_config, "robot", config.sim.camera,
+                                              {"source": "vmnav robot", "aria": config.pioneer.url,
+                                               "camera": config.camera.source}))
             driver.sip_observers.append(log.sip)
+            last.callback(lambda: log.pioneer_closed(clock.now_ns(), driver.status(),
+                                                     driver.counters()))
         runtime = RobotRuntime(memory, args.memory, config, driver, clock,
                                np.random.default_rng(), log=log)
         stack.callback(runtime.close)
@@ -167,19 +175,27 @@ def serve(camera: VideoCaptureSource, runtime: RobotRuntime, clock: Clock,
 
 def open_robot_memory(directory: Path, calibration: Path | None) -> VisualMemory:
     """The memory in ``directory`` (a writable folder), or a new empty one for
-    ``calibration``'s camera (default: the simulator's).
+    ``calibration``'s camera (default: the simulator's) when ``directory`` is missing or
+    holds no file.
 
     Raises:
         InputError: ``directory`` is not a writable folder, or a calibration is given for
             a stored memory taught with another camera.
-        MemoryFormatError: the stored memory does not load.
+        MemoryFormatError: the stored memory does not load, or ``directory`` holds files
+            but no manifest.
     """
     from shared.calibration import read_camera
     from shared.camera_model import CameraModel
     from shared.memory import read_memory
+    from shared.memory.store import MANIFEST_NAME, files_without_manifest
     from tools.teach_cmd import open_memory
 
-    if calibration is None and (directory / "manifest.json").exists():
+    orphans = files_without_manifest(directory)
+    if orphans:  # a teach would write a new manifest over them
+        raise MemoryFormatError(f"memory {directory}", f"{MANIFEST_NAME} missing but the folder "
+                                f"holds {orphans} files; restore it or point --memory to an "
+                                "empty folder")
+    if calibration is None and (directory / MANIFEST_NAME).exists():
         return read_memory(directory)
     return open_memory(directory, CameraModel.default() if calibration is None
                        else read_camera(calibration))

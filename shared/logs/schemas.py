@@ -152,19 +152,39 @@ def _flat(title: str, description: str, fields: dict[str, tuple[str | list[str],
 
 _STAMP = ("integer", "capture time of the data, ns (the loop's clock)")
 
-SERVO_STATE = _flat("vmnav.ServoState", "One visual servo cycle (robot.follower.FollowStep)", {
+SERVO_STATE = _flat("vmnav.ServoState", "One mission cycle of the robot "
+                    "(robot.mission_run.CycleRecord; robot.field_log.servo_state)", {
     "stamp_ns": _STAMP,
     "mode": ("string", "teach, repeat, idle, ..."),
-    "target_index": ("integer", "index of the key image headed for in the route"),
+    "mission_state": ("string", "the mission state after the cycle (robot.mission.MissionState: "
+                      "idle, localizing, following, lost, arrived, aborted, failed)"),
+    "target_index": ("integer", "index of the key image headed for in the route; -1 when not "
+                     "following"),
     "key_image_id": (["integer", "null"], "id of that key image"),
-    "lateral_error_m": (["number", "null"], "y: lateral offset from the taught path, m"),
-    "angular_error_rad": (["number", "null"], "theta: heading error to the taught path, rad"),
-    "progress_m": (["number", "null"], "s: distance along the current segment, m"),
-    "v_m_s": ("number", "commanded forward speed, m/s"),
-    "omega_rad_s": ("number", "commanded turn rate, rad/s, counter-clockwise"),
-    "matched_points": ("integer", "points matched to the key images"),
+    "lateral_error_m": (["number", "null"], "y: lateral offset from the taught path, m "
+                        "(filtered, what the control law used)"),
+    "angular_error_rad": (["number", "null"], "theta: heading error to the taught path, rad "
+                          "(filtered)"),
+    "progress_m": (["number", "null"], "s: distance along the current segment, m (filtered)"),
+    "v_m_s": ("number", "commanded forward speed, m/s (0 when not following)"),
+    "omega_rad_s": ("number", "commanded turn rate, rad/s, counter-clockwise (0 when not "
+                    "following)"),
+    "matched_points": ("integer", "points matched to the key images (when not following: by "
+                       "the localization)"),
     "inliers": (["integer", "null"], "matches consistent with the estimated geometry"),
     "lost": ("boolean", "the estimator declared the robot lost this cycle"),
+    "switch_reason": (["string", "null"], "the key image switch this cycle completed: "
+                      "image_error or passed (robot.switching.SWITCH_REASONS); null: none"),
+    "err_image_max_px": (["number", "null"], "errImageMax: largest image distance between "
+                         "matched points, px; null when not computed or without matches"),
+    "err_points_px": (["number", "null"], "errPoints: mean image distance between matched "
+                      "points, px; null when not computed or without matches"),
+    "lateral_error_raw_m": (["number", "null"], "y as the vision estimated it this cycle, "
+                            "before filtering, m; null without a usable estimate"),
+    "angular_error_raw_rad": (["number", "null"], "theta as the vision estimated it, rad; null "
+                              "without a usable estimate"),
+    "progress_raw_m": (["number", "null"], "s as the vision estimated it, m; null without a "
+                       "usable estimate"),
 })
 
 COMMAND = _flat("vmnav.Command", "A velocity command sent to the base", {

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -125,6 +126,24 @@ def read_memory(directory: str | Path) -> VisualMemory:
         return VisualMemory.from_parts(camera, keyframes, manifest.paths, manifest.junctions)
     except MemoryFormatError as e:
         raise MemoryFormatError(manifest.path, f"{e.where}: {e.problem}") from None
+
+
+def files_without_manifest(directory: str | Path) -> int:
+    """How many files ``directory`` holds, at any depth, while it has no manifest.
+
+    A new memory started there would write its manifest over them: key images whose
+    manifest was lost, another program's files, or (rule 2) a first write cut short.
+    Callers that start an empty memory where :data:`MANIFEST_NAME` is missing check
+    that this is 0 first.
+
+    Returns:
+        0 when ``directory`` holds a manifest, no file (empty sub-folders allowed), does
+        not exist or is not a folder.
+    """
+    directory = Path(directory)
+    if not directory.is_dir() or (directory / MANIFEST_NAME).exists():
+        return 0
+    return sum(len(files) for _, _, files in os.walk(directory))
 
 
 def write_memory(directory: str | Path, memory: VisualMemory) -> None:

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import json
 import logging
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 
 from robot.control_law import Twist
 from robot.field_log import FieldLog, camera_transform
@@ -17,14 +19,27 @@ from robot.follower import FollowStep
 from robot.logged_missions import mission_start
 from robot.mission import MissionState
 from robot.mission_run import AppEvent, CycleRecord
+from robot.pioneer.client import PioneerClient
+from robot.pioneer.status import LinkCounters, LinkState
 from robot.replay import generator_from_state
+from robot.switching import KeyImageSwitch
+from robot.vision.frame_state import FrameState
+from robot.vision.image_errors import ImageErrors
+from robot.vision.path_state import PathState
 from shared.aria.sip import Sip, SipFlags
-from shared.config import CameraMountConfig, ControlConfig, LogConfig, VmnavConfig
+from shared.config import (
+    CameraMountConfig,
+    ControlConfig,
+    LogConfig,
+    PioneerDriverConfig,
+    VmnavConfig,
+)
 from shared.interfaces import BaseState
 from shared.logs import topics
 from shared.logs.messages import image_from_compressed
 from shared.logs.reader import LogMessage, log_info, read_messages, read_metadata
 from shared.mavlink.dialect import make_codec, mavlink
+from tests.shared.logs.test_schemas import conforms
 
 MS = 1_000_000
 PERIOD_NS = 66 * MS
@@ -138,6 +153,36 @@ class TestTopics:
         assert messages["/mavlink/in/HEARTBEAT"][0].data["type"] == 10
 
 
+def test_every_servo_state_field_is_in_the_schema_the_file_declares(tmp_path: Path) -> None:
+    # Localizing, following without an estimate, following with one that completes a key
+    # image switch: every field written, null or not, against the schema stored in the file.
+    vision = FrameState(PathState(y_m=0.04, theta_rad=-0.01, s_m=-0.3, ok=True,
+                                  scale_source="three-view", n_inliers=40, n_points=35),
+                        ImageErrors(30.0, 20.0, 40), matches=42)
+    switched = record(2, True)
+    switch = KeyImageSwitch(t_ns=switched.t_ns, reached_index=0, next_index=1,
+                            reason="image_error", err_image_max_px=18.0, s_m=-0.05, final=False)
+    switched = dataclasses.replace(switched, follow=dataclasses.replace(
+        switched.follow, vision=vision, switch=switch))
+    rng = np.random.default_rng(3)
+    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
+        for r in (record(0, False), record(1, True), switched):
+            log.cycle(r, frame(rng), targets=(4, 6))
+    (file,) = log.close().files
+    with open(file, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    (schema,) = [json.loads(s.data) for s in summary.schemas.values()
+                 if s.name == "vmnav.ServoState"]
+    states = [m.data for m in read_messages(file, [topics.SERVO_STATE])]
+    assert len(states) == 3
+    for state in states:
+        assert set(state) <= set(schema["properties"]), set(state) - set(schema["properties"])
+        conforms(state, schema)  # and exactly the required keys, of the declared types
+    assert (states[2]["lateral_error_raw_m"], states[2]["err_points_px"],
+            states[2]["switch_reason"]) == (0.04, 20.0, "image_error")
+
+
 def test_replay_frames_are_lossless_every_cycle_and_teach_frames_jpeg(tmp_path: Path) -> None:
     rng = np.random.default_rng(2)
     config = LogConfig(output_dir=str(tmp_path), frame_rate_hz=1.0, replay_frames=True)
@@ -166,6 +211,21 @@ def test_a_mission_start_gives_back_its_config_and_generator(tmp_path: Path) -> 
     start = mission_start(file, message)
     assert (start.t_ns, start.goal_id, start.config) == (5 * MS, 7, config)
     np.testing.assert_array_equal(generator_from_state(start.rng_state).random(8), rng.random(8))
+
+
+def test_how_the_pioneer_link_ended_is_one_log_line(tmp_path: Path) -> None:
+    status = dataclasses.replace(PioneerClient(PioneerDriverConfig()).status,
+                                 link=LinkState.CLOSED)
+    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
+        log.pioneer_closed(5 * MS, status, LinkCounters())
+        log.pioneer_closed(9 * MS, dataclasses.replace(status, last_sip_ns=9 * MS - 12_345_678),
+                           LinkCounters(sips=57, link_losses=1, dropped_commands=3))
+    lines = [(m.log_time_ns, m.data["name"], m.data["message"])
+             for m in read_messages(log.close().files[0], [topics.LOG])]
+    assert lines == [
+        (5 * MS, "robot.pioneer", "pioneer closed: 0 SIPs; 0 link losses, 0 commands dropped"),
+        (9 * MS, "robot.pioneer", "pioneer closed: 57 SIPs (the last 12.3 ms before); "
+                                  "1 link losses, 3 commands dropped")]
 
 
 def test_the_camera_transform_of_a_forward_camera() -> None:

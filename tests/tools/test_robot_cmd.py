@@ -16,11 +16,15 @@ import time
 import pytest
 
 from ground.station import GroundStation
+from shared.camera_model import CameraModel
 from shared.clock import WallClock
-from shared.logs.reader import log_info
+from shared.errors import MemoryFormatError
+from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
-from shared.memory import read_memory
+from shared.memory import read_memory, write_memory
+from tests.shared.memory.builders import loop_memory
 from tests.tools.processes import VMNAV, start, wait_for
+from tools.robot_cmd import open_robot_memory
 
 
 @pytest.fixture
@@ -64,17 +68,27 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
             distance = memory.keyframes[path.keyframe_ids[-1]].distance_m
             assert 0.5 < distance < 1.0
         finally:
+            signalled_ns = time.monotonic_ns()  # the robot's WallClock: the same clock
             robot.send_signal(signal.SIGTERM)
             code = robot.wait(15)
     output = log.read_text()
     assert code == 143, output
     assert "Traceback" not in output
     assert "pioneer: Closed()" in output
-    info = log_info(tmp_path / "logs" / "robot-0001.mcap")
+    field_log = tmp_path / "logs" / "robot-0001.mcap"
+    info = log_info(field_log)
     assert info.complete, info.problem
     topics = {t.topic for t in info.topics}
     assert {"/camera/image/compressed", "/tf", "/pioneer/sip", "/mavlink/in/MANUAL_CONTROL",
             "/mavlink/out/HEARTBEAT", "/log"} <= topics
+    # The log was finished after the driver closed (stop and CLOSE sent): its last line,
+    # written then, gives the driver's last SIP, and that SIP is the log's last.
+    *_, closed = read_messages(field_log, ["/log"])
+    *_, last_sip = read_messages(field_log, ["/pioneer/sip"])
+    gap_ms = (closed.log_time_ns - last_sip.log_time_ns) / 1e6
+    assert closed.log_time_ns > signalled_ns and closed.data["name"] == "robot.pioneer"
+    assert closed.data["message"].startswith("pioneer closed: "), closed.data
+    assert f"SIPs (the last {gap_ms:.1f} ms before)" in closed.data["message"], closed.data
 
 
 def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
@@ -90,6 +104,47 @@ def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
 def run_robot(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:
     return subprocess.run([*VMNAV, "robot", *args], capture_output=True, text=True,
                           timeout=timeout_s)
+
+
+def test_a_memory_folder_without_its_manifest_is_one_line_at_start(tmp_path) -> None:
+    memory = tmp_path / "memory"
+    (memory / "images").mkdir(parents=True)
+    (memory / "images" / "0.png").write_bytes(b"key image")
+    (memory / "thumbnails").mkdir()
+    (memory / "thumbnails" / "0.png").write_bytes(b"thumbnail")
+    # Refused before the Pioneer or the camera is opened (neither exists here).
+    result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
+                       "--memory", str(memory), "--log", str(tmp_path / "logs"))
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        f"vmnav robot: error: memory {memory}: manifest.json missing but the folder holds 2 "
+        "files; restore it or point --memory to an empty folder"]
+    assert sorted(p.relative_to(memory).as_posix() for p in memory.rglob("*")) == [
+        "images", "images/0.png", "thumbnails", "thumbnails/0.png"]
+    assert not (tmp_path / "logs").exists()
+
+
+class TestOpenRobotMemory:
+    def test_files_without_a_manifest_are_refused(self, tmp_path, rng) -> None:
+        write_memory(tmp_path / "memory", loop_memory(rng))
+        (tmp_path / "memory" / "manifest.json").unlink()
+        with pytest.raises(MemoryFormatError, match=r"memory .*memory: manifest.json missing but "
+                                                    r"the folder holds 21 files; restore it"):
+            open_robot_memory(tmp_path / "memory", None)
+
+    def test_an_empty_or_missing_folder_starts_an_empty_memory(self, tmp_path) -> None:
+        (tmp_path / "empty" / "images").mkdir(parents=True)
+        for folder in (tmp_path / "empty", tmp_path / "new"):
+            memory = open_robot_memory(folder, None)
+            assert (memory.keyframes, memory.paths) == ({}, {})
+            assert memory.camera.width == CameraModel.default().width
+        assert (tmp_path / "new").is_dir()
+
+    def test_a_stored_memory_is_read(self, tmp_path, rng) -> None:
+        stored = loop_memory(rng)
+        write_memory(tmp_path / "memory", stored)
+        memory = open_robot_memory(tmp_path / "memory", None)
+        assert memory.keyframes.keys() == stored.keyframes.keys()
 
 
 def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) -> None:

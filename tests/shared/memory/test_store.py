@@ -15,7 +15,12 @@ import shared.atomic_file
 from shared.calibration import camera_to_dict
 from shared.errors import InputError, MemoryFormatError
 from shared.memory import Junction, VisualMemory, add_path_to_disk, read_memory, write_memory
-from shared.memory.store import features_path, image_path, thumbnail_path
+from shared.memory.store import (
+    features_path,
+    files_without_manifest,
+    image_path,
+    thumbnail_path,
+)
 from tests.shared.memory.builders import loop_memory, make_records, small_camera
 
 
@@ -372,6 +377,28 @@ def test_features_without_tracks_load_with_none(stored: tuple[Path, VisualMemory
 def test_missing_folder(tmp_path: Path) -> None:
     with pytest.raises(MemoryFormatError, match="no such folder"):
         read_memory(tmp_path / "nowhere")
+
+
+class TestFilesWithoutManifest:
+    def test_none_in_a_memory_an_empty_folder_or_no_folder(
+        self, stored: tuple[Path, VisualMemory], tmp_path: Path
+    ) -> None:
+        assert files_without_manifest(stored[0]) == 0
+        (tmp_path / "empty" / "images").mkdir(parents=True)
+        assert files_without_manifest(tmp_path / "empty") == 0
+        assert files_without_manifest(tmp_path / "nowhere") == 0
+        (tmp_path / "a_file").write_text("not a folder")
+        assert files_without_manifest(tmp_path / "a_file") == 0
+
+    def test_a_memory_that_lost_its_manifest_counts_its_key_image_files(
+        self, stored: tuple[Path, VisualMemory]
+    ) -> None:
+        directory, memory = stored
+        (directory / "manifest.json").unlink()
+        # image, features and thumbnail of each key image, in sub-folders.
+        assert files_without_manifest(directory) == 3 * len(memory.keyframes) == 21
+        (directory / "notes.txt").write_text("top-level files count too")
+        assert files_without_manifest(directory) == 22
 
 
 def test_write_refuses_to_replace_an_unreadable_memory(stored: tuple[Path, VisualMemory]) -> None:
