@@ -123,6 +123,7 @@ def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]
         "lateral_error_raw_m": vision.state.y_m if ok else None,
         "angular_error_raw_rad": vision.state.theta_rad if ok else None,
         "progress_raw_m": vision.state.s_m if ok else None,
+        "compute_ms": record.compute_ns / 1e6,
     }
 
 

@@ -165,7 +165,9 @@ def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
           f"heading RMS {fixed_text(report['heading_rms_deg'], 2)} deg; final position error "
           f"{cm_text(report['final_position_error_m'])} cm")
     print(f"  {report['key_images_reached']} key images reached, {report['mean_matches']} "
-          f"matches per frame on average, {report['lost_events']} LOST events (robot log)")
+          f"matches per frame on average, {report['lost_events']} LOST events; servo loop "
+          f"{fixed_text(report['loop_ms_p50'], 1)} ms median, "
+          f"{fixed_text(report['loop_ms_p95'], 1)} ms p95 (robot log)")
     print(f"  mission upload to MISSION_ACK {report['mission_upload_ms']:.0f} ms; "
           f"{report['wall_time_s']:.0f} s wall; processes exited {report['exit_codes']}")
     print(f"wrote {out / 'report.json'}; logs in {out / 'logs'}, process outputs {out}/*.out")

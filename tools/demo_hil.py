@@ -311,10 +311,12 @@ def follow(station: GroundStation, sim: SimControl, goal: int,
 
 def servo_figures(robot_logs: list[Path]) -> dict[str, Any]:
     """What the robot's field log says of the repeat (its ``/servo/state``): key images
-    reached (switches), mean matches while following, LOST events; the lock-step
-    report's figures that only the robot process knows."""
+    reached (switches), mean matches and the servo loop's processing time (median, p95,
+    ms) while following, LOST events; the lock-step report's figures that only the
+    robot process knows."""
     switches = lost = 0
     matches: list[int] = []
+    loop_ms: list[float] = []
     for path in robot_logs:
         for message in read_messages(path, [topics.SERVO_STATE]):
             state = message.data
@@ -322,8 +324,11 @@ def servo_figures(robot_logs: list[Path]) -> dict[str, Any]:
             lost += bool(state["lost"])
             if state["mission_state"] == "following":
                 matches.append(state["matched_points"])
+                loop_ms.append(state["compute_ms"])
     return {"key_images_reached": switches, "lost_events": lost,
-            "mean_matches": round(float(np.mean(matches)), 1) if matches else None}
+            "mean_matches": round(float(np.mean(matches)), 1) if matches else None,
+            "loop_ms_p50": round(float(np.percentile(loop_ms, 50)), 2) if loop_ms else None,
+            "loop_ms_p95": round(float(np.percentile(loop_ms, 95)), 2) if loop_ms else None}
 
 
 def robot_config_text(config: VmnavConfig) -> str:

@@ -135,7 +135,8 @@ def _run_phase(seconds: float, frames: list[npt.NDArray[np.uint8]], frame_rate_h
                  "matched_points": 150, "inliers": 120, "lost": False, "switch_reason": None,
                  "err_image_max_px": 24.5, "err_points_px": 11.2,
                  "lateral_error_raw_m": 0.012 * np.sin(tick / 50),
-                 "angular_error_raw_rad": 0.021, "progress_raw_m": 0.01 * tick}
+                 "angular_error_raw_rad": 0.021, "progress_raw_m": 0.01 * tick,
+                 "compute_ms": 9.5}
         command = {"stamp_ns": t_ns, "linear_x_m_s": 0.3, "angular_z_rad_s": 0.05,
                    "source": "servo"}
         odom = [FrameTransform.planar(topics.FRAME_ODOM, topics.FRAME_BASE, 0.006 * tick, 0.0,

@@ -185,6 +185,8 @@ SERVO_STATE = _flat("vmnav.ServoState", "One mission cycle of the robot "
                               "without a usable estimate"),
     "progress_raw_m": (["number", "null"], "s as the vision estimated it, m; null without a "
                        "usable estimate"),
+    "compute_ms": ("number", "the cycle's processing time, frame in to command out, ms of "
+                   "wall time"),
 })
 
 COMMAND = _flat("vmnav.Command", "A velocity command sent to the base", {

@@ -24,6 +24,7 @@ def test_teach_by_teleoperation_then_repeat_over_real_transports(tmp_path, capsy
     assert report["key_images_taught"] >= 5
     assert 1 <= report["key_images_reached"] <= report["key_images_taught"]
     assert report["mean_matches"] > 20
+    assert 0 < report["loop_ms_p50"] <= report["loop_ms_p95"] < 1000
     assert report["exit_codes"] == {"robot": 143, "sim": 0}  # SIGTERM; sim serve exits 0
     assert any(n.startswith("path 0 'east_a'") for n in report["notices"])
     assert "hil: taught 'east_a' by teleoperation over MAVLink" in printed
