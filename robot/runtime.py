@@ -86,6 +86,7 @@ from shared.mavlink.goal import Goal
 from shared.mavlink.mission_items import MissionRefusal
 from shared.mavlink.modes import Mode
 from shared.memory import VisualMemory, read_memory, write_memory
+from shared.memory.store import check_no_orphans
 
 #: Modes in which a mission run drives the robot.
 _MISSION_MODES = frozenset({Mode.AUTO, Mode.GUIDED})
@@ -552,6 +553,7 @@ class RobotRuntime:
                       f"{config.teach.min_path_length_m:.2f} m: nothing stored")
             return
         try:
+            check_no_orphans(self._memory_dir)
             memory = (read_memory(self._memory_dir)
                       if (self._memory_dir / "manifest.json").exists()
                       else VisualMemory(self._memory.camera))

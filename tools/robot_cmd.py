@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from shared.errors import InputError, MemoryFormatError, TransportError
+from shared.errors import InputError, TransportError
 
 if TYPE_CHECKING:
     from robot.camera import VideoCaptureSource
@@ -187,14 +187,9 @@ def open_robot_memory(directory: Path, calibration: Path | None) -> VisualMemory
     from shared.calibration import read_camera
     from shared.camera_model import CameraModel
     from shared.memory import read_memory
-    from shared.memory.store import MANIFEST_NAME, files_without_manifest
+    from shared.memory.store import MANIFEST_NAME
     from tools.teach_cmd import open_memory
 
-    orphans = files_without_manifest(directory)
-    if orphans:  # a teach would write a new manifest over them
-        raise MemoryFormatError(f"memory {directory}", f"{MANIFEST_NAME} missing but the folder "
-                                f"holds {orphans} files; restore it or point --memory to an "
-                                "empty folder")
     if calibration is None and (directory / MANIFEST_NAME).exists():
         return read_memory(directory)
     return open_memory(directory, CameraModel.default() if calibration is None

@@ -161,10 +161,12 @@ def open_memory(directory: Path, camera: CameraModel) -> VisualMemory:
     Raises:
         InputError: ``directory`` is not a writable folder, or holds a memory taught
             with another camera.
-        MemoryFormatError: the memory in ``directory`` does not load.
+        MemoryFormatError: the memory in ``directory`` does not load, or ``directory`` holds
+            files but no manifest (a new memory would be written over them).
     """
     from shared.calibration import camera_to_dict
     from shared.memory import VisualMemory, read_memory
+    from shared.memory.store import MANIFEST_NAME, check_no_orphans
 
     if directory.exists() and not directory.is_dir():
         raise InputError(directory, "is not a folder")
@@ -174,7 +176,8 @@ def open_memory(directory: Path, camera: CameraModel) -> VisualMemory:
         raise InputError(directory, f"cannot create the memory folder: {e.strerror}") from None
     if not os.access(directory, os.W_OK | os.X_OK):
         raise InputError(directory, "the memory folder is not writable")
-    if not (directory / "manifest.json").exists():
+    check_no_orphans(directory)
+    if not (directory / MANIFEST_NAME).exists():
         return VisualMemory(camera)
     memory = read_memory(directory)
     if camera_to_dict(memory.camera) != camera_to_dict(camera):

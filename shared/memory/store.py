@@ -146,6 +146,20 @@ def files_without_manifest(directory: str | Path) -> int:
     return sum(len(files) for _, _, files in os.walk(directory))
 
 
+def check_no_orphans(directory: str | Path) -> None:
+    """Refuse to start a new memory over files whose manifest is missing
+    (:func:`files_without_manifest`).
+
+    Raises:
+        MemoryFormatError: ``directory`` holds files but no manifest.
+    """
+    orphans = files_without_manifest(directory)
+    if orphans:
+        raise MemoryFormatError(f"memory {directory}", f"{MANIFEST_NAME} missing but the folder "
+                                f"holds {orphans} files; restore it or point --memory to an "
+                                "empty folder")
+
+
 def write_memory(directory: str | Path, memory: VisualMemory) -> None:
     """Store ``memory`` in ``directory`` (created if needed), adding to what is there.
 

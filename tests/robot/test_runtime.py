@@ -297,6 +297,19 @@ class TestTeaching:
         assert any(level == logging.ERROR and "a path needs 0.20 m: nothing stored" in text
                    for level, text in robot.notices)
 
+    def test_a_manifest_lost_while_teaching_stores_nothing_over_the_files(
+            self, taught, memory_dir) -> None:
+        robot = SimRobot(taught[0], memory_dir, Pose2(4.5, 10.0, 0.0))
+        robot.runtime.teach_start("east_b")
+        robot.drive(3.0, x=1.0)
+        (memory_dir / "manifest.json").unlink()
+        files = sorted(p.name for p in memory_dir.rglob("*"))
+        robot.runtime.teach_stop()
+        robot.run(0.1)
+        assert sorted(p.name for p in memory_dir.rglob("*")) == files
+        assert any(level == logging.ERROR and "'east_b' not stored" in text
+                   and "manifest.json missing" in text for level, text in robot.notices)
+
 
 def test_a_camera_stall_stops_the_base_and_frames_resume_the_mission(taught, memory_dir) -> None:
     robot = SimRobot(taught[0], memory_dir, EAST_A)

@@ -122,3 +122,11 @@ class TestBadInput:
         (tmp_path / "manifest.json").write_text("{")
         code, _, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
         assert code == 1 and "manifest.json" in err
+
+    def test_files_without_a_manifest_are_not_taught_over(self, tmp_path: Path) -> None:
+        (tmp_path / "images").mkdir()
+        (tmp_path / "images" / "0.png").write_bytes(b"a key image whose manifest was lost")
+        code, _, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
+        assert code == 1 and err.count("\n") == 1
+        assert "manifest.json missing but the folder holds 1 files" in err
+        assert sorted(p.name for p in tmp_path.rglob("*")) == ["0.png", "images"]
