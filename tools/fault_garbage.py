@@ -12,6 +12,7 @@ import shutil
 import socket
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -143,23 +144,29 @@ def garbage_mavlink(taught: Taught, folder: Path) -> None:
 
 
 def corrupt_memory(taught: Taught, folder: Path) -> None:
-    """``vmnav robot`` starts on a memory with a damaged file (manifest cut short, a key
-    image or a feature file overwritten) or a damaged parameter file: it exits 1 with one
-    line naming the file, and no stored file changes."""
+    """``vmnav robot`` starts on a memory with a damaged file (manifest cut short or
+    deleted, a key image or a feature file overwritten) or a damaged parameter file: it
+    exits 1 with one line naming the file, and no stored file changes."""
     rng = np.random.default_rng(84)
-    damages = {
-        "memory/manifest.json": lambda data: data[: len(data) // 2],
-        "memory/images/3.png": lambda data: random_bytes(rng, len(data)),
-        "memory/features/5.npz": lambda data: data[:100],
-        "state/params.parm": lambda data: random_bytes(rng, 64),
-    }
+    damages: list[tuple[str, Callable[[bytes], bytes | None]]] = [  # None: deleted
+        ("memory/manifest.json", lambda data: data[: len(data) // 2]),
+        ("memory/images/3.png", lambda data: random_bytes(rng, len(data))),
+        ("memory/features/5.npz", lambda data: data[:100]),
+        ("state/params.parm", lambda data: random_bytes(rng, 64)),
+        ("memory/manifest.json", lambda data: None),
+    ]
     with SimSide(taught.world_file) as side:
-        for number, (name, damage) in enumerate(damages.items()):
+        for number, (name, damage) in enumerate(damages):
             case = folder / f"damage-{number}"
             shutil.copytree(taught.memory_dir, case / "memory")
             (case / "state").mkdir()
             target = case / name
-            target.write_bytes(damage(target.read_bytes() if target.exists() else b""))
+            damaged = damage(target.read_bytes() if target.exists() else b"")
+            if damaged is None:
+                target.unlink()
+            else:
+                target.write_bytes(damaged)
+            named = f"{target.parent}: {target.name} missing" if damaged is None else str(target)
             before = {p: p.read_bytes() for p in sorted(case.rglob("*")) if p.is_file()}
             argv = ["--aria", side.aria_url, "--camera", side.camera.stream_url, "--mavlink",
                     "udpout:127.0.0.1:9", "--memory", str(case / "memory"),
@@ -169,7 +176,7 @@ def corrupt_memory(taught: Taught, folder: Path) -> None:
             lines = done.stderr.strip().splitlines()
             last = lines[-1] if lines else ""
             expect(done.returncode == 1 and last.startswith("vmnav robot: error: ")
-                   and str(target) in last and "Traceback" not in done.stderr,
+                   and named in last and "Traceback" not in done.stderr,
                    f"{name} damaged: exit {done.returncode}, last line {last!r}")
             after = {p: p.read_bytes() for p in sorted(case.rglob("*")) if p.is_file()}
             expect(after == before, f"{name} damaged: the robot changed "
