@@ -270,13 +270,8 @@ def run_faults(args: argparse.Namespace) -> int:
 
     if args.repeat < 1:
         raise InputError("--repeat", f"must be >= 1, got {args.repeat}")
-    names = list(CASES)
-    if args.cases is not None:
-        names = [name.strip() for name in args.cases.split(",") if name.strip()]
-        unknown = [name for name in names if name not in CASES]
-        if unknown or not names:
-            what = f"unknown case {', '.join(unknown)}" if unknown else "no case"
-            raise InputError("--cases", f"{what} (known: {', '.join(CASES)})")
+    names = list(CASES) if args.cases is None else picked("--cases", args.cases, list(CASES),
+                                                          "case")
 
     def progress(line: str) -> None:
         print(f"vmnav bench faults: {line}", file=sys.stderr, flush=True)
@@ -287,6 +282,22 @@ def run_faults(args: argparse.Namespace) -> int:
                               keep_passed=args.out is not None)
     print(json.dumps(result, indent=2))
     return 0
+
+
+def picked(option: str, text: str, known: list[str], kind: str) -> list[str]:
+    """The names of the comma-separated ``text``, each one of ``known``.
+
+    Raises:
+        InputError: a name is not known, or there is none (names ``option``).
+    """
+    from shared.errors import InputError
+
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in known]
+    if unknown or not names:
+        what = f"unknown {kind} {', '.join(unknown)}" if unknown else f"no {kind}"
+        raise InputError(option, f"{what} (known: {', '.join(known)})")
+    return names
 
 
 def run_all(args: argparse.Namespace) -> int:
@@ -300,13 +311,7 @@ def run_all(args: argparse.Namespace) -> int:
     from tools.bench_all import run_all as run_benchmarks
 
     known = [name for name in args.registry if name != "all"]
-    names = known
-    if args.only is not None:
-        names = [name.strip() for name in args.only.split(",") if name.strip()]
-        unknown = [name for name in names if name not in known]
-        if unknown or not names:
-            what = f"unknown benchmark {', '.join(unknown)}" if unknown else "no benchmark"
-            raise InputError("--only", f"{what} (known: {', '.join(known)})")
+    names = known if args.only is None else picked("--only", args.only, known, "benchmark")
     extra: dict[str, list[str]] = {}
     for item in args.bench_args:
         name, sep, rest = item.partition("=")
