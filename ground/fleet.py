@@ -24,7 +24,7 @@ from shared.mavlink.address import Address, source_of
 from shared.mavlink.dialect import Message, mavlink
 from shared.mavlink.modes import Mode
 from shared.mavlink.statustext import TEXT_LEN
-from shared.mavlink.udp_link import Peer
+from shared.udp_link import Peer
 
 
 def mode_name(custom_mode: int) -> str:

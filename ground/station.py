@@ -3,7 +3,7 @@
 Theory of operation
 -------------------
 
-The station owns a :class:`~shared.mavlink.udp_link.UdpLink` (``ground.DEFAULT_URL``,
+The station owns a :class:`~shared.udp_link.UdpLink` (``ground.DEFAULT_URL``,
 ``udpin:0.0.0.0:14550`` where QGroundControl listens, or ``udpout:HOST:PORT``), one
 codec, the :class:`~ground.fleet.Fleet` of vehicles it hears, and the sans-I/O client cores
 (missions, parameters, FTP, commands) aimed at the one vehicle it talks to. Each
@@ -66,8 +66,8 @@ from shared.mavlink.params import (
     ParamsFetched,
 )
 from shared.mavlink.signing import SigningClock, configure_signing, timestamp_from_unix_ns
-from shared.mavlink.udp_link import UdpLink
 from shared.mavlink.user_commands import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
+from shared.udp_link import UdpLink
 
 #: This station: system 255, MAV_COMP_ID_MISSIONPLANNER.
 GCS_ADDRESS = Address(255, 190)

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 DEFAULT_TIMEOUT_S = 5.0
 #: Default wait for a goal to be reached (``goto --wait``), s.
 DEFAULT_WAIT_S = 600.0
-#: Where the robot serves its key image thumbnails (``shared.mavlink.ftp_memory``).
+#: Where the robot serves its key image thumbnails (``robot.vehicle.ftp_memory``).
 THUMBNAILS = "/memory/thumbnails"
 #: ``watch`` without ``--duration`` runs until Ctrl-C: about 31 years, ns.
 FOREVER_NS = 10**18
@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     from ground.station import GroundStation
     from shared.clock import WallClock
     from shared.errors import InputError
-    from shared.mavlink.signing import read_key_file
+    from shared.key_file import read_key_file
 
     if args.action is run_drive and not sys.stdin.isatty():
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")

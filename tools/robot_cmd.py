@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.vehicle.udp_vehicle import UdpVehicle
     from shared.clock import WallClock
     from shared.config import load_config
-    from shared.mavlink.signing import read_key_file
+    from shared.key_file import read_key_file
     from tools.pioneer_cmd import CONNECT_TIMEOUT_S, why_not_connected
 
     config = load_config(args.config)

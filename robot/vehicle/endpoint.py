@@ -19,7 +19,7 @@ Rules:
    ``heartbeat_period_ns`` with ArduRover mode numbers (``shared.mavlink.modes``).
 2. Received packets go to the cores: commands (``shared.mavlink.commands``, plus
    the user commands of ``user_commands``), missions, parameters, FTP over the
-   memory and upload area (``shared.mavlink.ftp_memory``); HEARTBEATs of ground
+   memory and upload area (``robot.vehicle.ftp_memory``); HEARTBEATs of ground
    stations feed the failsafe; MANUAL_CONTROL, SET_MODE and TIMESYNC are handled
    here. Replies wait in an outbox for the next :meth:`poll`.
 3. Modes: DO_SET_MODE (ArduPilot or PX4 encoding) and SET_MODE go to
@@ -56,8 +56,11 @@ from typing import Any
 
 from robot.vehicle.app_port import VehicleApp, VehicleTelemetry
 from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
+from robot.vehicle.ftp_memory import MemoryFileSystem
 from robot.vehicle.options import SigningSetup, VehicleFiles
+from robot.vehicle.param_file import load_param_file, save_param_file
 from robot.vehicle.progress import MissionProgress
+from robot.vehicle.robot_params import config_with_params, robot_param_table
 from robot.vehicle.telemetry import (
     TELEMETRY_BUILDERS,
     Builder,
@@ -73,15 +76,12 @@ from shared.mavlink.address import Address, is_for
 from shared.mavlink.commands import CommandDispatcher, autopilot_version_message, vehicle_handlers
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import FtpServer
-from shared.mavlink.ftp_memory import MemoryFileSystem
 from shared.mavlink.goal import Goal, goals_from_items
 from shared.mavlink.intervals import MessageIntervals
 from shared.mavlink.mission import MissionServer
 from shared.mavlink.mission_items import MissionItem, MissionRefusal
 from shared.mavlink.modes import Mode, heartbeat_message, mode_from_set_mode
-from shared.mavlink.param_file import load_param_file, save_param_file
 from shared.mavlink.params import ParamChanged, ParamServer
-from shared.mavlink.robot_params import config_with_params, robot_param_table
 from shared.mavlink.signing import (
     SigningClock,
     SigningStats,

@@ -26,7 +26,7 @@ class SigningSetup:
     """MAVLink 2 signing of the link (``shared.mavlink.signing``).
 
     Attributes:
-        key: the 32-byte secret (``shared.mavlink.signing.read_key_file`` reads one).
+        key: the 32-byte secret (``shared.key_file.read_key_file`` reads one).
         unix_offset_ns: Unix time minus the endpoint's clock reading, ns, measured once by
             the entry point (``time.time_ns() - clock.now_ns()``); keeps the outgoing
             signing timestamp at the wall clock.

@@ -33,7 +33,7 @@ from collections.abc import Callable
 from robot.vehicle.endpoint import VehicleEndpoint
 from shared.clock import Clock, service_loop
 from shared.errors import IllegalEventError
-from shared.mavlink.udp_link import Peer, UdpLink
+from shared.udp_link import Peer, UdpLink
 
 
 class UdpVehicle:

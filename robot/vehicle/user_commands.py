@@ -13,9 +13,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from robot.vehicle.app_port import VehicleApp
+from robot.vehicle.ftp_memory import MemoryFileSystem
 from shared.mavlink.commands import CommandReply, CommandRequest, Handler
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.ftp_memory import MemoryFileSystem
 from shared.mavlink.user_commands import GOTO_PHOTO, TEACH_START, TEACH_STOP, name_from_params
 
 _MAX_PHOTO_ID = 2**24

@@ -5,7 +5,8 @@ the timestamp counts 10 µs units since 2015-01-01 00:00 UTC. pymavlink checks
 signatures while parsing (``MAVLink.check_signature``). This module adds what it
 leaves to the application:
 
-- **The key.** :func:`read_key_file` accepts, in this order: exactly 32 bytes (the
+- **The key.** :func:`key_from_file_bytes` reads a key file's content (the file
+  itself is read by ``shared/key_file.py``) as, in this order: exactly 32 bytes (the
   raw key); 64 hex digits; otherwise a passphrase (UTF-8 text, surrounding
   whitespace stripped, at least :data:`MIN_PASSPHRASE_CHARS` characters) whose
   SHA-256 is the key, as MAVProxy's ``signing key <passphrase>`` derives it. So a
@@ -58,23 +59,20 @@ def key_from_passphrase(passphrase: str) -> bytes:
     return hashlib.sha256(passphrase.encode("utf-8")).digest()
 
 
-def read_key_file(path: str | Path) -> bytes:
-    """Read a signing key (see the module docstring for the three formats).
+def key_from_file_bytes(path: Path, raw: bytes) -> bytes:
+    """The signing key a key file holds (see the module docstring for the three formats).
+
+    Args:
+        path: the file ``raw`` was read from, for the message.
+        raw: the file's content.
 
     Returns:
         The 32-byte key.
 
     Raises:
-        InputError: the file is missing, unreadable, empty, or neither a raw key
-            nor hex nor a printable passphrase long enough (the message says which).
+        InputError: ``raw`` is empty, or neither a raw key nor hex nor a printable
+            passphrase long enough (the message says which).
     """
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(path, "signing key file not found") from None
-    except OSError as e:
-        raise InputError(path, f"cannot read signing key file: {e.strerror}") from None
     if len(raw) == KEY_BYTES:
         return raw
     try:

@@ -13,8 +13,8 @@ from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.udp_link import UdpLink
 from shared.memory.store import read_memory, thumbnail_path, write_memory
+from shared.udp_link import UdpLink
 from tests.ground.conftest import run_ground
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.shared.memory.builders import loop_memory

@@ -18,7 +18,7 @@ from shared.clock import ManualClock, WallClock
 from shared.config import VmnavConfig
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.udp_link import UdpLink
+from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import UNIX_OFFSET_NS, make_vehicle
 

@@ -27,7 +27,7 @@ from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import FtpClient
 from shared.mavlink.mission_client import MissionClient
 from shared.mavlink.params import ParamClient
-from shared.mavlink.udp_link import UdpLink
+from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 
 GCS = Address(255, 190)

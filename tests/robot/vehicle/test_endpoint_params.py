@@ -9,13 +9,13 @@ import pytest
 
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import VehicleFiles
+from robot.vehicle.robot_params import ROBOT_PARAMS
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import ManualClock
 from shared.config import VmnavConfig
 from shared.errors import ConfigError
 from shared.mavlink.dialect import mavlink, to_float32
 from shared.mavlink.params import ParamSetDone, ParamsFetched
-from shared.mavlink.robot_params import ROBOT_PARAMS
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 

@@ -8,13 +8,13 @@ from pathlib import Path
 
 import pytest
 
+from robot.vehicle.robot_params import ROBOT_PARAMS
 from shared.clock import ManualClock
 from shared.config import VmnavConfig
 from shared.mavlink.dialect import to_float32
 from shared.mavlink.goal import Goal
 from shared.mavlink.mission_client import DownloadDone, UploadDone
 from shared.mavlink.params import ParamSetDone, ParamsFetched
-from shared.mavlink.robot_params import ROBOT_PARAMS
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, Relay, make_vehicle
 

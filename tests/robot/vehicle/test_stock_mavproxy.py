@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robot.vehicle.robot_params import ROBOT_PARAMS
 from shared.clock import WallClock
 from shared.mavlink.dialect import mavlink, to_float32
 from shared.mavlink.goal import GOAL_COMMAND, Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.robot_params import ROBOT_PARAMS
 from shared.memory.store import thumbnail_path, write_memory
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import make_vehicle

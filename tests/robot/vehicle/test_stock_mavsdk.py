@@ -13,11 +13,11 @@ from typing import Any
 
 import pytest
 
+from robot.vehicle.robot_params import ROBOT_PARAMS
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.dialect import mavlink, to_float32
 from shared.mavlink.goal import GOAL_COMMAND, Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.robot_params import ROBOT_PARAMS
 from tests.robot.vehicle.fake_app import FakeApp
 
 _WHY = "mavsdk is not installed (it comes with pip install -e '.[dev]')"

@@ -11,7 +11,7 @@ import pytest
 from shared.clock import ManualClock
 from shared.errors import IllegalEventError
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.udp_link import UdpLink
+from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 

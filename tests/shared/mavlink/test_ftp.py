@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from robot.vehicle.ftp_memory import MemoryFileSystem
 from shared.clock import ManualClock
 from shared.config import FtpConfig, from_mapping
 from shared.errors import ConfigError, LocalProtocolError, RemoteProtocolError
@@ -35,7 +36,6 @@ from shared.mavlink.ftp import (
     Uploaded,
     crc32_mavlink,
 )
-from shared.mavlink.ftp_memory import MemoryFileSystem
 
 GCS = (255, 190)
 VEHICLE = (1, 1)

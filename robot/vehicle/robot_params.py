@@ -3,8 +3,9 @@
 The robot builds its :class:`ParamTable` from the config it loaded (TOML values
 become the defaults), applies the parameter file on top, and after every
 :class:`~shared.mavlink.params.ParamChanged` rebuilds its config with
-:func:`config_with_params`, so a PARAM_SET changes what the robot uses. The ground
-station reads names, units and ranges from :data:`ROBOT_PARAMS` too.
+:func:`config_with_params`, so a PARAM_SET changes what the robot uses. Only the
+robot reads this table: a ground station learns the names and values over the
+wire (PARAM_VALUE).
 
 Units on the wire are SI like the config's, except durations: the config holds
 integer ns, a parameter seconds (float32 cannot hold ns), applied at 1 ms

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robot.vehicle.ftp_memory import MemoryFileSystem
 from shared.clock import ManualClock
 from shared.mavlink.ftp import DirEntry, Downloaded, FtpClient, FtpServer
-from shared.mavlink.ftp_memory import MemoryFileSystem
 from shared.memory.store import MANIFEST_NAME, read_memory, thumbnail_path, write_memory
 from tests.shared.mavlink.test_ftp import Relay, run
 from tests.shared.memory.builders import loop_memory

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from robot.vehicle.param_file import load_param_file, save_param_file
 from shared.errors import ConfigError, InputError
-from shared.mavlink.param_file import load_param_file, save_param_file
 from tests.shared.mavlink.test_params import make_table
 
 

@@ -6,11 +6,11 @@ import dataclasses
 
 import pytest
 
+from robot.vehicle.robot_params import ROBOT_PARAMS, config_with_params, robot_param_table
 from shared.config import ControlConfig, MavlinkConfig, VmnavConfig
 from shared.errors import ConfigError
 from shared.mavlink.param_table import NAME_LEN
 from shared.mavlink.params import ParamChanged, ParamClient, ParamServer
-from shared.mavlink.robot_params import ROBOT_PARAMS, config_with_params, robot_param_table
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events
 
 

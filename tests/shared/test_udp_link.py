@@ -11,7 +11,7 @@ import pytest
 from shared.byte_link import LinkClosedError
 from shared.errors import TransportError
 from shared.mavlink.dialect import make_codec, mavlink
-from shared.mavlink.udp_link import UdpLink, UdpMode, parse_udp_url
+from shared.udp_link import UdpLink, UdpMode, parse_udp_url
 
 
 @pytest.fixture
