@@ -1,9 +1,9 @@
 """The ground station: MAVLink ground station core, mission dispatch, telemetry, ground log.
 
 Modules: ``station`` (the link and the blocking API), ``fleet`` (vehicles by system
-id), ``command_client`` (COMMAND_LONG with retries, sans-I/O), ``mission_watch``
-(whether a goal was reached), ``telemetry_text`` (lines for people), ``teleop``
-(keyboard driving).
+id), ``mission_watch`` (whether a goal was reached), ``telemetry_text`` (lines for
+people), ``teleop`` (keyboard driving). The sans-I/O ends of the MAVLink protocols
+the station drives are the GCS roles in ``shared.mavlink`` (its module docstring).
 """
 
 #: QGroundControl's listening address: vehicles send there by default.

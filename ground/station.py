@@ -46,13 +46,14 @@ import select
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ground.command_client import CommandClient, CommandDone, result_name
 from ground.fleet import Fleet, VehicleState
 from ground.mission_watch import MissionWatch
 from shared.clock import NS_PER_S, Clock
 from shared.config import FtpConfig, MavlinkConfig
 from shared.errors import IllegalEventError, InputError, VmnavError
 from shared.mavlink.address import Address, is_for, source_of
+from shared.mavlink.commands.gcs import CommandClient, CommandDone, result_name
+from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import DirEntry, Downloaded, FtpClient, FtpFailed, Listed, Uploaded
 from shared.mavlink.goal import Goal
@@ -66,7 +67,6 @@ from shared.mavlink.params import (
     ParamsFetched,
 )
 from shared.mavlink.signing import SigningClock, configure_signing, timestamp_from_unix_ns
-from shared.mavlink.user_commands import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
 from shared.udp_link import UdpLink
 
 #: This station: system 255, MAV_COMP_ID_MISSIONPLANNER.

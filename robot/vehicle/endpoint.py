@@ -17,7 +17,7 @@ Rules:
 1. Identity: system ``MavlinkConfig.system_id``, component 1 (QGC and MAVSDK want
    an autopilot there), HEARTBEAT as a generic-autopilot ground rover every
    ``heartbeat_period_ns`` with ArduRover mode numbers (``shared.mavlink.modes``).
-2. Received packets go to the cores: commands (``shared.mavlink.commands``, plus
+2. Received packets go to the cores: commands (``shared.mavlink.commands.vehicle``, plus
    the user commands of ``user_commands``), missions, parameters, FTP over the
    memory and upload area (``robot.vehicle.ftp_memory``); HEARTBEATs of ground
    stations feed the failsafe; MANUAL_CONTROL, SET_MODE and TIMESYNC are handled
@@ -73,11 +73,15 @@ from robot.vehicle.user_commands import user_handlers
 from shared.config import FtpConfig, VmnavConfig
 from shared.errors import InputError
 from shared.mavlink.address import Address, is_for
-from shared.mavlink.commands import CommandDispatcher, autopilot_version_message, vehicle_handlers
+from shared.mavlink.commands.intervals import MessageIntervals
+from shared.mavlink.commands.vehicle import (
+    CommandDispatcher,
+    autopilot_version_message,
+    vehicle_handlers,
+)
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import FtpServer
 from shared.mavlink.goal import Goal, goals_from_items
-from shared.mavlink.intervals import MessageIntervals
 from shared.mavlink.mission import MissionServer
 from shared.mavlink.mission_items import MissionItem, MissionRefusal
 from shared.mavlink.modes import Mode, heartbeat_message, mode_from_set_mode

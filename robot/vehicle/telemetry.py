@@ -9,7 +9,7 @@ Wire units (mV, degrees, us) stop here.
 
 The vehicle streams by default (reference/mavlink-vehicle.md sec. 3): every message
 of :func:`default_periods_ns` at its config period, changed per message by
-SET_MESSAGE_INTERVAL (``shared.mavlink.intervals``). A builder may return None
+SET_MESSAGE_INTERVAL (``shared.mavlink.commands.intervals``). A builder may return None
 when it has nothing to say (NAV_CONTROLLER_OUTPUT while no route is followed,
 HOME_POSITION before the home is known); its slot passes.
 """

@@ -1,5 +1,5 @@
 """The vehicle's handlers of its own commands (numbers and name encoding:
-:mod:`shared.mavlink.user_commands`): go to an uploaded photo, start and stop teaching.
+:mod:`shared.mavlink.commands.user`): go to an uploaded photo, start and stop teaching.
 
 Results: ACCEPTED when the robot took the request, DENIED when it cannot now or a
 parameter is malformed (a STATUSTEXT after the ACK says why). Progress shows in the
@@ -14,9 +14,9 @@ from pathlib import Path
 
 from robot.vehicle.app_port import VehicleApp
 from robot.vehicle.ftp_memory import MemoryFileSystem
-from shared.mavlink.commands import CommandReply, CommandRequest, Handler
+from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, name_from_params
+from shared.mavlink.commands.vehicle import CommandReply, CommandRequest, Handler
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.user_commands import GOTO_PHOTO, TEACH_START, TEACH_STOP, name_from_params
 
 _MAX_PHOTO_ID = 2**24
 

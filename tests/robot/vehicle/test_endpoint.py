@@ -11,7 +11,7 @@ from pymavlink import mavutil
 
 from robot.mission import MissionState
 from robot.vehicle.app_port import ServoTelemetry
-from shared.mavlink.commands import CAPABILITIES
+from shared.mavlink.commands.vehicle import CAPABILITIES
 from shared.mavlink.modes import Mode
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import GCS, Net

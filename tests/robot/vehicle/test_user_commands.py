@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from robot.vehicle.ftp_memory import MemoryFileSystem
 from robot.vehicle.user_commands import find_photo
+from shared.mavlink.commands.user import NAME_BYTES, name_from_params, params_from_name
 from shared.mavlink.dialect import to_float32
-from shared.mavlink.user_commands import NAME_BYTES, name_from_params, params_from_name
 
 PRINTABLE = st.text(st.characters(min_codepoint=0x20, max_codepoint=0x7E), max_size=NAME_BYTES)
 

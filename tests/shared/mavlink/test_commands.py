@@ -1,4 +1,8 @@
-"""Command protocol: every COMMAND_LONG / COMMAND_INT gets a COMMAND_ACK, through bytes."""
+"""Command protocol, both ends through bytes.
+
+The vehicle: every COMMAND_LONG / COMMAND_INT gets a COMMAND_ACK. The ground station:
+ACKs, resends with rising confirmation, IN_PROGRESS, time-outs.
+"""
 
 from __future__ import annotations
 
@@ -7,15 +11,17 @@ from typing import Any
 
 import pytest
 
+from shared.errors import LocalProtocolError
 from shared.mavlink.address import Address
-from shared.mavlink.commands import (
+from shared.mavlink.commands.gcs import CommandClient, CommandDone, CommandTimedOut, result_name
+from shared.mavlink.commands.intervals import MessageIntervals
+from shared.mavlink.commands.vehicle import (
     CAPABILITIES,
     CommandDispatcher,
     autopilot_version_message,
     vehicle_handlers,
 )
 from shared.mavlink.dialect import Message, make_codec, mavlink
-from shared.mavlink.intervals import MessageIntervals
 from shared.mavlink.modes import Mode
 from tests.shared.mavlink.link import GCS, VEHICLE
 
@@ -172,3 +178,56 @@ def test_broadcast_commands_are_answered() -> None:
         0, 0, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, 4, 0, 0, 0, 0, 0))
     assert ack_of(replies)[1] == mavlink.MAV_RESULT_ACCEPTED
     assert Address(*[replies[0].target_system, replies[0].target_component]) == GCS
+
+
+# -- the ground station's end -------------------------------------------------------
+
+CMD = mavlink.MAV_CMD_DO_SET_MODE
+
+
+def ack(result: int, system_id: int = 1, command: int = CMD) -> Message:
+    """A COMMAND_ACK from (``system_id``, 1) to the station, as the station decodes it."""
+    (msg,) = make_codec(255, 190).parse(make_codec(system_id, 1).pack(
+        mavlink.MAVLink_command_ack_message(command, result, target_system=255,
+                                            target_component=190)))
+    return msg
+
+
+def test_ack_ends_the_command() -> None:
+    client = CommandClient(GCS, VEHICLE)
+    [sent] = client.send(CMD, (1.0, 4.0), 0)
+    assert (sent.target_system, sent.command, sent.confirmation, sent.param2) == (1, CMD, 0, 4.0)
+    assert math.isnan(sent.param3)
+    client.handle_message(ack(mavlink.MAV_RESULT_ACCEPTED, system_id=2), 1)  # another vehicle
+    client.handle_message(ack(mavlink.MAV_RESULT_ACCEPTED, command=CMD + 1), 1)  # another command
+    assert client.busy and client.next_event() is None
+    client.handle_message(ack(mavlink.MAV_RESULT_DENIED), 2)
+    assert client.next_event() == CommandDone(CMD, mavlink.MAV_RESULT_DENIED)
+    assert not client.busy and client.get_timer() is None
+    assert result_name(mavlink.MAV_RESULT_DENIED) == "MAV_RESULT_DENIED"
+
+
+def test_resends_then_times_out() -> None:
+    client = CommandClient(GCS, VEHICLE, timeout_ns=100, retries=2)
+    client.send(CMD, (), 0)
+    assert client.handle_timer(99) == []
+    assert [m.confirmation for m in client.handle_timer(100)] == [1]
+    assert [m.confirmation for m in client.handle_timer(200)] == [2]
+    assert client.handle_timer(300) == []
+    assert client.next_event() == CommandTimedOut(CMD, 3)
+
+
+def test_in_progress_waits_without_resending() -> None:
+    client = CommandClient(GCS, VEHICLE, timeout_ns=100, retries=5)
+    client.send(CMD, (), 0)
+    client.handle_message(ack(mavlink.MAV_RESULT_IN_PROGRESS), 50)
+    assert client.get_timer() == 150 and client.next_event() is None
+    assert client.handle_timer(150) == []
+    assert client.next_event() == CommandTimedOut(CMD, 1)
+
+
+def test_one_command_at_a_time() -> None:
+    client = CommandClient(GCS, VEHICLE)
+    client.send(CMD, (), 0)
+    with pytest.raises(LocalProtocolError, match="waits for its ACK"):
+        client.send(CMD, (), 0)

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared.mavlink.address import Address, is_for, source_of
+from shared.mavlink.commands.intervals import MessageIntervals
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.intervals import MessageIntervals
 from shared.mavlink.modes import Mode, mode_from_command
 
 #: COMPONENT_ARM_DISARM param2 that forces arming/disarming (common.xml).
