@@ -82,8 +82,8 @@ from shared.config import VmnavConfig
 from shared.errors import VmnavError
 from shared.interfaces import BaseState, MobileBase
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_items import MissionRefusal
+from shared.mavlink.mission.goal import Goal
+from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 from shared.memory import VisualMemory, read_memory, write_memory
 from shared.memory.store import check_no_orphans

@@ -22,7 +22,7 @@ from ground.station import GroundStation
 from shared.clock import NS_PER_S, WallClock
 from shared.config import LogConfig
 from shared.errors import VmnavError
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 
 #: How long the ground waits for the vehicle's first heartbeat, s.
 VEHICLE_TIMEOUT_S = 10.0

@@ -52,7 +52,7 @@ from shared.config import LogConfig, SimConfig, VmnavConfig
 from shared.errors import InputError, TransportError
 from shared.logs import topics
 from shared.logs.reader import read_messages
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.memory import read_memory
 from sim.teach_driver import TeachDriver
 from sim.world import load_world

@@ -212,7 +212,7 @@ def run_memory_get(station: GroundStation, args: argparse.Namespace) -> int:
 def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     """Dispatch the goal; with ``--wait``, 0 when reached and 1 when not."""
     from shared.errors import InputError
-    from shared.mavlink.goal import Goal
+    from shared.mavlink.mission.goal import Goal
 
     if (args.goal_key is None) == (args.image is None):
         raise InputError("goto", "give either a key image id KEY or --image PHOTO")

@@ -33,7 +33,7 @@ from ground.fleet import VehicleState
 from ground.station import GroundStation
 from shared.clock import NS_PER_S, WallClock
 from shared.config import SimConfig, VmnavConfig
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.memory import read_memory
 from sim.camera_server import CameraServer
 from sim.pioneer import TcpListener

@@ -42,7 +42,7 @@ from robot.vehicle.telemetry import default_periods_ns
 from shared.clock import NS_PER_S, WallClock
 from shared.config import MavlinkConfig
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from tools.bench_targets import target_summary
 from tools.link_load import make_load_app
 from tools.link_vehicles import AppFactory, VehicleProcesses, factory_name

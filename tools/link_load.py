@@ -46,8 +46,8 @@ from robot.vehicle.app_port import (
 from shared.clock import NS_PER_S, Clock
 from shared.config import MissionConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_items import MissionRefusal
+from shared.mavlink.mission.goal import Goal
+from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 from tools.link_vehicles import AppContext
 

@@ -22,8 +22,8 @@ from typing import Literal, Protocol
 
 from robot.mission import MissionState
 from shared.config import VmnavConfig
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_items import MissionRefusal
+from shared.mavlink.mission.goal import Goal
+from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 
 #: What the robot does when the ground heartbeat stops: "stop" (MANUAL: stop driving),

@@ -26,7 +26,7 @@ Rules:
    ``VehicleApp.set_mode``, except AUTO, which (like MISSION_START) starts the
    uploaded mission from its current item through ``VehicleApp.start_mission``;
    without a mission AUTO is DENIED.
-4. Missions are goal items (``shared.mavlink.goal``), validated on upload by
+4. Missions are goal items (``shared.mavlink.mission.goal``), validated on upload by
    ``VehicleApp.validate_goals``; a refused upload keeps the mission in force. While
    the uploaded mission runs, uploads and clears are refused (MAV_MISSION_DENIED):
    switch to HOLD first.
@@ -81,9 +81,9 @@ from shared.mavlink.commands.vehicle import (
 )
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import FtpServer
-from shared.mavlink.goal import Goal, goals_from_items
-from shared.mavlink.mission import MissionServer
-from shared.mavlink.mission_items import MissionItem, MissionRefusal
+from shared.mavlink.mission.goal import Goal, goals_from_items
+from shared.mavlink.mission.items import MissionItem, MissionRefusal
+from shared.mavlink.mission.vehicle import MissionServer
 from shared.mavlink.modes import Mode, heartbeat_message, mode_from_set_mode
 from shared.mavlink.params import ParamChanged, ParamServer
 from shared.mavlink.signing import (

@@ -23,7 +23,7 @@ from collections.abc import Callable
 from robot.mission import MissionState
 from robot.vehicle.app_port import ACTIVE_STATES, VehicleTelemetry
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.mission import MissionServer
+from shared.mavlink.mission.vehicle import MissionServer
 
 #: (severity, text) -> STATUSTEXT messages.
 Notice = Callable[[int, str], list[Message]]

@@ -11,7 +11,7 @@ import pytest
 
 from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory.store import read_memory, thumbnail_path, write_memory
 from shared.udp_link import UdpLink

@@ -16,7 +16,7 @@ from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import ManualClock, WallClock
 from shared.config import VmnavConfig
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp

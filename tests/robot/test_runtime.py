@@ -23,7 +23,7 @@ from robot.mission import MissionState
 from robot.runtime import RobotRuntime
 from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
 from sim.sim_camera import SimFrameSource

@@ -18,7 +18,7 @@ import pytest
 from robot.mission import MissionState
 from shared.clock import ManualClock
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from tools.cli import main
 from tools.link_bench import expected_message_rate

@@ -17,8 +17,8 @@ from robot.mission import MissionState
 from robot.vehicle.app_port import GcsLostAction, VehicleTelemetry
 from shared.config import VmnavConfig
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_items import MissionRefusal
+from shared.mavlink.mission.goal import Goal
+from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from robot.mission import MissionState
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_client import DownloadDone, Operation, OperationRefused, UploadDone
-from shared.mavlink.mission_items import MissionItem
+from shared.mavlink.mission.gcs import DownloadDone, Operation, OperationRefused, UploadDone
+from shared.mavlink.mission.goal import Goal
+from shared.mavlink.mission.items import MissionItem
 from shared.mavlink.modes import Mode
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Net

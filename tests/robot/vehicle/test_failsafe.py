@@ -6,7 +6,7 @@ import pytest
 
 from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.mavlink.params import ParamSetDone
 from tests.robot.vehicle.fake_app import FakeApp

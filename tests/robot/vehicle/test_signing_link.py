@@ -12,8 +12,8 @@ import pytest
 from shared.clock import ManualClock
 from shared.mavlink.address import Address
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.goal import Goal
-from shared.mavlink.mission_client import UploadDone
+from shared.mavlink.mission.gcs import UploadDone
+from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.mavlink.signing import (
     configure_signing,

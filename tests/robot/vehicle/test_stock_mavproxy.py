@@ -24,7 +24,7 @@ import pytest
 from robot.vehicle.robot_params import ROBOT_PARAMS
 from shared.clock import WallClock
 from shared.mavlink.dialect import mavlink, to_float32
-from shared.mavlink.goal import GOAL_COMMAND, Goal
+from shared.mavlink.mission.goal import GOAL_COMMAND, Goal
 from shared.mavlink.modes import Mode
 from shared.memory.store import thumbnail_path, write_memory
 from tests.robot.vehicle.fake_app import FakeApp

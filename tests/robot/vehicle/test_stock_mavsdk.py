@@ -16,7 +16,7 @@ import pytest
 from robot.vehicle.robot_params import ROBOT_PARAMS
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.dialect import mavlink, to_float32
-from shared.mavlink.goal import GOAL_COMMAND, Goal
+from shared.mavlink.mission.goal import GOAL_COMMAND, Goal
 from shared.mavlink.modes import Mode
 from tests.robot.vehicle.fake_app import FakeApp
 

@@ -8,8 +8,8 @@ import pytest
 
 from shared.mavlink.address import Address
 from shared.mavlink.dialect import make_codec, mavlink
-from shared.mavlink.goal import GOAL_COMMAND, MAX_ID, Goal, goal_from_item, goals_from_items
-from shared.mavlink.mission_items import MissionItem, MissionRefusal, item_from_message
+from shared.mavlink.mission.goal import GOAL_COMMAND, MAX_ID, Goal, goal_from_item, goals_from_items
+from shared.mavlink.mission.items import MissionItem, MissionRefusal, item_from_message
 
 
 def test_goal_round_trips_through_a_mission_item_int_on_the_wire() -> None:

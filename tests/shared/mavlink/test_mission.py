@@ -10,16 +10,7 @@ from shared.config import MavlinkConfig
 from shared.errors import LocalProtocolError
 from shared.mavlink.address import Address
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.goal import Goal, goals_from_items
-from shared.mavlink.mission import (
-    CurrentSet,
-    MissionCleared,
-    MissionRejected,
-    MissionServer,
-    MissionUploaded,
-    UploadFailed,
-)
-from shared.mavlink.mission_client import (
+from shared.mavlink.mission.gcs import (
     ClearDone,
     DownloadDone,
     MissionClient,
@@ -28,7 +19,16 @@ from shared.mavlink.mission_client import (
     OperationTimedOut,
     UploadDone,
 )
-from shared.mavlink.mission_items import MissionItem, MissionRefusal, item_from_message
+from shared.mavlink.mission.goal import Goal, goals_from_items
+from shared.mavlink.mission.items import MissionItem, MissionRefusal, item_from_message
+from shared.mavlink.mission.vehicle import (
+    CurrentSet,
+    MissionCleared,
+    MissionRejected,
+    MissionServer,
+    MissionUploaded,
+    UploadFailed,
+)
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events, of_type
 
 KNOWN_KEYS = set(range(100))

@@ -38,7 +38,7 @@ from shared.config import MavlinkConfig
 from shared.errors import LocalProtocolError
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.mission_items import MissionItem, item_from_message, mission_result_name
+from shared.mavlink.mission.items import MissionItem, item_from_message, mission_result_name
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 

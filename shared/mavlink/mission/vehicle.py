@@ -4,7 +4,7 @@ Theory of operation
 -------------------
 
 The vehicle stores one mission (``mission_type`` 0): a tuple of
-:class:`~shared.mavlink.mission_items.MissionItem`. A ground station replaces it
+:class:`~shared.mavlink.mission.items.MissionItem`. A ground station replaces it
 by an *upload*, reads it by a *download*, empties it by a *clear*::
 
     upload    GCS MISSION_COUNT(n) -> REQUEST_INT(0) ... ITEM_INT(n-1) -> MISSION_ACK
@@ -52,7 +52,7 @@ from typing import Any, ClassVar
 from shared.config import MavlinkConfig
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.mission_items import (
+from shared.mavlink.mission.items import (
     MissionItem,
     MissionRefusal,
     item_from_message,

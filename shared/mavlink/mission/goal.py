@@ -28,7 +28,7 @@ import math
 from dataclasses import dataclass
 
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.mission_items import MissionItem, MissionRefusal
+from shared.mavlink.mission.items import MissionItem, MissionRefusal
 
 #: The MAV_CMD of a goal item.
 GOAL_COMMAND = mavlink.MAV_CMD_WAYPOINT_USER_1
