@@ -59,7 +59,7 @@ from shared.mavlink.ftp import DirEntry, Downloaded, FtpClient, FtpFailed, Liste
 from shared.mavlink.mission.gcs import MissionClient, OperationRefused, UploadDone
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.params import (
+from shared.mavlink.params.gcs import (
     ParamClient,
     ParamOperationFailed,
     ParamReceived,

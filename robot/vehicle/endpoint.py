@@ -85,7 +85,7 @@ from shared.mavlink.mission.goal import Goal, goals_from_items
 from shared.mavlink.mission.items import MissionItem, MissionRefusal
 from shared.mavlink.mission.vehicle import MissionServer
 from shared.mavlink.modes import Mode, heartbeat_message, mode_from_set_mode
-from shared.mavlink.params import ParamChanged, ParamServer
+from shared.mavlink.params.vehicle import ParamChanged, ParamServer
 from shared.mavlink.signing import (
     SigningClock,
     SigningStats,

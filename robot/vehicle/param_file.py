@@ -20,7 +20,7 @@ from pathlib import Path
 from shared.atomic_file import write_text_atomic
 from shared.errors import ConfigError
 from shared.json_file import parse_json
-from shared.mavlink.param_table import ParamTable
+from shared.mavlink.params.table import ParamTable
 
 FORMAT = "vmnav-params"
 FORMAT_VERSION = 1

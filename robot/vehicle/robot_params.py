@@ -2,7 +2,7 @@
 
 The robot builds its :class:`ParamTable` from the config it loaded (TOML values
 become the defaults), applies the parameter file on top, and after every
-:class:`~shared.mavlink.params.ParamChanged` rebuilds its config with
+:class:`~shared.mavlink.params.vehicle.ParamChanged` rebuilds its config with
 :func:`config_with_params`, so a PARAM_SET changes what the robot uses. Only the
 robot reads this table: a ground station learns the names and values over the
 wire (PARAM_VALUE).
@@ -21,7 +21,7 @@ from typing import Any
 
 from shared.config import BASE_LOST_ACTIONS, CONTROL_LAWS, GCS_LOST_ACTIONS, VmnavConfig
 from shared.errors import ConfigError
-from shared.mavlink.param_table import ParamSpec, ParamTable
+from shared.mavlink.params.table import ParamSpec, ParamTable
 
 
 class Kind(enum.Enum):

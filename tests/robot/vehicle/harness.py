@@ -26,7 +26,7 @@ from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp import FtpClient
 from shared.mavlink.mission.gcs import MissionClient
-from shared.mavlink.params import ParamClient
+from shared.mavlink.params.gcs import ParamClient
 from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 

@@ -15,7 +15,7 @@ from shared.clock import ManualClock
 from shared.config import VmnavConfig
 from shared.errors import ConfigError
 from shared.mavlink.dialect import mavlink, to_float32
-from shared.mavlink.params import ParamSetDone, ParamsFetched
+from shared.mavlink.params.gcs import ParamSetDone, ParamsFetched
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 

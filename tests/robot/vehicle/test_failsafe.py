@@ -8,7 +8,7 @@ from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
-from shared.mavlink.params import ParamSetDone
+from shared.mavlink.params.gcs import ParamSetDone
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Net
 

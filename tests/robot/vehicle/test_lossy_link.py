@@ -14,7 +14,7 @@ from shared.config import VmnavConfig
 from shared.mavlink.dialect import to_float32
 from shared.mavlink.mission.gcs import DownloadDone, UploadDone
 from shared.mavlink.mission.goal import Goal
-from shared.mavlink.params import ParamSetDone, ParamsFetched
+from shared.mavlink.params.gcs import ParamSetDone, ParamsFetched
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, Relay, make_vehicle
 

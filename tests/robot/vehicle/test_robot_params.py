@@ -9,8 +9,9 @@ import pytest
 from robot.vehicle.robot_params import ROBOT_PARAMS, config_with_params, robot_param_table
 from shared.config import ControlConfig, MavlinkConfig, VmnavConfig
 from shared.errors import ConfigError
-from shared.mavlink.param_table import NAME_LEN
-from shared.mavlink.params import ParamChanged, ParamClient, ParamServer
+from shared.mavlink.params.gcs import ParamClient
+from shared.mavlink.params.table import NAME_LEN
+from shared.mavlink.params.vehicle import ParamChanged, ParamServer
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events
 
 

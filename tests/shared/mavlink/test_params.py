@@ -7,18 +7,16 @@ import pytest
 from shared.config import MavlinkConfig
 from shared.errors import ConfigError, LocalProtocolError
 from shared.mavlink.dialect import mavlink, to_float32
-from shared.mavlink.param_table import ParamSpec, ParamTable
-from shared.mavlink.params import (
-    ParamChanged,
+from shared.mavlink.params.gcs import (
     ParamClient,
     ParamOperation,
     ParamOperationFailed,
     ParamReceived,
-    ParamRefused,
-    ParamServer,
     ParamSetDone,
     ParamsFetched,
 )
+from shared.mavlink.params.table import ParamSpec, ParamTable
+from shared.mavlink.params.vehicle import ParamChanged, ParamRefused, ParamServer
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events, of_type
 
 

@@ -15,10 +15,17 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from shared.errors import ConfigError
-from shared.mavlink.dialect import to_float32
+from shared.mavlink.dialect import mavlink, to_float32
 
 #: Longest parameter name (PARAM_VALUE.param_id is char[16]).
 NAME_LEN = 16
+#: The wire type of every parameter.
+REAL32 = mavlink.MAV_PARAM_TYPE_REAL32
+
+
+def param_id_from_name(name: str) -> bytes:
+    """The ``param_id`` field carrying ``name``: ASCII, anything else as ``?``."""
+    return name.encode("ascii", errors="replace")
 
 
 @dataclass(frozen=True, slots=True)
