@@ -55,7 +55,8 @@ from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.commands.gcs import CommandClient, CommandDone, result_name
 from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
 from shared.mavlink.dialect import Message, make_codec, mavlink
-from shared.mavlink.ftp import DirEntry, Downloaded, FtpClient, FtpFailed, Listed, Uploaded
+from shared.mavlink.ftp.gcs import Downloaded, FtpClient, FtpFailed, Listed, Uploaded
+from shared.mavlink.ftp.payload import DirEntry
 from shared.mavlink.mission.gcs import MissionClient, OperationRefused, UploadDone
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode

@@ -80,7 +80,7 @@ from shared.mavlink.commands.vehicle import (
     vehicle_handlers,
 )
 from shared.mavlink.dialect import Message, make_codec, mavlink
-from shared.mavlink.ftp import FtpServer
+from shared.mavlink.ftp.vehicle import FtpServer
 from shared.mavlink.mission.goal import Goal, goals_from_items
 from shared.mavlink.mission.items import MissionItem, MissionRefusal
 from shared.mavlink.mission.vehicle import MissionServer

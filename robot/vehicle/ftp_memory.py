@@ -36,7 +36,7 @@ from pathlib import Path
 from shared.atomic_file import write_bytes_atomic
 from shared.config import FtpConfig
 from shared.errors import InputError
-from shared.mavlink.ftp import DirEntry
+from shared.mavlink.ftp.payload import DirEntry
 
 _AREAS = ("memory", "upload")
 
@@ -122,7 +122,7 @@ class Upload:
 
 
 class MemoryFileSystem:
-    """The :class:`~shared.mavlink.ftp.FtpFileSystem` the robot serves (module rules).
+    """The :class:`~shared.mavlink.ftp.vehicle.FtpFileSystem` the robot serves (module rules).
 
     Args:
         memory_dir: the visual memory directory (need not exist yet).

@@ -24,7 +24,7 @@ from shared.clock import NS_PER_S, Clock, ManualClock
 from shared.config import MavlinkConfig, VmnavConfig
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, make_codec, mavlink
-from shared.mavlink.ftp import FtpClient
+from shared.mavlink.ftp.gcs import FtpClient
 from shared.mavlink.mission.gcs import MissionClient
 from shared.mavlink.params.gcs import ParamClient
 from shared.udp_link import UdpLink

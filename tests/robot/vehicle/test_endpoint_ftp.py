@@ -8,7 +8,8 @@ import numpy as np
 
 from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
 from shared.mavlink.dialect import mavlink
-from shared.mavlink.ftp import Downloaded, FtpFailed, Listed, NakCode, Uploaded
+from shared.mavlink.ftp.gcs import Downloaded, FtpFailed, Listed, Uploaded
+from shared.mavlink.ftp.payload import NakCode
 from shared.memory.store import read_memory, thumbnail_path, write_memory
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Net

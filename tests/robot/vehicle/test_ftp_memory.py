@@ -11,7 +11,9 @@ import pytest
 
 from robot.vehicle.ftp_memory import MemoryFileSystem
 from shared.clock import ManualClock
-from shared.mavlink.ftp import DirEntry, Downloaded, FtpClient, FtpServer
+from shared.mavlink.ftp.gcs import Downloaded, FtpClient
+from shared.mavlink.ftp.payload import DirEntry
+from shared.mavlink.ftp.vehicle import FtpServer
 from shared.memory.store import MANIFEST_NAME, read_memory, thumbnail_path, write_memory
 from tests.shared.mavlink.test_ftp import Relay, run
 from tests.shared.memory.builders import loop_memory

@@ -19,23 +19,25 @@ from shared.clock import ManualClock
 from shared.config import FtpConfig, from_mapping
 from shared.errors import ConfigError, LocalProtocolError, RemoteProtocolError
 from shared.mavlink.dialect import make_codec, mavlink
-from shared.mavlink.ftp import (
-    MAX_DATA,
-    PAYLOAD_LEN,
+from shared.mavlink.ftp.gcs import (
     Checksummed,
-    DirEntry,
     Downloaded,
     FtpClient,
     FtpEvent,
     FtpFailed,
-    FtpPayload,
-    FtpServer,
     Listed,
+    Uploaded,
+)
+from shared.mavlink.ftp.payload import (
+    MAX_DATA,
+    PAYLOAD_LEN,
+    DirEntry,
+    FtpPayload,
     NakCode,
     Opcode,
-    Uploaded,
     crc32_mavlink,
 )
+from shared.mavlink.ftp.vehicle import FtpServer
 
 GCS = (255, 190)
 VEHICLE = (1, 1)
