@@ -6,6 +6,9 @@
   ``shared.mavlink`` cores (commands, missions, parameters, FTP, signing);
 * ``telemetry``, ``progress``, ``failsafe``, ``user_commands``: the pieces it
   streams, reports, times and answers with;
+* ``ftp_memory``, ``robot_params``, ``param_file``: the robot-only sides of FTP and
+  parameters (the memory and upload area it serves, its parameters bound to the
+  config, the file they persist in);
 * ``options``: its files and signing setup;
 * ``udp_vehicle``: :class:`UdpVehicle`, the endpoint on a UDP socket.
 """

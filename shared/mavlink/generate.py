@@ -1,7 +1,7 @@
 """Regenerate ``vmnav_dialect.py`` from ``vmnav.xml`` with pymavlink's mavgen.
 
 Run ``python -m shared.mavlink.generate`` after editing ``vmnav.xml`` or upgrading
-pymavlink, and commit the result; ``tests/shared/mavlink/test_generate.py`` fails
+pymavlink, and commit the result; ``tests/shared/mavlink/test_dialect.py`` fails
 while the committed module differs from what this produces.
 
 mavgen resolves ``<include>`` relative to the including file's folder. Rather
