@@ -20,7 +20,7 @@ from collections.abc import Sequence
 
 from shared.errors import VmnavError
 from tools import (
-    bench,
+    bench_cmd,
     calibrate,
     demo_cmd,
     ground_cmd,
@@ -33,7 +33,7 @@ from tools import (
     teach_cmd,
 )
 
-COMMANDS = (sim_cmd, calibrate, bench, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
+COMMANDS = (sim_cmd, calibrate, bench_cmd, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
             log_cmd, replay_cmd, ground_cmd)
 
 
