@@ -1,6 +1,6 @@
 """``vmnav demo``: the whole teach-and-repeat story in the simulator, in lock-step, one process.
 
-It couples the simulator and the robot application, so it lives in tools/:
+It couples the simulator and the robot application, so it lives in the harness (tools/harness/):
 
 1. **Teach** (:func:`taught_memory`): the routes of the world are driven by the
    scripted teach driver and stored into one visual memory in ``OUT/memory``

@@ -1,5 +1,5 @@
 """Issue 8's faults on the hardware-in-the-loop rig: one function per case, which the tests
-(``tests/tools/test_faults.py``) and ``vmnav bench faults`` both run.
+(``tests/tools/bench/test_faults.py``) and ``vmnav bench faults`` both run.
 
 Every case takes the taught route (:class:`tools.harness.hil_rig.Taught`, taught once) and a
 fresh folder, builds its own rig (:func:`tools.harness.hil_rig.open_hil`: the simulator's

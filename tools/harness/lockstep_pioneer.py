@@ -9,7 +9,7 @@ both ends before every physics step, so the exchange is deterministic and as fas
 as the machine allows. Velocity commands travel as VEL/RVEL (mm/s, whole deg/s),
 odometry comes back in the SIPs every 100 ms of simulated time, as on the robot.
 
-It couples ``robot/`` and ``sim/``, so it lives in tools/.
+It couples ``robot/`` and ``sim/``, so it lives in the harness (tools/harness/).
 """
 
 from __future__ import annotations
