@@ -106,6 +106,13 @@ def read_camera(path: str | Path) -> CameraModel:
     return camera_from_dict(parse_json(path, text, CalibrationError), path)
 
 
+def load_camera(path: str | None) -> CameraModel:
+    """The camera from a calibration file, or the default camera when ``path`` is None."""
+    if path is None:
+        return CameraModel.default()
+    return read_camera(path)
+
+
 def write_camera(
     path: str | Path,
     camera: CameraModel,

@@ -2,8 +2,12 @@
 
 Each subcommand lives in its own module under ``tools/`` with two functions:
 ``add_parser(subparsers)`` declares its arguments, ``run(args) -> int`` turns them
-into config objects and calls package code that knows nothing about argparse.
-Heavy imports (OpenCV, pymunk) happen inside ``run`` so ``vmnav --help`` is fast.
+into config objects and calls package code that knows nothing about argparse: robot/,
+ground/, sim/, shared/, or the packages of tools/ (``harness``: what wires two of
+robot/, sim/ and ground/ together; ``bench``: the benchmarks; ``figures``: reports and
+plots). Subcommand modules do not import each other, except that a command registers
+its own nested subcommand's module (``sim serve``, ``memory localize``). Heavy imports
+(OpenCV, pymunk) happen inside ``run`` so ``vmnav --help`` is fast.
 
 A :class:`~shared.errors.VmnavError` prints as one line on stderr with exit code 1;
 anything else is a bug and keeps its traceback.
@@ -20,7 +24,7 @@ from collections.abc import Sequence
 
 from shared.errors import VmnavError
 from tools import (
-    bench,
+    bench_cmd,
     calibrate,
     demo_cmd,
     ground_cmd,
@@ -33,7 +37,7 @@ from tools import (
     teach_cmd,
 )
 
-COMMANDS = (sim_cmd, calibrate, bench, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
+COMMANDS = (sim_cmd, calibrate, bench_cmd, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
             log_cmd, replay_cmd, ground_cmd)
 
 

@@ -1,8 +1,8 @@
 """``vmnav demo``: teach routes, then repeat one to a goal on another path; report, plots, video.
 
-See :mod:`tools.demo` for the story, :mod:`tools.demo_report` for what is measured
-and :mod:`tools.demo_plots` for the figures and the video, :mod:`tools.demo_log` for the
-robot's MCAP log.
+See :mod:`tools.harness.demo` for the story, :mod:`tools.figures.demo_report` for what is
+measured and :mod:`tools.figures.demo_plots` for the figures and the video,
+:mod:`tools.harness.demo_log` for the robot's MCAP log.
 """
 
 from __future__ import annotations
@@ -17,16 +17,16 @@ from typing import TYPE_CHECKING
 
 from shared.config import CONTROL_LAWS
 from shared.errors import InputError
-from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
-from tools.sim_args import add_sim_arguments, sim_config_from_args
+from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
+from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
     from shared.config import SimConfig, VmnavConfig
     from shared.logs.writer import LogStats
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
-    from tools.demo import CycleSample
-    from tools.demo_ground import DispatchResult
+    from tools.harness.demo import CycleSample
+    from tools.harness.ground_dispatch import DispatchResult
 
 OnCycle = Callable[["Simulation", "RenderedFrame", "CycleSample"], None]
 
@@ -72,15 +72,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 def run(args: argparse.Namespace) -> int:
     """Teach (or reuse), repeat, write the outputs and print the summary."""
     from shared.config import load_config
-    from tools.demo import (
+    from tools.figures.demo_plots import VideoWriter, write_plots
+    from tools.figures.demo_report import build_report, summary_text
+    from tools.harness.demo import (
         default_goal,
         follow_config,
         repeat_in_sim,
         taught_memory,
     )
-    from tools.demo_log import DemoLog
-    from tools.demo_plots import VideoWriter, write_plots
-    from tools.demo_report import build_report, summary_text
+    from tools.harness.demo_log import DemoLog
 
     if not 0.0 <= args.landmark_dropout <= 1.0:
         raise InputError("--landmark-dropout", f"must be in [0, 1], got {args.landmark_dropout}")
@@ -148,8 +148,8 @@ def run(args: argparse.Namespace) -> int:
 def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
                  route: str | None) -> int:
     """``vmnav demo --hil``: run it, write ``report.json``, print the summary."""
-    from tools.demo_hil import robot_config_text, run_hil
-    from tools.demo_report import cm_text, fixed_text
+    from tools.figures.demo_report import cm_text, fixed_text
+    from tools.harness.hil_demo import robot_config_text, run_hil
 
     robot_config = out / "robot.toml"
     robot_config.write_text(robot_config_text(config))

@@ -5,7 +5,7 @@
 * ``vmnav log recover FILE [-o OUT]``: rewrite an unfinished or damaged file (from a
   killed process) into a valid, indexed one; FILE is never changed.
 * ``vmnav log plot FILE [--out DIR]``: the paper-style figures of a robot log
-  (:mod:`tools.log_plot`).
+  (:mod:`tools.figures.log_plot`).
 """
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ def run_recover(args: argparse.Namespace) -> int:
 
 def run_plot(args: argparse.Namespace) -> int:
     """Write the figures of ``args.file`` and list them."""
-    from tools.log_plot import plot_log
+    from tools.figures.log_plot import plot_log
 
     for path in plot_log(args.file, args.out):
         print(f"wrote {path}")

@@ -1,8 +1,9 @@
 """``vmnav memory ...``: inspect a visual memory on disk, or build a path from a teach log.
 
 Each subcommand is a pair of functions here, ``add_<name>_parser(memory_sub)``
-and ``run_<name>(args)``; :data:`SUBCOMMANDS` lists the parser builders, so a new
-subcommand is one more pair and one more entry.
+and ``run_<name>(args)``, or a module of its own (``vmnav memory localize``:
+:mod:`tools.memory_localize_cmd`); :data:`SUBCOMMANDS` lists the parser builders, so a
+new subcommand is one more pair and one more entry.
 """
 
 from __future__ import annotations
@@ -11,13 +12,8 @@ import argparse
 import itertools
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:
-    import numpy as np
-    import numpy.typing as npt
-
-    from shared.memory import VisualMemory
+from tools import memory_localize_cmd
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -49,126 +45,6 @@ def run_info(args: argparse.Namespace) -> int:
     summary = memory_summary(read_memory(args.directory))
     print(json.dumps(summary, indent=2) if args.json else summary_text(summary))
     return 0
-
-
-def add_localize_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Register ``vmnav memory localize DIR IMAGE.png``."""
-    localize = memory_sub.add_parser(
-        "localize",
-        help="the key image of a memory that an image shows, its matches and the time taken",
-        description="Localize IMAGE (a grey or colour 8-bit image of the memory camera's size) "
-        "in the visual memory in DIR: a global prefilter over every key image, then Harris + "
-        "ZNCC matching on the best candidates; the key image with the most matches wins "
-        "(Courbon et al. 2008, sec. II-D). Prints it, its match count and the time taken.",
-    )
-    localize.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
-    localize.add_argument("image", type=Path, metavar="IMAGE", help="the query image (PNG, ...)")
-    localize.add_argument(
-        "--config", metavar="FILE", help="vmnav TOML config ([features], [localize] tables)"
-    )
-    localize.add_argument(
-        "--exhaustive",
-        action="store_true",
-        help="also match every key image (the paper's rule, the baseline) and time it",
-    )
-    localize.add_argument("--json", action="store_true", help="print the result as JSON")
-    localize.set_defaults(run=run_localize)
-
-
-def run_localize(args: argparse.Namespace) -> int:
-    """Print where ``args.image`` is in the memory in ``args.directory``."""
-    import time
-
-    from robot.memory import Localizer
-    from shared.config import load_config
-    from shared.memory import read_memory
-
-    config = load_config(args.config)
-    memory = read_memory(args.directory)
-    image = read_query_image(args.image, memory.camera.width, memory.camera.height)
-    t0 = time.perf_counter()
-    localizer = Localizer.from_memory(memory, config.features, config.localize)
-    t1 = time.perf_counter()
-    result = localizer.localize(image)
-    t2 = time.perf_counter()
-    report: dict[str, object] = {
-        "keyframe_id": result.keyframe_id,
-        "matches": result.matches,
-        "ok": result.ok,
-        "localize_ms": round((t2 - t1) * 1e3, 2),
-        "build_ms": round((t1 - t0) * 1e3, 2),
-        "keyframes": len(memory.keyframes),
-        "query_features": result.query_features,
-        "candidates": [
-            {"keyframe_id": c.keyframe_id, "similarity": round(c.similarity, 4),
-             "matches": c.matches}
-            for c in result.candidates
-        ],
-    }
-    if args.exhaustive:
-        t3 = time.perf_counter()
-        baseline = localizer.localize_exhaustive(image)
-        report["exhaustive"] = {
-            "keyframe_id": baseline.keyframe_id,
-            "matches": baseline.matches,
-            "localize_ms": round((time.perf_counter() - t3) * 1e3, 2),
-        }
-    print(json.dumps(report, indent=2) if args.json else localize_text(memory, report))
-    return 0
-
-
-def read_query_image(path: Path, width: int, height: int) -> npt.NDArray[np.uint8]:
-    """An 8-bit image file as a grey (height, width) array (colour is converted to grey).
-
-    Raises:
-        InputError: the file is missing, unreadable, not an 8-bit image or not
-            ``width`` x ``height`` px.
-    """
-    import cv2
-    import numpy as np
-
-    from shared.errors import InputError
-
-    if not path.is_file():
-        raise InputError(path, "no such image file")
-    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    if image is None or image.size == 0:
-        raise InputError(path, "cannot be decoded as an image")
-    if image.dtype != np.uint8:
-        raise InputError(path, f"expected 8-bit pixels, got {image.dtype}")
-    if image.ndim == 3:
-        code = cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        image = cv2.cvtColor(image, code)
-    if image.shape != (height, width):
-        raise InputError(
-            path,
-            f"is {image.shape[1]}x{image.shape[0]} px; the memory's camera takes "
-            f"{width}x{height} px",
-        )
-    return image
-
-
-def localize_text(memory: VisualMemory, report: dict[str, Any]) -> str:
-    """The human-readable form of :func:`run_localize`'s report."""
-    keyframe_id = report["keyframe_id"]
-    if keyframe_id is None:
-        return "the memory has no key images"
-    keyframe = memory.keyframes[keyframe_id]
-    path = memory.paths[keyframe.path_id]
-    verdict = "" if report["ok"] else " (too few matches: not localized)"
-    lines = [
-        f"key image {keyframe_id} (path {path.id} {path.name!r}, index {keyframe.index}, "
-        f"{keyframe.distance_m:.2f} m along): {report['matches']} matches{verdict}",
-        f"  {report['localize_ms']:.1f} ms for {report['keyframes']} key images "
-        f"({len(report['candidates'])} verified; localizer built in {report['build_ms']:.1f} ms)",
-    ]
-    if "exhaustive" in report:
-        e = report["exhaustive"]
-        lines.append(
-            f"  exhaustive (every key image): key image {e['keyframe_id']} with {e['matches']} "
-            f"matches in {e['localize_ms']:.1f} ms"
-        )
-    return "\n".join(lines)
 
 
 def add_route_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -260,8 +136,8 @@ def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: i
 
 def run_build(args: argparse.Namespace) -> int:
     """Build a path of the memory in ``args.memory`` from ``args.log``; print a summary."""
+    from robot.memory.path_from_log import build_path, summary_text
     from shared.config import load_config
-    from tools.memory_build import build_path, summary_text
 
     config = load_config(args.config)
     name = args.log[0].stem if args.name is None else args.name
@@ -270,4 +146,5 @@ def run_build(args: argparse.Namespace) -> int:
     return 0
 
 
-SUBCOMMANDS = (add_info_parser, add_localize_parser, add_route_parser, add_build_parser)
+SUBCOMMANDS = (add_info_parser, memory_localize_cmd.add_parser, add_route_parser,
+               add_build_parser)

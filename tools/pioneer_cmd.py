@@ -21,10 +21,6 @@ from shared.errors import InputError, TransportError
 if TYPE_CHECKING:
     from robot.pioneer.driver import PioneerDriver
 
-#: Wall time allowed to connect, s (ARIA's own connect gives up after about 6.4 s of SYNCs).
-CONNECT_TIMEOUT_S = 10.0
-
-
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav pioneer``."""
     parser = sub.add_parser(
@@ -49,6 +45,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 def run_pioneer(args: argparse.Namespace) -> int:
     """Connect, report, drive, close (see the module docstring)."""
+    from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
     from robot.pioneer.shutdown import close_on_sigterm
     from shared.clock import WallClock
@@ -92,20 +89,6 @@ def run_pioneer(args: argparse.Namespace) -> int:
     print(f"closed: {counters.sips} SIPs, {counters.bad_checksums} bad checksums, "
           f"{counters.dropped_commands} commands dropped")
     return 0
-
-
-def why_not_connected(driver: PioneerDriver) -> str:
-    """The last transport or handshake failure the driver reported, in one line."""
-    from robot.pioneer.events import ConnectFailed, TransportFailed
-
-    status, cause = driver.status(), ""
-    while (event := driver.next_event()) is not None:
-        if isinstance(event, TransportFailed):
-            cause = f"; last error: {event.problem}"
-        elif isinstance(event, ConnectFailed):
-            cause = "; the robot did not answer the SYNC handshake"
-    return (f"no Pioneer ready within {CONNECT_TIMEOUT_S:.0f} s (link {status.link.value}, "
-            f"motors {'on' if status.motors_enabled else 'off'}{cause})")
 
 
 def _print_state(driver: PioneerDriver, t_s: float) -> None:

@@ -84,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
 
     from robot.camera import VideoCaptureSource
     from robot.field_log import FieldLog
+    from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
     from robot.runtime import RobotRuntime
     from robot.vehicle.endpoint import VehicleEndpoint
@@ -92,7 +93,6 @@ def run(args: argparse.Namespace) -> int:
     from shared.clock import WallClock
     from shared.config import load_config
     from shared.key_file import read_key_file
-    from tools.pioneer_cmd import CONNECT_TIMEOUT_S, why_not_connected
 
     config = load_config(args.config)
     config = dataclasses.replace(
@@ -187,8 +187,8 @@ def open_robot_memory(directory: Path, calibration: Path | None) -> VisualMemory
     from shared.calibration import read_camera
     from shared.camera_model import CameraModel
     from shared.memory import read_memory
+    from shared.memory.folder import open_memory
     from shared.memory.store import MANIFEST_NAME
-    from tools.teach_cmd import open_memory
 
     if calibration is None and (directory / MANIFEST_NAME).exists():
         return read_memory(directory)

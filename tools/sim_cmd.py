@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from tools import sim_serve
-from tools.sim_args import add_sim_arguments, sim_config_from_args
+from tools import sim_serve_cmd
+from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -39,7 +39,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="robot heading, degrees CCW from +x [default: 0 with --x/--y]",
     )
     snap.set_defaults(run=run_snapshot)
-    sim_serve.add_parser(sim_sub)
+    sim_serve_cmd.add_parser(sim_sub)
 
 
 def run_snapshot(args: argparse.Namespace) -> int:

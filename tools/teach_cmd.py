@@ -1,72 +1,33 @@
 """``vmnav teach --sim``: teach a route of a simulated world into a visual memory.
 
-The loop couples the simulator and the robot's code, so it lives here (robot/
-never imports sim/, sim/ never imports robot/):
-
-1. :func:`sim.teach_recording.record_drive` drives the simulated robot along the
-   route with the scripted human-like :class:`sim.teach_driver.TeachDriver`, in
-   lock-step, one rendered frame per camera period;
-2. each frame's image and the body's wheel odometry (not the truth) go to
-   :class:`robot.teach.KeyImageSelector`;
-3. the key images become a new path of the memory, whose ends are localized
+1. :func:`tools.harness.teach.teach_in_sim` drives the route in the simulator in
+   lock-step and selects key images from the frames and the wheel odometry;
+2. the key images become a new path of the memory, whose ends are localized
    against the other paths to make junctions
    (:func:`robot.memory.junctions.junction_attempts`);
-4. :func:`shared.memory.write_memory` stores it (adding to what ``DIR`` holds).
+3. :func:`shared.memory.write_memory` stores it (adding to what ``DIR`` holds).
 
 With ``--log LOGDIR`` the drive's frames and odometry are also recorded, as a robot's
 teach run is, in ``LOGDIR/teach-<route>-NNNN.mcap`` (:meth:`robot.field_log.FieldLog.teach_frame`),
 which ``vmnav memory build`` turns into the same path.
 """
-
 from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError
-from tools.sim_args import add_sim_arguments, sim_config_from_args
+from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
     from robot.memory.junctions import JunctionAttempt
-    from robot.teach import OdomPose, SelectedKeyImage
-    from robot.vision.features import GreyImage
-    from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
+    from shared.config import VmnavConfig
     from shared.logs.writer import LogStats
     from shared.memory import VisualMemory, VisualPath
-    from sim.world import Route, World
-
-#: Mixed with the simulation seed for the teach driver's random wander.
-DRIVER_STREAM = 0x54454143
-#: A drive may take this many times its length at the minimum cruise speed before it is abandoned.
-_DURATION_MARGIN = 3.0
-#: ... plus this, s (start and stop).
-_DURATION_EXTRA_S = 30.0
-
-
-@dataclass(frozen=True, eq=False)
-class TaughtRoute:
-    """A route driven in the simulator and cut into key images.
-
-    Attributes:
-        route: the route driven.
-        key_images: the selected key images in driving order.
-        true_poses: the true robot pose (x_m, y_m, yaw_rad) of each key image (evaluation only).
-        frames: frames recorded.
-        sim_time_s: simulated duration of the drive, s.
-    """
-
-    route: Route
-    key_images: tuple[SelectedKeyImage, ...]
-    true_poses: tuple[tuple[float, float, float], ...]
-    frames: int
-    sim_time_s: float
+    from tools.harness.teach import TaughtRoute
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -103,7 +64,9 @@ def run(args: argparse.Namespace) -> int:
     from robot.memory.junctions import join_path
     from shared.config import load_config
     from shared.memory import write_memory
+    from shared.memory.folder import open_memory
     from sim.world import load_world
+    from tools.harness.teach import find_route, teach_in_sim
 
     if not args.sim:
         raise InputError("vmnav teach", "only --sim is available: teach in the simulator")
@@ -142,115 +105,6 @@ def log_text(stats: LogStats) -> str:
     return f"log {files}: {stats.written} messages{problem}"
 
 
-def find_route(world: World, name: str) -> Route:
-    """The route ``name`` of ``world``.
-
-    Raises:
-        InputError: no such route (the message lists the world's routes).
-    """
-    for route in world.routes:
-        if route.name == name:
-            return route
-    known = ", ".join(r.name for r in world.routes) or "none"
-    raise InputError("--route", f"unknown route {name!r} in world {world.name!r} (known: {known})")
-
-
-def open_memory(directory: Path, camera: CameraModel) -> VisualMemory:
-    """The memory in ``directory`` to add to, or a new one; checked before any driving.
-
-    Raises:
-        InputError: ``directory`` is not a writable folder, or holds a memory taught
-            with another camera.
-        MemoryFormatError: the memory in ``directory`` does not load, or ``directory`` holds
-            files but no manifest (a new memory would be written over them).
-    """
-    from shared.calibration import camera_to_dict
-    from shared.memory import VisualMemory, read_memory
-    from shared.memory.store import MANIFEST_NAME, check_no_orphans
-
-    if directory.exists() and not directory.is_dir():
-        raise InputError(directory, "is not a folder")
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise InputError(directory, f"cannot create the memory folder: {e.strerror}") from None
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InputError(directory, "the memory folder is not writable")
-    check_no_orphans(directory)
-    if not (directory / MANIFEST_NAME).exists():
-        return VisualMemory(camera)
-    memory = read_memory(directory)
-    if camera_to_dict(memory.camera) != camera_to_dict(camera):
-        raise InputError(
-            directory, "the memory was taught with another camera than the simulated one"
-        )
-    return memory
-
-
-def teach_in_sim(
-    world: World,
-    route: Route,
-    config: VmnavConfig,
-    sim_config: SimConfig,
-    camera: CameraModel,
-    on_frame: Callable[[int, GreyImage, OdomPose], None] | None = None,
-) -> TaughtRoute:
-    """Drive ``route`` in lock-step and select its key images from frames and odometry.
-
-    Args:
-        world: the world of the route.
-        route: the route to drive, from its start pose.
-        config: teach, driver and feature parameters.
-        sim_config: the simulation's config (its seed seeds the driver too).
-        camera: the simulated camera.
-        on_frame: called with each frame's (t_ns, image, odometry pose), e.g.
-            :meth:`robot.field_log.FieldLog.teach_frame`.
-
-    Raises:
-        InputError: the drive did not reach the route's end in time.
-    """
-    import numpy as np
-
-    from robot.teach import KeyImageSelector
-    from sim.renderer import FisheyeRenderer
-    from sim.simulation import Simulation
-    from sim.teach_driver import TeachDriver
-    from sim.teach_recording import record_drive
-
-    sim = Simulation(world, sim_config)
-    sim.place_robot(route.start_pose())
-    renderer = FisheyeRenderer.for_simulation(sim, camera)
-    driver_config = config.teach_driver
-    driver = TeachDriver(
-        route.waypoints, driver_config, np.random.default_rng([sim_config.seed, DRIVER_STREAM])
-    )
-    slowest_m_s = driver_config.speed_m_s * (1.0 - driver_config.speed_variation)
-    max_duration_s = _DURATION_MARGIN * driver.length_m / slowest_m_s + _DURATION_EXTRA_S
-    selector = KeyImageSelector(camera, config.features, config.teach)
-    key_images: list[SelectedKeyImage] = []
-    true_poses: list[tuple[float, float, float]] = []
-    frames = 0
-    for frame in record_drive(sim, renderer, driver, round(max_duration_s * 1e9)):
-        true_poses.append(frame.pose_w)
-        if on_frame is not None:
-            on_frame(frame.t_ns, frame.image, frame.odom_pose)
-        key_images.extend(selector.push(frame.t_ns, frame.image, frame.odom_pose))
-        frames += 1
-    key_images.extend(selector.finish())
-    if not driver.done:
-        raise InputError(
-            f"route {route.name!r}",
-            f"the teach drive did not reach the end in {max_duration_s:.0f} s of simulated time",
-        )
-    return TaughtRoute(
-        route=route,
-        key_images=tuple(key_images),
-        true_poses=tuple(true_poses[k.frame_index] for k in key_images),
-        frames=frames,
-        sim_time_s=sim.now_ns / 1e9,
-    )
-
-
 def summary_text(
     taught: TaughtRoute,
     path: VisualPath,
@@ -262,6 +116,8 @@ def summary_text(
 ) -> str:
     """What ``vmnav teach`` prints: the new path, its junctions, the memory."""
     import numpy as np
+
+    from robot.memory.junctions import junction_lines
 
     distances = np.array([memory.keyframes[i].distance_m for i in path.keyframe_ids])
     length_m = float(distances[-1])
@@ -286,21 +142,3 @@ def summary_text(
         lines.append(f"  {len(weak)} key images forced with fewer than M = {m} tracked points")
     lines.extend(junction_lines(attempts, memory, directory))
     return "\n".join(lines)
-
-
-def junction_lines(
-    attempts: Sequence[JunctionAttempt], memory: VisualMemory, directory: Path
-) -> list[str]:
-    """The end of a teach summary: the junctions made and tried, then the memory."""
-    made = [a for a in attempts if a.accepted]
-    lines = [f"  junctions made: {len(made)}"]
-    for a in attempts:
-        lines.append(
-            f"    end key image {a.end_id}: best key image {a.best_id} with {a.matches} "
-            f"matches: {a.outcome.value}"
-        )
-    lines.append(
-        f"memory {directory}: {len(memory.paths)} paths, {len(memory.keyframes)} key images, "
-        f"{len(memory.junctions)} junctions"
-    )
-    return lines

@@ -1,4 +1,6 @@
-"""The robot's use of the visual memory: localization of a view among the key images."""
+"""The robot's use of the visual memory: localization of a view among the key images
+(:mod:`.localize`), joining a new path to the others (:mod:`.junctions`), and a path built
+from a recorded teach drive (:mod:`.path_from_log`, ``vmnav memory build``)."""
 
 from __future__ import annotations
 

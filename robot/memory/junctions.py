@@ -23,8 +23,9 @@ but one key image of an older path, it joins the last.
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 from robot.memory.localize import Localizer
 from shared.config import FeatureConfig, LocalizeConfig, TeachConfig
@@ -149,6 +150,24 @@ def junction_attempts(
         JunctionAttempt(end, best, matches, outcome)
         for (end, best, matches), outcome in zip(found, outcomes, strict=True)
     ]
+
+
+def junction_lines(
+    attempts: Sequence[JunctionAttempt], memory: VisualMemory, directory: Path
+) -> list[str]:
+    """The end of a teach summary: the junctions made and tried, then the memory."""
+    made = [a for a in attempts if a.accepted]
+    lines = [f"  junctions made: {len(made)}"]
+    for a in attempts:
+        lines.append(
+            f"    end key image {a.end_id}: best key image {a.best_id} with {a.matches} "
+            f"matches: {a.outcome.value}"
+        )
+    lines.append(
+        f"memory {directory}: {len(memory.paths)} paths, {len(memory.keyframes)} key images, "
+        f"{len(memory.junctions)} junctions"
+    )
+    return lines
 
 
 def _links(memory: VisualMemory, a: int, b: int) -> set[tuple[int, int]]:

@@ -7,7 +7,8 @@
 * ``serial_link``: :class:`SerialLink`, the pyserial adapter (devices, ptys,
   ``socket://``), and :func:`serial_link_factory`;
 * ``odometry``, ``events``, ``status``: the pieces they report with;
-* ``shutdown``: :func:`close_on_sigterm`.
+* ``shutdown``: :func:`close_on_sigterm`; ``connection``: the time allowed to connect at
+  start-up and why a driver did not connect.
 """
 
 from robot.pioneer.client import PioneerClient

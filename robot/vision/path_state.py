@@ -29,7 +29,7 @@ A ground-plane scale (known camera height, Clement et al. 2015) was not built:
 the simulator's worlds carry no floor texture, so it could not be measured.
 
 Bearings come from :func:`robot.vision.bearings.level_bearings`; pass only the
-rows it marks valid. Measured accuracy and time: :mod:`robot.vision.bench_state`.
+rows it marks valid. Measured accuracy and time: :mod:`tools.bench.state`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 
 Courbon et al. (ICARCV 2008, sec. II): :mod:`.keyframe` holds the records,
 :mod:`.graph` the multigraph with route planning and the connectivity check,
-:mod:`.store` the directory format, :mod:`.summary` what ``vmnav memory info`` shows.
+:mod:`.store` the directory format, :mod:`.folder` opening a folder to add paths to,
+:mod:`.summary` what ``vmnav memory info`` shows.
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ Modules:
 * ``sonar``: the two sonar arrays (firing schedule, pymunk rays).
 * ``emulator``: :class:`EmulatedPioneer`, the sans-I/O ARIA server.
 * ``links``: pty and TCP byte links; ``server``: :class:`PioneerServer`, one client at
-  a time, tick by tick or in real time (``vmnav sim serve``).
+  a time, tick by tick or in real time (``vmnav sim serve``); ``world_server``: a world
+  served as an emulated Pioneer with its camera feed.
 """
 
 from sim.pioneer.emulator import EmulatedPioneer, EmulatorStats

@@ -36,8 +36,8 @@ from sim.simulation import Simulation
 from sim.world import Pose2, load_world
 from tests.tools.short_routes import teach_east_a
 from tools.cli import main
-from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
-from tools.lockstep_pioneer import lockstep_pioneer
+from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
+from tools.harness.lockstep_pioneer import lockstep_pioneer
 
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 GOALS = (2, 4)

@@ -2,7 +2,7 @@
 photo goals, and the requests it refuses.
 
 The robot drives the emulated Pioneer through the real ARIA driver
-(:func:`tools.lockstep_pioneer.lockstep_pioneer`) and sees rendered frames; the runtime
+(:func:`tools.harness.lockstep_pioneer.lockstep_pioneer`) and sees rendered frames; the runtime
 is called as the vehicle endpoint calls it (its VehicleApp methods) and as the robot's
 loop calls it (``step`` per frame, ``stall``).
 """
@@ -31,8 +31,8 @@ from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
 from tests.tools.short_routes import teach_east_a
-from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
-from tools.lockstep_pioneer import lockstep_pioneer
+from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
+from tools.harness.lockstep_pioneer import lockstep_pioneer
 
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 

@@ -17,8 +17,8 @@ from robot.mission_run import CycleRecord
 from shared.interfaces import BaseState
 from shared.logs.reader import log_info
 from tools.cli import main
-from tools.demo import CycleSample
-from tools.demo_report import following_errors, plan_references, track_errors
+from tools.figures.demo_report import following_errors, plan_references, track_errors
+from tools.harness.demo import CycleSample
 
 REPORT_KEYS = ("reached_goal", "final_position_error_m", "lateral_rms_m", "lateral_max_m",
                "heading_rms_deg", "key_images_route", "key_images_reached", "distance_m",
@@ -152,7 +152,7 @@ def test_after_a_relocalization_samples_are_measured_against_the_new_plan() -> N
 
 
 def test_the_summary_rounds_for_people() -> None:
-    from tools.demo_report import summary_text
+    from tools.figures.demo_report import summary_text
 
     report = {"reached_goal": True, "goal_key_image": 66, "state": "arrived",
               "detail": "at goal key image 66", "key_images_reached": 35,

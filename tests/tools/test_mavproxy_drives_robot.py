@@ -18,7 +18,7 @@ from shared.memory import read_memory
 from tests.robot.vehicle.mavproxy_console import MavproxyConsole
 from tests.tools.processes import start, wait_for
 from tests.tools.short_routes import teach_east_a
-from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
+from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 
 pytest.importorskip("MAVProxy", reason="stock MAVProxy is not installed")
 

@@ -1,4 +1,4 @@
-"""``vmnav memory build`` (tools/memory_build.py) from a ``vmnav teach --sim --log`` drive,
+"""``vmnav memory build`` (robot/memory/path_from_log.py) from a ``vmnav teach --sim --log`` drive,
 rotated into several files."""
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robot.memory.path_from_log import Odometry
 from shared.config import LogConfig
 from shared.logs import topics
 from shared.logs.messages import FrameTransform
@@ -19,7 +20,6 @@ from shared.logs.writer import LogWriter
 from shared.memory import read_memory
 from tests.tools.short_routes import write_short_routes_world
 from tests.tools.test_teach_cmd import run
-from tools.memory_build import Odometry
 
 #: At the default JPEG quality (85) the artefacts cost tracks: east_a gave 12 key images
 #: from its log against 9 taught directly; at 95, 10. The log rotates every 4 s of the

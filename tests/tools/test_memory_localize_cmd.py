@@ -1,4 +1,5 @@
-"""``vmnav memory localize DIR IMAGE`` (tools/memory_cmd.py) on a synthetic memory on disk."""
+"""``vmnav memory localize DIR IMAGE`` (tools/memory_localize_cmd.py) on a synthetic memory
+on disk."""
 
 from __future__ import annotations
 

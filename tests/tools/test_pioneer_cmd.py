@@ -96,7 +96,7 @@ def test_a_client_killed_mid_motion_leaves_the_robot_to_the_next(
 
 def test_a_missing_device_is_one_line_naming_it(capsys: pytest.CaptureFixture[str],
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("tools.pioneer_cmd.CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr("robot.pioneer.connection.CONNECT_TIMEOUT_S", 1.0)
     code = main(["pioneer", "--aria", "/dev/ttyNOPE"])
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1

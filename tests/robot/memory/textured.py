@@ -1,7 +1,7 @@
 """Small memories of random textures, each key image a distinct place (no simulator).
 
 A query of place k is the same texture seen again: shifted a few pixels, with
-another gain, offset and noise (:func:`robot.vision.synthetic.warped_pair`).
+another gain, offset and noise (:func:`sim.synthetic.image_pairs.warped_pair`).
 """
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ import numpy as np
 
 from robot.vision.features import detect_harris
 from robot.vision.lens_mask import lens_mask
-from robot.vision.synthetic import similarity_homography, warped_pair
 from shared.camera_model import CameraModel
 from shared.config import FeatureConfig
 from shared.memory import KeyframeRecord, VisualMemory
+from sim.synthetic.image_pairs import similarity_homography, warped_pair
 from tests.shared.memory.builders import small_camera
 
 FEATURES = FeatureConfig()

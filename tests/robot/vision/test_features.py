@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from robot.vision.features import Features, detect_harris
-from robot.vision.synthetic import texture
 from shared.config import FeatureConfig
 from shared.errors import InputError, ShapeError
+from sim.synthetic.image_pairs import texture
 
 CONFIG = FeatureConfig()
 P = CONFIG.patch_size_px

@@ -18,9 +18,9 @@ from robot.vision.frame_state import (
     key_segment_from_key_images,
     state_from_frame,
 )
-from robot.vision.synthetic_scene import CorridorScene, SceneView, corridor_scene
 from shared.config import MatchConfig, PathStateConfig
 from shared.errors import DegenerateGeometryError, InputError, ShapeError
+from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
 
 CONFIG = PathStateConfig()
 PATCH_LENGTH = 121

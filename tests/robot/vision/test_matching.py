@@ -11,9 +11,9 @@ from hypothesis import strategies as st
 
 from robot.vision.features import Features, detect_harris
 from robot.vision.matching import Matches, match_zncc
-from robot.vision.synthetic import similarity_homography, transform_pixels, warped_pair
 from shared.config import FeatureConfig, MatchConfig
 from shared.errors import ShapeError
+from sim.synthetic.image_pairs import similarity_homography, transform_pixels, warped_pair
 
 FEATURES = FeatureConfig()
 CONFIG = MatchConfig()

@@ -16,10 +16,10 @@ from robot.vision.path_state import (
     state_from_two_views,
     state_from_views,
 )
-from robot.vision.synthetic_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig, PathStateConfig
 from shared.errors import InputError, ShapeError
+from sim.synthetic.corridor_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 from tests.robot.vision.test_key_pair import level_pose_world
 
 CONFIG = PathStateConfig()

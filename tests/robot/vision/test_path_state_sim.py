@@ -15,11 +15,11 @@ from robot.vision.features import Features, detect_harris
 from robot.vision.frame_state import key_segment_from_key_images, state_from_frame
 from robot.vision.lens_mask import lens_mask
 from robot.vision.path_state import PathState
-from robot.vision.synthetic_scene import Pose2D, compose
 from shared.camera_model import CameraModel
 from shared.config import FeatureConfig, PathStateConfig, SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
+from sim.synthetic.corridor_scene import Pose2D, compose
 from sim.world import Pose2, load_world
 
 CAMERA = CameraModel.default()

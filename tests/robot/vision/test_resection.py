@@ -10,10 +10,10 @@ import pytest
 from robot.vision._epipolar_error import rotation_y
 from robot.vision.bearings import level_bearings
 from robot.vision.resection import resect_planar
-from robot.vision.synthetic_scene import CorridorScene, corridor_scene
 from shared.camera_mount import rotation_level_cam
 from shared.config import PathStateConfig
 from shared.errors import ShapeError
+from sim.synthetic.corridor_scene import CorridorScene, corridor_scene
 from tests.robot.vision.test_key_pair import level_pose_world, previous_pair
 
 CONFIG = PathStateConfig()

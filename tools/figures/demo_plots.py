@@ -1,0 +1,172 @@
+"""The figures and the video of ``vmnav demo`` (matplotlib with the Agg backend, OpenCV).
+
+* ``topdown.png``: the taught paths, the route's reference and the repeated trajectory;
+* ``errors_vs_distance.png``: y and theta against the distance driven, true and
+  estimated (as Fig. 8 of Courbon et al. 2008);
+* ``image_errors.png``: errImageMax and errPoints against time (as their Fig. 6);
+* ``matches.png``: matches with the next key image per frame;
+* ``demo.mp4`` (:class:`VideoWriter`): the fisheye view with its corners and the
+  servo state, beside the top-down map with the trajectory so far.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import cv2
+import matplotlib
+import numpy as np
+
+from shared.config import SimConfig
+from tools.figures.demo_report import following_errors, plan_references
+from tools.figures.log_plot import plot_image_errors, plot_matches, save_figure
+from tools.harness.demo import CycleSample, RepeatRun, TaughtMemory
+
+if TYPE_CHECKING:
+    from sim.renderer import RenderedFrame
+    from sim.simulation import Simulation
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # after matplotlib.use: the backend must be chosen first
+
+#: Every n-th servo cycle becomes a video frame.
+VIDEO_EVERY = 2
+#: Map scale in the video, px per m.
+_MAP_PX_PER_M = 20.0
+
+
+def write_plots(out: Path, run: RepeatRun, taught: TaughtMemory) -> None:
+    """Write the four PNG figures into ``out``."""
+    _plot_topdown(out / "topdown.png", run, taught)
+    _plot_errors(out / "errors_vs_distance.png", run, taught)
+    _plot_image_errors(out / "image_errors.png", run)
+    _plot_matches(out / "matches.png", run)
+
+
+def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
+    fig, ax = plt.subplots(figsize=(10, 7))
+    for path_id in taught.path_ids:
+        ids = taught.memory.paths[path_id].keyframe_ids
+        xy = np.array([taught.true_poses[k][:2] for k in ids])
+        ax.plot(xy[:, 0], xy[:, 1], ".-", color="0.75", lw=1, ms=3)
+    for i, reference in enumerate(plan_references(run, taught)):
+        ax.plot(reference[:, 0], reference[:, 1], "o-", color="tab:blue", lw=1.5, ms=3,
+                label="taught (route key images)" if i == 0 else None)
+    repeated = np.array([s.pose_w for s in run.samples]).reshape(-1, 3)
+    ax.plot(repeated[:, 0], repeated[:, 1], color="tab:red", lw=1.2, label="repeated")
+    ax.plot(*run.start_pose[:2], "g^", ms=10, label="start")
+    ax.plot(*taught.true_poses[run.goal_id][:2], "k*", ms=14, label="goal key image")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="best")
+    ax.set_title("Taught paths and the repeated trajectory (ground truth)")
+    save_figure(fig, path)
+
+
+def _plot_errors(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
+    fig, (ax_y, ax_t) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    errors = following_errors(run, taught)
+    if errors is not None:
+        ax_y.plot(errors.distance_m, 100 * errors.lateral_m, label="true")
+        ax_t.plot(errors.distance_m, np.degrees(errors.heading_rad), label="true")
+        estimated = [s for s in run.samples if s.record.follow is not None]
+        if estimated:
+            steps = np.hypot(*np.diff(np.array([s.pose_w for s in estimated])[:, :2], axis=0).T)
+            distance = np.concatenate([[0.0], np.cumsum(steps)])
+            y = [_value(s.record.follow.y_m) if s.record.follow else np.nan for s in estimated]
+            t = [_value(s.record.follow.theta_rad) if s.record.follow else np.nan
+                 for s in estimated]
+            ax_y.plot(distance, 100 * np.array(y), lw=0.8, label="estimated (next key image)")
+            ax_t.plot(distance, np.degrees(np.array(t)), lw=0.8,
+                      label="estimated (next key image)")
+    ax_y.set_ylabel("lateral error y (cm)")
+    ax_t.set_ylabel("angular error theta (deg)")
+    ax_t.set_xlabel("distance driven (m)")
+    ax_y.legend(loc="best")
+    ax_y.set_title("Errors along the route (cf. Courbon et al. 2008, Fig. 8)")
+    save_figure(fig, path)
+
+
+def _plot_image_errors(path: Path, run: RepeatRun) -> None:
+    seen = [(s.record.t_ns / 1e9, s.record.follow.vision.image_errors) for s in run.samples
+            if s.record.follow is not None and s.record.follow.vision is not None]
+    switches = [s.record.t_ns / 1e9 for s in run.samples
+                if s.record.follow is not None and s.record.follow.switch is not None]
+    plot_image_errors(path, [t for t, _ in seen], [e.err_image_max_px for _, e in seen],
+                      [e.err_points_px for _, e in seen], switches)
+
+
+def _plot_matches(path: Path, run: RepeatRun) -> None:
+    seen = [(s.record.t_ns / 1e9, s.record.follow.vision.matches) for s in run.samples
+            if s.record.follow is not None and s.record.follow.vision is not None]
+    plot_matches(path, [t for t, _ in seen], [n for _, n in seen])
+
+
+def _value(v: float | None) -> float:
+    return np.nan if v is None else v
+
+
+class VideoWriter:
+    """``demo.mp4``: the fisheye view beside the top-down map, every ``VIDEO_EVERY`` cycles.
+
+    Args:
+        path: the MP4 file.
+        taught: the memory's truth (the taught paths are drawn on the map).
+        sim_config: the frame period sets the video's frame rate.
+    """
+
+    def __init__(self, path: Path, taught: TaughtMemory, sim_config: SimConfig) -> None:
+        self._path = path
+        self._taught = taught
+        self._fps = 1e9 / sim_config.frame_period_ns / VIDEO_EVERY
+        self._writer: cv2.VideoWriter | None = None
+        self._trail: list[tuple[float, float]] = []
+        self._count = 0
+
+    def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
+        """Draw one cycle (called by :func:`tools.harness.demo.repeat_in_sim`)."""
+        from sim.topdown import MapCanvas, draw_topdown
+
+        self._trail.append(sample.pose_w[:2])
+        self._count += 1
+        if (self._count - 1) % VIDEO_EVERY:
+            return
+        view = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+        record = sample.record
+        follow = record.follow
+        if follow is not None:
+            for x, y in follow.corners_xy.astype(int):
+                cv2.circle(view, (int(x), int(y)), 3, (0, 200, 0), 1, cv2.LINE_AA)
+        lines = [f"t {record.t_ns / 1e9:6.1f} s  {record.state.name}"]
+        if follow is not None:
+            matches = follow.vision.matches if follow.vision is not None else 0
+            lines.append(f"target {follow.target_index + 1}  matches {matches}")
+            if follow.y_m is not None and follow.theta_rad is not None:
+                lines.append(f"y {100 * follow.y_m:+5.1f} cm  "
+                             f"theta {np.degrees(follow.theta_rad):+5.1f} deg")
+        for i, text in enumerate(lines):
+            cv2.putText(view, text, (10, 25 + 25 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.7,
+                        (0, 255, 255), 2, cv2.LINE_AA)
+        top = draw_topdown(sim, frame, self._taught.memory.camera.fov_deg, _MAP_PX_PER_M)
+        canvas = MapCanvas(sim, _MAP_PX_PER_M)
+        for path_id in self._taught.path_ids:
+            ids = self._taught.memory.paths[path_id].keyframe_ids
+            pts = canvas.px([self._taught.true_poses[k][:2] for k in ids])
+            cv2.polylines(top, [pts], False, (160, 160, 160), 1, cv2.LINE_AA)
+        if len(self._trail) > 1:
+            cv2.polylines(top, [canvas.px(self._trail)], False, (0, 0, 230), 2, cv2.LINE_AA)
+        height = view.shape[0]
+        top = cv2.resize(top, (round(top.shape[1] * height / top.shape[0]), height))
+        image = np.hstack([view, top])
+        if self._writer is None:
+            fourcc = cv2.VideoWriter.fourcc(*"mp4v")
+            self._writer = cv2.VideoWriter(str(self._path), fourcc, self._fps,
+                                           (image.shape[1], image.shape[0]))
+        self._writer.write(image)
+
+    def close(self) -> None:
+        """Finish the file."""
+        if self._writer is not None:
+            self._writer.release()

@@ -1,0 +1,357 @@
+"""The hardware-in-the-loop rig of the fault cases (:mod:`tools.harness.fault_cases`).
+
+Three parts on real transports, as ``vmnav demo --hil`` runs them, except that the
+simulator side lives in this process so that a case can reach its fault hooks and
+its truth:
+
+* :class:`SimSide`: the objects ``vmnav sim serve`` runs (the emulated Pioneer on a TCP
+  port, the camera as MJPEG over HTTP, stepped in real time on a thread), with a
+  :class:`TruthRecorder` on the simulation;
+* ``vmnav robot`` as a subprocess on their URLs (:func:`start_robot`);
+* a :class:`~ground.station.GroundStation` here, which the robot calls over UDP.
+
+:func:`open_hil` starts the three on a copy of a taught memory (:class:`Taught`) and
+stops them all however the block ends.
+
+Times: the truth is in simulation time (ns), which runs at the wall clock's pace;
+:attr:`SimSide.now_ns` marks when a fault was injected on that scale.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import shutil
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, closing, contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from ground.fleet import VehicleState
+from ground.station import GroundStation
+from shared.calibration import load_camera
+from shared.clock import NS_PER_S, WallClock
+from shared.config import SimConfig, VmnavConfig
+from shared.mavlink.mission.goal import Goal
+from shared.memory import read_memory
+from sim.camera_server import CameraServer
+from sim.pioneer import TcpListener
+from sim.pioneer.world_server import pioneer_server
+from sim.simulation import Simulation
+from sim.world import load_world
+from tools.harness.short_routes import teach_east_a
+from tools.harness.vmnav_process import VmnavProcess
+
+#: How long ``vmnav robot`` may take to answer the ground station, s.
+ROBOT_START_S = 30.0
+#: SIGTERM, then SIGKILL after this long, s.
+STOP_GRACE_S = 15.0
+#: Below these the robot's body counts as standing still: m/s, rad/s.
+STILL_M_S = 0.01
+STILL_RAD_S = 0.02
+_POLL_NS = 20_000_000
+
+
+class FaultCaseError(AssertionError):
+    """A fault case saw other behaviour than expected (one line)."""
+
+
+def expect(condition: bool, message: str) -> None:
+    """Raise :class:`FaultCaseError` with ``message`` unless ``condition``."""
+    if not condition:
+        raise FaultCaseError(message)
+
+
+def wait_until(done: Callable[[], bool], timeout_s: float, what: str) -> None:
+    """Poll ``done()`` on the wall clock every 20 ms, at most ``timeout_s``.
+
+    Raises:
+        FaultCaseError: not done in time (``what`` says what was awaited).
+    """
+    clock = WallClock()
+    limit_ns = clock.now_ns() + round(timeout_s * NS_PER_S)
+    while not done():
+        expect(clock.now_ns() < limit_ns, f"{what}: not within {timeout_s:g} s")
+        clock.sleep_until_ns(clock.now_ns() + _POLL_NS)
+
+
+@dataclass(frozen=True, slots=True)
+class Taught:
+    """The ``east_a`` route of :mod:`tools.harness.short_routes`, taught in lock-step (seed 1).
+
+    Attributes:
+        world_file: the world TOML (the lab plus the short routes).
+        memory_dir: the taught memory; cases work on copies.
+        keyframe_ids: the path's key images in order.
+        goal_xy: key image id -> where it was taken, world frame (x_m, y_m).
+    """
+
+    world_file: Path
+    memory_dir: Path
+    keyframe_ids: tuple[int, ...]
+    goal_xy: dict[int, tuple[float, float]]
+
+
+def teach(folder: Path) -> Taught:
+    """Teach ``east_a`` into ``folder/memory`` (about 4 s; ``folder`` is made if missing);
+    the world's start is the route's."""
+    folder.mkdir(parents=True, exist_ok=True)
+    world_file = teach_east_a(folder, VmnavConfig())
+    memory = read_memory(folder / "memory")
+    (path,) = memory.paths.values()
+    start = load_world(world_file).start
+    yaw = math.radians(start.yaw_deg)
+    goal_xy = {}
+    for key in path.keyframe_ids:
+        x, y, _ = memory.keyframes[key].odom_pose  # the teach odometry began at the start
+        goal_xy[key] = (start.x_m + x * math.cos(yaw) - y * math.sin(yaw),
+                        start.y_m + x * math.sin(yaw) + y * math.cos(yaw))
+    return Taught(world_file, folder / "memory", tuple(path.keyframe_ids), goal_xy)
+
+
+class TruthRecorder:
+    """The body's true speed and position at every physics step.
+
+    A step hook (called in the simulation's thread); read from any thread.
+    """
+
+    def __init__(self, sim: Simulation) -> None:
+        self._sim = sim
+        self._lock = threading.Lock()
+        self._t_ns: list[int] = []
+        self._motion: list[tuple[float, float]] = []  # (speed m/s, |turn rate| rad/s)
+        self._xy: list[tuple[float, float]] = []
+
+    def __call__(self, now_ns: int, dt_ns: int) -> None:
+        vx, vy, omega = self._sim.body.velocity_base
+        x, y, _ = self._sim.body.pose_w
+        with self._lock:
+            self._t_ns.append(now_ns)
+            self._motion.append((math.hypot(vx, vy), abs(omega)))
+            self._xy.append((x, y))
+
+    def moved_m(self) -> float:
+        """Straight-line distance from the first sample to the last, m."""
+        with self._lock:
+            if not self._xy:
+                return 0.0
+            (x0, y0), (x1, y1) = self._xy[0], self._xy[-1]
+        return math.hypot(x1 - x0, y1 - y0)
+
+    def position(self) -> tuple[float, float]:
+        """The last position sampled, world frame, m."""
+        with self._lock:
+            return self._xy[-1]
+
+    def motion(self, t0_ns: int, t1_ns: int) -> tuple[float, float]:
+        """The largest speed (m/s) and turn rate (rad/s) sampled in ``[t0_ns, t1_ns]``.
+
+        Raises:
+            FaultCaseError: no sample there (the simulation has not got that far).
+        """
+        with self._lock:
+            inside = [m for t, m in zip(self._t_ns, self._motion, strict=True)
+                      if t0_ns <= t <= t1_ns]
+        expect(bool(inside), f"no truth between {t0_ns / 1e9:.2f} and {t1_ns / 1e9:.2f} s")
+        return max(s for s, _ in inside), max(w for _, w in inside)
+
+    def travelled_m(self, t0_ns: int, t1_ns: int) -> float:
+        """Path length driven in ``[t0_ns, t1_ns]``, m."""
+        with self._lock:
+            xy = [p for t, p in zip(self._t_ns, self._xy, strict=True) if t0_ns <= t <= t1_ns]
+        return sum(math.dist(a, b) for a, b in itertools.pairwise(xy))
+
+    def still(self, t0_ns: int, t1_ns: int) -> str | None:
+        """None if the body stood still throughout ``[t0_ns, t1_ns]``; else what moved."""
+        speed, turn = self.motion(t0_ns, t1_ns)
+        if speed < STILL_M_S and turn < STILL_RAD_S:
+            return None
+        return (f"moving between {t0_ns / 1e9:.2f} and {t1_ns / 1e9:.2f} s "
+                f"(up to {speed:.3f} m/s, {turn:.3f} rad/s)")
+
+
+class SimSide:
+    """``vmnav sim serve``'s objects in this process (built by the same
+    :func:`sim.pioneer.world_server.pioneer_server`): the world in real time on a thread, the
+    emulated Pioneer on a TCP port and the camera on HTTP (ports picked free), with their
+    fault hooks at hand.
+
+    Args:
+        world_file: the world.
+        seed: the simulation's seed (the emulator draws from its child, as sim serve's).
+
+    Attributes:
+        sim, emulator, server, camera: the parts; ``server`` and ``camera`` hold the
+            fault hooks (``cut``, ``inject``; ``stall``, ``corrupt``).
+        truth: the body's true motion.
+        aria_url: the ARIA server for ``--aria`` (``socket://127.0.0.1:PORT``).
+    """
+
+    def __init__(self, world_file: Path, seed: int = 1) -> None:
+        config = SimConfig(world=str(world_file), seed=seed)
+        with ExitStack() as opened:
+            listener = opened.enter_context(closing(TcpListener("127.0.0.1", 0)))
+            self.camera = opened.enter_context(CameraServer("127.0.0.1", 0))
+            self.server = opened.enter_context(pioneer_server(
+                config, load_camera(config.camera_file), [], [listener], self.camera))
+            self.emulator = self.server.emulator
+            self.sim = self.emulator.simulation
+            self.truth = TruthRecorder(self.sim)
+            self.sim.add_step_hook(self.truth)
+            self.aria_url = f"socket://127.0.0.1:{listener.port}"
+            self._thread = threading.Thread(target=self.server.run, args=(WallClock(),),
+                                            name="sim-side")
+            self._thread.start()
+            self._opened = opened.pop_all()
+
+    @property
+    def now_ns(self) -> int:
+        """Simulation time now, ns."""
+        return self.sim.now_ns
+
+    @property
+    def running(self) -> bool:
+        """The simulation loop is alive."""
+        return self._thread.is_alive()
+
+    def close(self) -> None:
+        """Stop the loop, then close the server and the camera; idempotent."""
+        self.server.stop()
+        self._thread.join()
+        self._opened.close()
+
+    def __enter__(self) -> SimSide:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def start_robot(sim: SimSide, station: GroundStation, folder: Path,
+                out_name: str) -> VmnavProcess:
+    """``vmnav robot`` on the rig's transports, with ``folder``'s ``memory``, ``state`` and
+    ``logs`` (the field log, as on the robot), its output in ``folder/out_name``; stopped
+    by SIGTERM, SIGKILL after :data:`STOP_GRACE_S`."""
+    argv = ["robot", "--aria", sim.aria_url, "--camera", sim.camera.stream_url,
+            "--mavlink", f"udpout:127.0.0.1:{station.link.local_port}",
+            "--memory", str(folder / "memory"), "--state", str(folder / "state"),
+            "--log", str(folder / "logs")]
+    return VmnavProcess(argv, folder / out_name, STOP_GRACE_S)
+
+
+@dataclass(eq=False)
+class Hil:
+    """A running rig (:func:`open_hil`).
+
+    Attributes:
+        sim: the simulator side.
+        station: the ground station, aimed at the robot.
+        robot: the robot process (the last one started).
+        folder: the case's folder: ``memory``, ``state``, ``logs``, the robot's output.
+    """
+
+    sim: SimSide
+    station: GroundStation
+    robot: VmnavProcess
+    folder: Path
+
+    def restart_robot(self, out_name: str) -> None:
+        """Start ``vmnav robot`` again (after the last one ended) with output in
+        ``folder/out_name``, and wait until it answers (:meth:`wait_robot`)."""
+        since_ns = self.station.clock.now_ns()
+        self.robot = start_robot(self.sim, self.station, self.folder, out_name)
+        self.wait_robot(since_ns)
+
+    def wait_robot(self, since_ns: int) -> None:
+        """Wait for a HEARTBEAT of the robot newer than ``since_ns`` (station clock) and aim
+        the station at it.
+
+        Raises:
+            FaultCaseError: none within :data:`ROBOT_START_S`, or the robot ended first (with
+                its last line of output).
+        """
+        def answered() -> bool:
+            return any(v.last_heartbeat_ns >= since_ns
+                       for v in self.station.fleet.vehicles.values())
+
+        self.station.run_until(lambda: answered() or self.robot.process.poll() is not None,
+                               round(ROBOT_START_S * NS_PER_S))
+        expect(answered(), f"vmnav robot did not answer: {self.robot.last_line()}")
+        self.station.wait_vehicle(1.0)
+
+    def run_until(self, done: Callable[[], bool], timeout_s: float, what: str) -> None:
+        """Service the station until ``done()``, at most ``timeout_s``.
+
+        Raises:
+            FaultCaseError: not done in time (``what`` says what was awaited).
+        """
+        expect(self.station.run_until(done, round(timeout_s * NS_PER_S)),
+               f"{what}: not within {timeout_s:g} s")
+
+    def wait_sim(self, until_ns: int) -> None:
+        """Service the station until the simulation reaches ``until_ns``."""
+        self.run_until(lambda: self.sim.now_ns >= until_ns,
+                       (until_ns - self.sim.now_ns) / NS_PER_S + 5.0,
+                       f"simulation time {until_ns / NS_PER_S:.1f} s")
+
+    @property
+    def vehicle(self) -> VehicleState:
+        """The robot as the station knows it."""
+        vehicle = self.station.vehicle
+        if vehicle is None:
+            raise FaultCaseError("the ground station has no vehicle")
+        return vehicle
+
+    def notices(self) -> list[str]:
+        """The robot's STATUSTEXT notices so far."""
+        return list(self.vehicle.notices)
+
+    def notice(self, pattern: str) -> re.Match[str] | None:
+        """The first of the robot's notices matching the regular expression ``pattern``."""
+        return next((m for n in self.notices() if (m := re.search(pattern, n))), None)
+
+    def start_goal(self, goal: int, drive_m: float) -> None:
+        """Upload a one-goal mission to key image ``goal``, start it, and wait until the robot
+        has driven ``drive_m`` (it is following the route by then)."""
+        self.station.upload_goals([Goal(goal)])
+        self.station.start_mission()
+        self.run_until(lambda: self.sim.truth.moved_m() >= drive_m, 20.0,
+                       f"driving {drive_m} m towards key image {goal}")
+
+    def reach(self, taught: Taught, goal: int, timeout_s: float, tolerance_m: float) -> None:
+        """Wait until the mission reaches key image ``goal``; check the robot stands within
+        ``tolerance_m`` of where the key image was taken.
+
+        Raises:
+            FaultCaseError: not reached in ``timeout_s``, or reached elsewhere.
+        """
+        reached = self.station.wait_mission_done(timeout_s)
+        expect(reached, f"key image {goal} not reached (outcome {self.station.mission_outcome});"
+                        f" notices {self.notices()}")
+        (x, y), (gx, gy) = self.sim.truth.position(), taught.goal_xy[goal]
+        error = math.hypot(x - gx, y - gy)
+        expect(error <= tolerance_m, f"ended {error:.3f} m from key image {goal} "
+                                     f"(tolerance {tolerance_m} m)")
+
+
+@contextmanager
+def open_hil(taught: Taught, folder: Path) -> Iterator[Hil]:
+    """The rig on a copy of ``taught``'s memory in ``folder/memory``: the robot started
+    (:func:`start_robot`), its output in ``folder/robot.out``, and answering.
+    Everything is stopped after, however the block ends (the robot by SIGTERM).
+
+    Raises:
+        FaultCaseError: the robot did not answer.
+    """
+    shutil.copytree(taught.memory_dir, folder / "memory")
+    with ExitStack() as stack:
+        sim = stack.enter_context(SimSide(taught.world_file))
+        station = stack.enter_context(GroundStation.open("udpin:127.0.0.1:0", WallClock()))
+        since_ns = station.clock.now_ns()
+        robot = start_robot(sim, station, folder, "robot.out")
+        hil = Hil(sim, station, robot, folder)
+        stack.callback(lambda: hil.robot.stop())
+        hil.wait_robot(since_ns)
+        yield hil

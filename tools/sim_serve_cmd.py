@@ -1,0 +1,196 @@
+"""``vmnav sim serve``: the emulated Pioneer 3-AT on a pty and/or TCP, in real time.
+
+Registered under ``vmnav sim`` by :mod:`tools.sim_cmd`. The simulation steps to the
+wall clock and the ARIA server answers one client at a time (``sim.pioneer.server``)
+until Ctrl-C, SIGTERM or ``--duration``. With ``--video`` the robot's fisheye camera
+is an MJPEG stream over HTTP (``sim.camera_server``), rendered from the same
+simulation every frame period.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, closing, contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from shared.errors import InputError
+from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
+
+DEFAULT_ARIA = "tcp:8101"
+DEFAULT_VIDEO_PORT = 8080
+DEFAULT_CONTROL_PORT = 8081
+
+
+@dataclass(frozen=True, slots=True)
+class PtySpec:
+    """Serve on a new pseudo-terminal, optionally symlinked."""
+
+    symlink: Path | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class TcpSpec:
+    """Serve on a TCP port (0: any free port)."""
+
+    host: str
+    port: int
+
+
+def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
+    """An ``--aria`` value: ``pty``, ``pty:LINK``, ``tcp``, ``tcp:PORT`` or ``tcp:HOST:PORT``.
+
+    Raises:
+        InputError: anything else (the message names ``--aria`` and the value).
+    """
+    kind, _, rest = text.partition(":")
+    if kind == "pty":
+        return PtySpec(Path(rest) if rest else None)
+    if kind == "tcp":
+        return _tcp_spec("--aria", text, rest, int(DEFAULT_ARIA.split(":")[1]))
+    raise InputError(
+        "--aria", f"{text!r} is not pty, pty:LINK, tcp:PORT or tcp:HOST:PORT"
+    )
+
+
+def parse_video_spec(text: str, option: str = "--video",
+                     default_port: int = DEFAULT_VIDEO_PORT) -> TcpSpec:
+    """A ``--video`` (or ``--control``) value: ``http``, ``http:PORT`` or ``http:HOST:PORT``.
+
+    Raises:
+        InputError: anything else (the message names ``option`` and the value).
+    """
+    kind, _, rest = text.partition(":")
+    if kind == "http":
+        return _tcp_spec(option, text, rest, default_port)
+    raise InputError(option, f"{text!r} is not http:PORT or http:HOST:PORT")
+
+
+def _tcp_spec(option: str, text: str, rest: str, default_port: int) -> TcpSpec:
+    """``[HOST:]PORT`` (``rest`` of ``text``), default host 127.0.0.1."""
+    host, _, port_text = rest.rpartition(":")
+    port_text = port_text or str(default_port)
+    if port_text.isdigit() and 0 <= int(port_text) <= 65535:
+        return TcpSpec(host or "127.0.0.1", int(port_text))
+    raise InputError(option, f"{text!r}: the TCP port must be 0-65535")
+
+
+def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``vmnav sim serve``."""
+    serve = sim_sub.add_parser(
+        "serve",
+        help="serve an emulated Pioneer 3-AT (ARIA server) on a pty and/or TCP, in real time",
+        description="Run a simulated world in real time with its robot as an emulated "
+        "Pioneer 3-AT-SH that ARIA clients (stock ARIA, vmnav's driver) connect to over a "
+        "serial pty or TCP (one client at a time), and with --video its fisheye camera as an "
+        "MJPEG stream over HTTP that cv2.VideoCapture reads like a network camera. Stop with "
+        "Ctrl-C.",
+    )
+    add_sim_arguments(serve)
+    serve.add_argument(
+        "--aria",
+        action="append",
+        metavar="SPEC",
+        help="where to serve ARIA, repeatable: pty, pty:LINK (also symlink LINK to the pty), "
+        f"tcp:PORT, tcp:HOST:PORT (default host 127.0.0.1) [default: {DEFAULT_ARIA}]",
+    )
+    serve.add_argument(
+        "--video",
+        metavar="SPEC",
+        help="also serve the robot's camera as MJPEG over HTTP (for cv2.VideoCapture, "
+        "ffplay, a browser): http, http:PORT, http:HOST:PORT (default host 127.0.0.1, "
+        f"port {DEFAULT_VIDEO_PORT}; port 0 picks a free one) [default: no camera]",
+    )
+    serve.add_argument(
+        "--control",
+        metavar="SPEC",
+        help="also serve the simulator's truth and robot placement over HTTP (GET /truth, "
+        "POST /place; for vmnav demo --hil): http, http:PORT, http:HOST:PORT (port "
+        f"{DEFAULT_CONTROL_PORT} unless given) [default: none]",
+    )
+    serve.add_argument(
+        "--jpeg-quality", type=int, metavar="Q",
+        help="JPEG quality of the --video frames, 1-100 [default: 90, about 45 kB a frame]",
+    )
+    serve.add_argument(
+        "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
+    )
+    serve.set_defaults(run=run_serve)
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    """Open the transports, print where they are, serve until stopped, print the counts."""
+    specs = [parse_aria_spec(text) for text in args.aria or [DEFAULT_ARIA]]
+    video = None if args.video is None else parse_video_spec(args.video)
+    control = (None if args.control is None
+               else parse_video_spec(args.control, "--control", DEFAULT_CONTROL_PORT))
+    if args.jpeg_quality is not None and not 1 <= args.jpeg_quality <= 100:
+        raise InputError("--jpeg-quality", f"must be 1-100, got {args.jpeg_quality}")
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    config, camera = sim_config_from_args(args)
+
+    from shared.clock import WallClock
+    from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraServer
+    from sim.control_server import ControlHook, ControlServer
+    from sim.pioneer import PtyLink, TcpListener
+    from sim.pioneer.world_server import pioneer_server
+
+    with ExitStack() as opened:  # closes everything, also if a step fails
+        links, listeners = [], []
+        for spec in specs:  # first: a port in use fails before the world is built
+            if isinstance(spec, PtySpec):
+                links.append(opened.enter_context(closing(PtyLink(spec.symlink))))
+            else:
+                listener = TcpListener(spec.host, spec.port)
+                listeners.append(opened.enter_context(closing(listener)))
+        video_server = None if video is None else opened.enter_context(
+            CameraServer(video.host, video.port, args.jpeg_quality or DEFAULT_JPEG_QUALITY))
+        server = opened.enter_context(
+            pioneer_server(config, camera, links, listeners, video_server))
+        emulator = server.emulator
+        sim = emulator.simulation
+        control_server = None
+        if control is not None:
+            hook = ControlHook(sim)
+            sim.add_step_hook(hook)
+            control_server = opened.enter_context(ControlServer(hook, control.host, control.port))
+        print(f"vmnav sim serve: world {config.world} (seed {config.seed}), robot "
+              f"'{emulator.identity.name}' ({emulator.identity.subclass})")
+        for link in links:
+            also = f" (also {link.symlink})" if link.symlink else ""
+            print(f"  ARIA on pty {link.path}{also}")
+        for listener in listeners:
+            print(f"  ARIA on tcp {listener.host}:{listener.port}")
+        if video_server is not None:
+            print(f"  camera on {video_server.stream_url} "
+                  f"(one frame: {video_server.snapshot_url})")
+        if control_server is not None:
+            print(f"  control on {control_server.url} (GET /truth, POST /place)")
+        print("  Ctrl-C stops", flush=True)
+        duration_ns = None if args.duration is None else round(args.duration * 1e9)
+        with _stopped_by_signals(server.stop):
+            server.run(WallClock(), duration_ns)
+    s = emulator.stats
+    print(f"stopped after {sim.now_ns / 1e9:.1f} s of simulation: {s.sessions} session(s), "
+          f"{s.sips_sent} SIPs, {s.commands} commands, {s.unknown_commands} unknown, "
+          f"{s.bad_checksums} bad checksums, {server.refused_clients} client(s) refused")
+    if video_server is not None:
+        v = video_server.stats()
+        print(f"camera: {v.published} frames, {v.clients} stream client(s)")
+    return 0
+
+
+@contextmanager
+def _stopped_by_signals(stop: Callable[[], None]) -> Iterator[None]:
+    """SIGINT and SIGTERM call ``stop`` while inside (a clean shutdown); old handlers after."""
+    handlers = {sig: signal.signal(sig, lambda *_: stop())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
