@@ -43,7 +43,7 @@ import numpy.typing as npt
 from robot.control_law import Twist, steer
 from robot.estimator import Estimate, Estimator, EstimatorLost
 from robot.memory.localize import keyframe_features
-from robot.segment_frame import Pose2, arc_coordinates, relative_pose, segment_curvature_1_m
+from robot.segment_frame import arc_coordinates, relative_pose, segment_curvature_1_m
 from robot.switching import FrameEvidence, KeyImageSwitch, SwitchState, observe_frame
 from robot.vision.features import Features, detect_harris
 from robot.vision.frame_state import (
@@ -65,6 +65,7 @@ from shared.config import (
 from shared.errors import DegenerateGeometryError, InputError
 from shared.interfaces import BaseState
 from shared.memory import Keyframe, VisualMemory
+from shared.pose import Pose2
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,7 +133,7 @@ def odometry_increment(before: Pose2, after: Pose2, distance_m: float) -> tuple[
     """Forward distance (m, negative when reversing) and heading change (rad) between poses.
 
     Args:
-        before: odometry pose (x_m, y_m, yaw_rad) at the previous frame.
+        before: odometry pose at the previous frame.
         after: odometry pose now, same frame.
         distance_m: |path length| driven in between, m (odometry's distance counter).
     """

@@ -21,6 +21,7 @@ import numpy.typing as npt
 
 from shared.clock import Clock
 from shared.errors import InputError
+from shared.pose import Pose2
 
 __all__ = ["BaseState", "Clock", "FrameSource", "MobileBase"]
 
@@ -45,7 +46,7 @@ class BaseState:
     """What the mobile base reports.
 
     Attributes:
-        odom_pose: (x_m, y_m, yaw_rad) of the robot frame in the odometry frame.
+        odom_pose: the robot frame's pose in the odometry frame.
         odom_distance_m: distance driven since the odometry started, m, >= 0 (sums
             |forward motion|, so it grows when reversing too).
         bumped: a bumper is pressed now.
@@ -57,7 +58,7 @@ class BaseState:
             may not arrive.
     """
 
-    odom_pose: tuple[float, float, float]
+    odom_pose: Pose2
     odom_distance_m: float
     bumped: bool
     stalled: bool

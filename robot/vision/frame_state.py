@@ -33,13 +33,14 @@ import numpy.typing as npt
 from robot.vision.bearings import LevelBearings, level_bearings
 from robot.vision.features import Features
 from robot.vision.image_errors import ImageErrors, image_errors
-from robot.vision.key_pair import KeyPairGeometry, Pose2D, key_pair_geometry
+from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.matching import match_zncc
 from robot.vision.path_state import PathState, state_from_views
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig, MatchConfig, PathStateConfig
 from shared.errors import InputError, check_shape
+from shared.pose import Pose2
 
 IntArray = npt.NDArray[np.int64]
 
@@ -140,8 +141,8 @@ def key_correspondences(
 def key_segment_from_key_images(
     next_features: Features,
     other_features: Features,
-    odom_next: Pose2D,
-    odom_other: Pose2D,
+    odom_next: Pose2,
+    odom_other: Pose2,
     camera: CameraModel,
     mount: CameraMountConfig,
     rng: np.random.Generator,
@@ -154,7 +155,7 @@ def key_segment_from_key_images(
         next_features: the next key image's corners and patches.
         other_features: the previous key image's (or, on a path's first segment,
             the key image after next).
-        odom_next: teach odometry base pose (x_m, y_m, yaw_rad) of the next key image.
+        odom_next: teach odometry base pose of the next key image.
         odom_other: teach odometry base pose of the other key image, same frame.
         camera: the lens of both key images.
         mount: where the camera sits on the robot.

@@ -9,9 +9,10 @@ from hypothesis import strategies as st
 
 from shared.config import BodyConfig, OdometryConfig, SimConfig
 from shared.errors import InputError
+from shared.pose import Pose2
 from sim.body import ramp
 from sim.simulation import Simulation
-from sim.world import Pose2, World
+from sim.world import World
 from tests.sim.rooms import box_room
 
 DT_S = 0.01
@@ -137,7 +138,7 @@ class TestWalls:
         assert sim.body.bumped_rear and not sim.body.bumped_front
 
 
-START = Pose2(10.0, 10.0, 30.0)
+START = Pose2(10.0, 10.0, math.radians(30.0))
 
 
 class TestOdometry:
