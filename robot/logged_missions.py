@@ -138,7 +138,7 @@ def base_state(where: str, data: Mapping[str, Any]) -> BaseState:
                          bool(data["motors_enabled"]))
     except KeyError as e:
         raise InputError(where, f"base state without {e}") from None
-    except (TypeError, ValueError, InputError) as e:
+    except (TypeError, ValueError) as e:
         raise InputError(where, f"malformed base state ({e})") from None
 
 

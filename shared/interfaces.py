@@ -20,7 +20,6 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.clock import Clock
-from shared.errors import InputError
 from shared.pose import Pose2
 
 __all__ = ["BaseState", "Clock", "FrameSource", "MobileBase"]
@@ -68,10 +67,10 @@ class BaseState:
 
     def __post_init__(self) -> None:
         if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):
-            raise InputError("BaseState", f"odom_pose must be 3 finite numbers (x_m, y_m, "
+            raise ValueError(f"BaseState: odom_pose must be 3 finite numbers (x_m, y_m, "
                              f"yaw_rad), got {self.odom_pose!r}")
         if not (math.isfinite(self.odom_distance_m) and self.odom_distance_m >= 0):
-            raise InputError("BaseState", f"odom_distance_m must be finite and >= 0, got "
+            raise ValueError(f"BaseState: odom_distance_m must be finite and >= 0, got "
                              f"{self.odom_distance_m}")
 
 

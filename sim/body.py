@@ -44,7 +44,6 @@ import numpy as np
 import pymunk
 
 from shared.config import BodyConfig, OdometryConfig
-from shared.errors import InputError
 from shared.pose import Pose2
 from sim._shapes import Category, tag
 
@@ -172,11 +171,11 @@ class PioneerBody:
         """Set the unicycle command, clamped to the speed limits.
 
         Raises:
-            InputError: a value is not finite.
+            ValueError: a value is not finite.
         """
         if not (math.isfinite(v_m_s) and math.isfinite(omega_rad_s)):
-            raise InputError(
-                "body command", f"values must be finite, got v={v_m_s}, omega={omega_rad_s}"
+            raise ValueError(
+                f"body command: values must be finite, got v={v_m_s}, omega={omega_rad_s}"
             )
         v_max, w_max = self.config.max_speed_m_s, self.config.max_omega_rad_s
         self._v_cmd = max(-v_max, min(v_max, float(v_m_s)))

@@ -110,5 +110,5 @@ def _summary(
 def _write_png(path: Path, image: npt.NDArray[np.uint8]) -> None:
     ok, data = cv2.imencode(".png", image)
     if not ok:
-        raise InputError(path, "PNG encoding failed")
+        raise RuntimeError(f"{path}: PNG encoding failed")
     write_bytes_atomic(path, data.tobytes())

@@ -39,7 +39,7 @@ from robot.vision.path_state import PathState, state_from_views
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig, MatchConfig, PathStateConfig
-from shared.errors import InputError, check_shape
+from shared.errors import check_shape
 from shared.pose import Pose2
 
 IntArray = npt.NDArray[np.int64]
@@ -117,16 +117,16 @@ def key_correspondences(
 
     Raises:
         ShapeError: ``tracks_next_other`` is not (T, 2).
-        InputError: a track refers to a corner that does not exist.
+        ValueError: a track refers to a corner that does not exist.
     """
     tracks = np.zeros((0, 2), np.int64) if tracks_next_other is None else np.asarray(
         tracks_next_other, dtype=np.int64)
     check_shape("tracks_next_other", tracks.shape, (None, 2))
     for column, name, n in ((0, "next", len(next_features)), (1, "other", len(other_features))):
         if tracks.size and not (tracks[:, column].min() >= 0 and tracks[:, column].max() < n):
-            raise InputError("tracks_next_other",
-                             f"column {column} must index the {n} corners of the {name} key "
-                             f"image, got {tracks[:, column].min()}..{tracks[:, column].max()}")
+            raise ValueError(f"tracks_next_other: column {column} must index the {n} corners of "
+                             f"the {name} key image, got "
+                             f"{tracks[:, column].min()}..{tracks[:, column].max()}")
     free_next = np.setdiff1d(np.arange(len(next_features)), tracks[:, 0])
     free_other = np.setdiff1d(np.arange(len(other_features)), tracks[:, 1])
     matches = match_zncc(_subset(next_features, free_next), _subset(other_features, free_other),
@@ -168,7 +168,7 @@ def key_segment_from_key_images(
         key images do not give a trustworthy structure.
 
     Raises:
-        ShapeError, InputError: bad ``tracks_next_other``.
+        ShapeError, ValueError: bad ``tracks_next_other``.
         DegenerateGeometryError: the odometry puts the two optical centres less
             than 1 cm apart.
     """

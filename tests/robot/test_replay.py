@@ -221,7 +221,7 @@ class TestCore:
     def test_the_replay_base_reports_logged_states_and_records_commands(self) -> None:
         base = ReplayBase()
         assert isinstance(base, MobileBase)
-        with pytest.raises(InputError, match="before any was logged"):
+        with pytest.raises(RuntimeError, match="before any was logged"):
             base.state()
         state = ConstantBase().state()
         base.report(state)

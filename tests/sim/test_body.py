@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared.config import BodyConfig, OdometryConfig, SimConfig
-from shared.errors import InputError
 from shared.pose import Pose2
 from sim.body import ramp
 from sim.simulation import Simulation
@@ -85,7 +84,7 @@ class TestLimits:
         assert w.max() == pytest.approx(cfg.max_omega_rad_s)
 
     def test_non_finite_command_is_refused(self) -> None:
-        with pytest.raises(InputError, match="finite"):
+        with pytest.raises(ValueError, match="finite"):
             make_sim().body.command(math.nan, 0.0)
 
     def test_unicycle_motion_has_no_lateral_slide(self) -> None:
