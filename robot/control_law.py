@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from scipy.special import lambertw
 
 from shared.config import ControlConfig
-from shared.errors import DegenerateGeometryError, InputError
+from shared.errors import DegenerateGeometryError
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,14 +79,14 @@ def steer(
         v = ``config.speed_m_s`` and omega with |omega| <= ``config.max_omega_rad_s``.
 
     Raises:
-        InputError: an argument is not finite.
+        ValueError: an argument is not finite.
         DegenerateGeometryError: ``"paper+ff"`` with 1 - c y <= 0 (the robot is at or
             beyond the centre of the reference arc).
     """
     for name, value in (("y_m", y_m), ("theta_rad", theta_rad),
                         ("curvature_ff_1_m", curvature_ff_1_m)):
         if not math.isfinite(value):
-            raise InputError("steer", f"{name} must be finite, got {value}")
+            raise ValueError(f"steer: {name} must be finite, got {value}")
     kp, kd = gains(config)
     v = config.speed_m_s
     v_cos3 = v * math.cos(theta_rad) ** 3
@@ -118,12 +118,12 @@ def settling_distance_m(pole_1_m: float, y0_m: float, tolerance_m: float) -> flo
         The distance, m (0 when |y0| is already within the band).
 
     Raises:
-        InputError: ``pole_1_m`` or ``tolerance_m`` is not > 0.
+        ValueError: ``pole_1_m`` or ``tolerance_m`` is not > 0.
     """
     if not pole_1_m > 0:
-        raise InputError("settling_distance_m", f"pole_1_m must be > 0, got {pole_1_m}")
+        raise ValueError(f"settling_distance_m: pole_1_m must be > 0, got {pole_1_m}")
     if not tolerance_m > 0:
-        raise InputError("settling_distance_m", f"tolerance_m must be > 0, got {tolerance_m}")
+        raise ValueError(f"settling_distance_m: tolerance_m must be > 0, got {tolerance_m}")
     ratio = tolerance_m / abs(y0_m) if y0_m != 0 else math.inf
     if ratio >= 1.0:
         return 0.0

@@ -41,10 +41,10 @@ import numpy as np
 import numpy.typing as npt
 from filterpy.kalman import KalmanFilter
 
-from robot.segment_frame import Pose2, coordinates_in_next_segment, wrap_angle
+from robot.segment_frame import coordinates_in_next_segment, wrap_angle
 from robot.vision.path_state import PathCoordinates
 from shared.config import EstimatorConfig
-from shared.errors import InputError
+from shared.pose import Pose2
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -172,11 +172,11 @@ class Estimator:
             dpsi_rad: heading change, counter-clockwise positive, rad.
 
         Raises:
-            InputError: an increment is not finite.
+            ValueError: an increment is not finite.
         """
         for name, value in (("ds_m", ds_m), ("dpsi_rad", dpsi_rad)):
             if not math.isfinite(value):
-                raise InputError("Estimator.predict", f"{name} must be finite, got {value}")
+                raise ValueError(f"Estimator.predict: {name} must be finite, got {value}")
         if not self._initialized:
             return
         s, y, theta = self._kf.x[:, 0]
@@ -211,12 +211,12 @@ class Estimator:
             What happened to the estimate.
 
         Raises:
-            InputError: a value is not finite.
+            ValueError: a value is not finite.
             ValueError: ``now_ns`` is earlier than a previous call's.
         """
         for name, value in (("s_m", s_m), ("y_m", y_m), ("theta_rad", theta_rad)):
             if not math.isfinite(value):
-                raise InputError("Estimator.update", f"{name} must be finite, got {value}")
+                raise ValueError(f"Estimator.update: {name} must be finite, got {value}")
         self._check_time(now_ns)
         if not self._initialized or self._lost:
             self._kf.x = np.array([[s_m], [y_m], [wrap_angle(theta_rad)]])

@@ -58,6 +58,7 @@ from shared.logs import topics
 from shared.logs.messages import FrameTransform, base_state_fields, sip_fields
 from shared.logs.series import RUN_METADATA, SERIES_KEY
 from shared.logs.writer import LogStats, LogWriter
+from shared.pose import Pose2
 
 #: ``foxglove.Log`` name of mission events, of the runtime's notes and of the Pioneer's end.
 EVENT_SOURCE = "robot.mission_run"
@@ -225,10 +226,8 @@ class FieldLog:
             f"{counters.link_losses} link losses, {counters.dropped_commands} commands dropped",
             PIONEER_SOURCE)
 
-    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8],
-                    odom_pose: tuple[float, float, float]) -> None:
-        """A frame of a teach drive ((H, W) uint8 grey) with the odometry
-        (x_m, y_m, yaw_rad) at its time."""
+    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:
+        """A frame of a teach drive ((H, W) uint8 grey) with the odometry pose at its time."""
         self._writer.log_image(t_ns, topics.CAMERA_IMAGE, image)
         self._odometry(t_ns, odom_pose)
 
@@ -255,7 +254,7 @@ class FieldLog:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def _odometry(self, t_ns: int, odom_pose: tuple[float, float, float]) -> None:
+    def _odometry(self, t_ns: int, odom_pose: Pose2) -> None:
         self._writer.log_transform(t_ns, [
             FrameTransform.planar(topics.FRAME_ODOM, topics.FRAME_BASE, *odom_pose),
             self._camera])

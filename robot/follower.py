@@ -43,7 +43,7 @@ import numpy.typing as npt
 from robot.control_law import Twist, steer
 from robot.estimator import Estimate, Estimator, EstimatorLost
 from robot.memory.localize import keyframe_features
-from robot.segment_frame import Pose2, arc_coordinates, relative_pose, segment_curvature_1_m
+from robot.segment_frame import arc_coordinates, relative_pose, segment_curvature_1_m
 from robot.switching import FrameEvidence, KeyImageSwitch, SwitchState, observe_frame
 from robot.vision.features import Features, detect_harris
 from robot.vision.frame_state import (
@@ -62,9 +62,10 @@ from shared.config import (
     PathStateConfig,
     SwitchingConfig,
 )
-from shared.errors import DegenerateGeometryError, InputError
+from shared.errors import DegenerateGeometryError
 from shared.interfaces import BaseState
 from shared.memory import Keyframe, VisualMemory
+from shared.pose import Pose2
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,10 +120,10 @@ def targets_from_route(memory: VisualMemory, route: list[int]) -> tuple[int, ...
     its last key image, on the path the route continues on, is the target.
 
     Raises:
-        InputError: the route is empty (no route from the start to the goal).
+        ValueError: the route is empty (no route from the start to the goal).
     """
     if not route:
-        raise InputError("route", "is empty: the memory does not connect start and goal")
+        raise ValueError("route is empty: the memory does not connect start and goal")
     path_of = [memory.keyframe(k).path_id for k in route]
     return tuple(k for i, k in enumerate(route)
                  if i + 1 == len(route) or path_of[i + 1] == path_of[i])
@@ -132,7 +133,7 @@ def odometry_increment(before: Pose2, after: Pose2, distance_m: float) -> tuple[
     """Forward distance (m, negative when reversing) and heading change (rad) between poses.
 
     Args:
-        before: odometry pose (x_m, y_m, yaw_rad) at the previous frame.
+        before: odometry pose at the previous frame.
         after: odometry pose now, same frame.
         distance_m: |path length| driven in between, m (odometry's distance counter).
     """
@@ -152,7 +153,7 @@ class RouteFollower:
         base: the base's state now (odometry origin of the first increment).
 
     Raises:
-        InputError: the route is empty.
+        ValueError: the route is empty.
         UnknownKeyframeError: a route id is not in the memory.
     """
 
@@ -189,10 +190,10 @@ class RouteFollower:
             base: the base's state at the frame.
 
         Raises:
-            InputError: the route was already finished.
+            RuntimeError: the route was already finished.
         """
         if self.finished:
-            raise InputError("RouteFollower.step", "the route's goal was already reached")
+            raise RuntimeError("RouteFollower.step: the route's goal was already reached")
         ds, dpsi = odometry_increment(self._odom, base.odom_pose,
                                       base.odom_distance_m - self._distance_m)
         self._odom, self._distance_m = base.odom_pose, base.odom_distance_m

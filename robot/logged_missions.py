@@ -35,6 +35,7 @@ from shared.logs import topics
 from shared.logs.messages import image_from_compressed
 from shared.logs.reader import LogMessage, log_info, read_messages
 from shared.logs.series import series_name
+from shared.pose import Pose2
 
 #: The topics replay reads.
 REPLAY_TOPICS = (topics.MISSION_START, topics.SERVO_STATE, topics.BASE_STATE, topics.CMD_VEL,
@@ -131,13 +132,13 @@ def base_state(where: str, data: Mapping[str, Any]) -> BaseState:
     """
     try:
         battery = data["battery_v"]
-        return BaseState((float(data["x_m"]), float(data["y_m"]), float(data["yaw_rad"])),
+        return BaseState(Pose2(float(data["x_m"]), float(data["y_m"]), float(data["yaw_rad"])),
                          float(data["odom_distance_m"]), bool(data["bumped"]),
                          bool(data["stalled"]), math.nan if battery is None else float(battery),
                          bool(data["motors_enabled"]))
     except KeyError as e:
         raise InputError(where, f"base state without {e}") from None
-    except (TypeError, ValueError, InputError) as e:
+    except (TypeError, ValueError) as e:
         raise InputError(where, f"malformed base state ({e})") from None
 
 

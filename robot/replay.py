@@ -211,10 +211,10 @@ class ReplayBase:
         """The state last reported.
 
         Raises:
-            InputError: none was (a bug of the replay loop, named so).
+            RuntimeError: none was (a bug of the replay loop).
         """
         if self._state is None:
-            raise InputError("replay", "the base was asked for its state before any was logged")
+            raise RuntimeError("the base was asked for its state before any was logged")
         return self._state
 
 

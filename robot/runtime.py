@@ -75,7 +75,7 @@ from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mission import MissionState
 from robot.mission_run import AppEvent, CycleRecord, MissionResult, MissionRun
-from robot.teach import KeyImageSelector, OdomPose, SelectedKeyImage
+from robot.teach import KeyImageSelector, SelectedKeyImage
 from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, ServoTelemetry, VehicleTelemetry
 from shared.clock import Clock
 from shared.config import VmnavConfig
@@ -87,6 +87,7 @@ from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 from shared.memory import VisualMemory, read_memory, write_memory
 from shared.memory.store import check_no_orphans
+from shared.pose import Pose2
 
 #: Modes in which a mission run drives the robot.
 _MISSION_MODES = frozenset({Mode.AUTO, Mode.GUIDED})
@@ -111,8 +112,8 @@ class RuntimeLog(Protocol):
         """A mission event (transition, key image, localization, lost)."""
         ...
 
-    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: OdomPose) -> None:
-        """A frame recorded while teaching, with the odometry (x_m, y_m, yaw_rad)."""
+    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:
+        """A frame recorded while teaching, with the odometry pose."""
         ...
 
     def note(self, t_ns: int, level: int, text: str) -> None:
@@ -214,7 +215,7 @@ class RobotRuntime:
         self._last_result: MissionResult | None = None
         self._servo: ServoTelemetry | None = None
         self._twist = (0.0, 0.0)
-        self._home: OdomPose | None = None
+        self._home: Pose2 | None = None
         self._stalled_since_ns: int | None = None
         self._base_lost_since_ns: int | None = None
         self._snapshot = VehicleTelemetry(mode=self._mode, armed=self._armed)

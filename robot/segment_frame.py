@@ -26,9 +26,7 @@ import math
 
 from robot.vision.path_state import PathCoordinates
 from shared.errors import DegenerateGeometryError
-
-#: A planar pose (x_m, y_m, yaw_rad): position in m, yaw counter-clockwise in rad.
-Pose2 = tuple[float, float, float]
+from shared.pose import Pose2
 
 
 def wrap_angle(angle_rad: float) -> float:
@@ -41,23 +39,23 @@ def relative_pose(pose_from: Pose2, pose_to: Pose2) -> Pose2:
     """``pose_to`` expressed in the frame of ``pose_from`` (both in one common frame).
 
     Args:
-        pose_from: (x_m, y_m, yaw_rad), e.g. a key image's teach odometry pose.
-        pose_to: (x_m, y_m, yaw_rad) in the same frame, e.g. the next key image's.
+        pose_from: e.g. a key image's teach odometry pose.
+        pose_to: in the same frame, e.g. the next key image's.
 
     Returns:
-        (x_m, y_m, yaw_rad) of ``pose_to`` in ``pose_from``'s frame, yaw in (-pi, pi].
+        ``pose_to`` in ``pose_from``'s frame, yaw in (-pi, pi].
     """
     x0, y0, yaw0 = pose_from
     dx, dy = pose_to[0] - x0, pose_to[1] - y0
     c, s = math.cos(yaw0), math.sin(yaw0)
-    return (c * dx + s * dy, -s * dx + c * dy, wrap_angle(pose_to[2] - yaw0))
+    return Pose2(c * dx + s * dy, -s * dx + c * dy, wrap_angle(pose_to[2] - yaw0))
 
 
 def segment_curvature_1_m(pose_from: Pose2, pose_to: Pose2, length_m: float) -> float:
     """Mean curvature of the teach path between two key images: heading change over length.
 
     Args:
-        pose_from: teach odometry pose (x_m, y_m, yaw_rad) of the first key image.
+        pose_from: teach odometry pose of the first key image.
         pose_to: teach odometry pose of the second key image, same frame.
         length_m: odometric distance driven between them, m (``Keyframe.distance_m``
             difference).

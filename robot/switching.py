@@ -33,7 +33,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from shared.config import SwitchingConfig
-from shared.errors import InputError
 
 #: Reasons of a :class:`KeyImageSwitch`, in order of precedence when both hold.
 SWITCH_REASONS = ("image_error", "passed")
@@ -75,9 +74,9 @@ class SwitchState:
 
     def __post_init__(self) -> None:
         if self.route_length < 1:
-            raise InputError("SwitchState", f"route_length must be >= 1, got {self.route_length}")
+            raise ValueError(f"SwitchState: route_length must be >= 1, got {self.route_length}")
         if not 0 <= self.next_index <= self.route_length:
-            raise InputError("SwitchState", f"next_index must be in [0, {self.route_length}], "
+            raise ValueError(f"SwitchState: next_index must be in [0, {self.route_length}], "
                              f"got {self.next_index}")
 
     @property
@@ -130,10 +129,10 @@ def observe_frame(
         The new state, and the switch event when the frame completed one.
 
     Raises:
-        InputError: the state is finished (the route's last key image was reached).
+        RuntimeError: the state is finished (the route's last key image was reached).
     """
     if state.finished:
-        raise InputError("observe_frame", f"the route's last key image (index "
+        raise RuntimeError(f"observe_frame: the route's last key image (index "
                          f"{state.route_length - 1}) was already reached")
     err, s = evidence.err_image_max_px, evidence.s_m
     near = s is None or s >= -config.image_error_within_m

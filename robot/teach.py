@@ -73,11 +73,11 @@ from shared.camera_model import CameraModel
 from shared.config import FeatureConfig, TeachConfig
 from shared.errors import InputError
 from shared.memory import KeyframeRecord
+from shared.pose import Pose2
 
-OdomPose = tuple[float, float, float]
-"""Odometry pose (x_m, y_m, yaw_rad) in the drive's odometry frame."""
-TeachFrame = tuple[int, GreyImage, OdomPose]
-"""One frame of a teach recording: (t_ns, (H, W) uint8 grey image, odometry pose)."""
+TeachFrame = tuple[int, GreyImage, Pose2]
+"""One frame of a teach recording: (t_ns, (H, W) uint8 grey image, pose in the drive's
+odometry frame)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,7 +105,7 @@ class _Frame:
     index: int
     t_ns: int
     image: GreyImage
-    odom_pose: OdomPose
+    odom_pose: Pose2
     distance_m: float
     features: Features
 
@@ -186,14 +186,14 @@ class KeyImageSelector:
         self._pending: list[_Seen] = []
 
     def push(
-        self, t_ns: int, image: GreyImage, odom_pose: OdomPose
+        self, t_ns: int, image: GreyImage, odom_pose: Pose2
     ) -> tuple[SelectedKeyImage, ...]:
         """Add the next frame.
 
         Args:
             t_ns: capture time, ns; strictly increasing.
             image: (H, W) uint8 grey frame of the camera's size.
-            odom_pose: odometry (x_m, y_m, yaw_rad) at capture.
+            odom_pose: odometry pose at capture.
 
         Returns:
             The key images decided by this frame, in order (usually none; the
@@ -267,7 +267,7 @@ class KeyImageSelector:
         )
         return SelectedKeyImage(record=record, frame_index=frame.index, shared_points=seen.shared)
 
-    def _frame(self, t_ns: int, image: GreyImage, odom_pose: OdomPose) -> _Frame:
+    def _frame(self, t_ns: int, image: GreyImage, odom_pose: Pose2) -> _Frame:
         where = f"teach frame {self._count}"
         image = np.asarray(image)
         size = (self._camera.height, self._camera.width)
@@ -291,7 +291,7 @@ class KeyImageSelector:
             index=self._count,
             t_ns=int(t_ns),
             image=image,
-            odom_pose=(pose[0], pose[1], pose[2]),
+            odom_pose=Pose2(*pose),
             distance_m=self._distance_m,
             features=detect_harris(image, self._feature_config, self._mask),
         )

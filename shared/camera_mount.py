@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.config import CameraMountConfig
+from shared.pose import Pose2
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -74,11 +75,11 @@ def transform_base_level(mount: CameraMountConfig) -> FloatArray:
     return T
 
 
-def camera_pose_world(pose_w: tuple[float, float, float], mount: CameraMountConfig) -> FloatArray:
+def camera_pose_world(pose_w: Pose2, mount: CameraMountConfig) -> FloatArray:
     """The camera's pose in the world for a robot pose.
 
     Args:
-        pose_w: robot pose (x_m, y_m, yaw_rad) on the floor plan.
+        pose_w: robot pose on the floor plan.
         mount: where the camera sits on the robot.
 
     Returns:

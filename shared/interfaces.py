@@ -20,7 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.clock import Clock
-from shared.errors import InputError
+from shared.pose import Pose2
 
 __all__ = ["BaseState", "Clock", "FrameSource", "MobileBase"]
 
@@ -45,7 +45,7 @@ class BaseState:
     """What the mobile base reports.
 
     Attributes:
-        odom_pose: (x_m, y_m, yaw_rad) of the robot frame in the odometry frame.
+        odom_pose: the robot frame's pose in the odometry frame.
         odom_distance_m: distance driven since the odometry started, m, >= 0 (sums
             |forward motion|, so it grows when reversing too).
         bumped: a bumper is pressed now.
@@ -57,7 +57,7 @@ class BaseState:
             may not arrive.
     """
 
-    odom_pose: tuple[float, float, float]
+    odom_pose: Pose2
     odom_distance_m: float
     bumped: bool
     stalled: bool
@@ -67,10 +67,10 @@ class BaseState:
 
     def __post_init__(self) -> None:
         if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):
-            raise InputError("BaseState", f"odom_pose must be 3 finite numbers (x_m, y_m, "
+            raise ValueError(f"BaseState: odom_pose must be 3 finite numbers (x_m, y_m, "
                              f"yaw_rad), got {self.odom_pose!r}")
         if not (math.isfinite(self.odom_distance_m) and self.odom_distance_m >= 0):
-            raise InputError("BaseState", f"odom_distance_m must be finite and >= 0, got "
+            raise ValueError(f"BaseState: odom_distance_m must be finite and >= 0, got "
                              f"{self.odom_distance_m}")
 
 

@@ -44,9 +44,8 @@ import numpy as np
 import pymunk
 
 from shared.config import BodyConfig, OdometryConfig
-from shared.errors import InputError
+from shared.pose import Pose2
 from sim._shapes import Category, tag
-from sim.world import Pose2
 
 _FOLLOW_REL = 0.5  # the motion follows when within half the set-point...
 _FOLLOW_ABS_M_S = 0.05  # ...or within 5 cm/s
@@ -116,10 +115,10 @@ class PioneerBody:
         return self._shape
 
     @property
-    def pose_w(self) -> tuple[float, float, float]:
-        """True pose (x_m, y_m, yaw_rad), world frame, yaw in [-pi, pi)."""
+    def pose_w(self) -> Pose2:
+        """True pose, world frame, yaw in [-pi, pi)."""
         x, y = self._body.position
-        return float(x), float(y), _wrap(self._body.angle)
+        return Pose2(float(x), float(y), _wrap(self._body.angle))
 
     @property
     def velocity_base(self) -> tuple[float, float, float]:
@@ -137,9 +136,9 @@ class PioneerBody:
         return self._v_cmd, self._w_cmd
 
     @property
-    def odom_pose(self) -> tuple[float, float, float]:
-        """Odometry pose (x_m, y_m, yaw_rad), odometry frame (see the module docstring)."""
-        return self._odom_x, self._odom_y, _wrap(self._odom_yaw)
+    def odom_pose(self) -> Pose2:
+        """Odometry pose, odometry frame (see the module docstring)."""
+        return Pose2(self._odom_x, self._odom_y, _wrap(self._odom_yaw))
 
     @property
     def odom_velocity(self) -> tuple[float, float]:
@@ -172,11 +171,11 @@ class PioneerBody:
         """Set the unicycle command, clamped to the speed limits.
 
         Raises:
-            InputError: a value is not finite.
+            ValueError: a value is not finite.
         """
         if not (math.isfinite(v_m_s) and math.isfinite(omega_rad_s)):
-            raise InputError(
-                "body command", f"values must be finite, got v={v_m_s}, omega={omega_rad_s}"
+            raise ValueError(
+                f"body command: values must be finite, got v={v_m_s}, omega={omega_rad_s}"
             )
         v_max, w_max = self.config.max_speed_m_s, self.config.max_omega_rad_s
         self._v_cmd = max(-v_max, min(v_max, float(v_m_s)))
@@ -185,7 +184,7 @@ class PioneerBody:
     def place(self, pose: Pose2) -> None:
         """Put the robot at rest at ``pose``; clear bumpers and stall; restart odometry at 0."""
         self._body.position = (pose.x_m, pose.y_m)
-        self._body.angle = math.radians(pose.yaw_deg)
+        self._body.angle = pose.yaw_rad
         self._body.velocity = (0.0, 0.0)
         self._body.angular_velocity = 0.0
         if self._body.space is not None:

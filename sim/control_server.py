@@ -29,8 +29,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
 from shared.errors import TransportError, VmnavError
+from shared.pose import Pose2
 from sim.simulation import Simulation
-from sim.world import Pose2
 
 TRUTH_PATH = "/truth"
 PLACE_PATH = "/place"
@@ -40,7 +40,7 @@ _PLACE_TIMEOUT_S = 5.0
 
 @dataclass(eq=False)
 class _Placement:
-    pose_w: tuple[float, float, float]
+    pose_w: Pose2
     done: threading.Event = field(default_factory=threading.Event)
     error: str | None = None
 
@@ -63,15 +63,14 @@ class ControlHook:
                 placement = self._placements.get_nowait()
             except queue.Empty:
                 break
-            x, y, yaw = placement.pose_w
             try:
-                self._sim.place_robot(Pose2(x, y, math.degrees(yaw)))
+                self._sim.place_robot(placement.pose_w)
             except VmnavError as e:
                 placement.error = str(e)
             placement.done.set()
         self.truth = self._truth()
 
-    def place(self, pose_w: tuple[float, float, float]) -> str | None:
+    def place(self, pose_w: Pose2) -> str | None:
         """Place the robot at the next step (rule 2); None when done, else why not."""
         placement = _Placement(pose_w)
         self._placements.put(placement)
@@ -143,7 +142,7 @@ class _Handler(BaseHTTPRequestHandler):
         except (ValueError, TypeError, KeyError) as e:
             self._reply(400, {"error": f"want {{\"pose_w\": [x_m, y_m, yaw_rad]}}: {e}"})
             return
-        error = self.hook.place((x, y, yaw))
+        error = self.hook.place(Pose2(x, y, yaw))
         if error is None:
             self._reply(200, {"t_ns": self.hook.truth["t_ns"], "pose_w": [x, y, yaw]})
         else:

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from shared.pose import Pose2
+
 
 @dataclass(frozen=True, slots=True)
 class DriveCommand:
@@ -65,8 +67,8 @@ class PurePursuit:
         """Total path length, m."""
         return float(self._cum[-1])
 
-    def command(self, pose_w: tuple[float, float, float]) -> DriveCommand:
-        """The command for the robot at ``pose_w`` (x_m, y_m, yaw_rad)."""
+    def command(self, pose_w: Pose2) -> DriveCommand:
+        """The command for the robot at ``pose_w``, world frame."""
         x, y, yaw = pose_w
         end = self._pts[-1]
         if not self.done:

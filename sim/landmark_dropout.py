@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from shared.errors import InputError
 from sim.landmarks import LandmarkField
 
 
@@ -23,10 +22,10 @@ def drop_landmarks(
         rng: picks which.
 
     Raises:
-        InputError: ``fraction`` is outside [0, 1].
+        ValueError: ``fraction`` is outside [0, 1].
     """
     if not 0.0 <= fraction <= 1.0:
-        raise InputError("--landmark-dropout", f"must be in [0, 1], got {fraction}")
+        raise ValueError(f"fraction must be in [0, 1], got {fraction}")
     n = len(field)
     removed = rng.choice(n, size=round(fraction * n), replace=False)
     keep = np.setdiff1d(np.arange(n), removed)

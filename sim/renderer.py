@@ -38,6 +38,7 @@ import numpy.typing as npt
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
 from shared.config import CameraMountConfig, RenderConfig
+from shared.pose import Pose2
 from sim.landmarks import LandmarkField
 from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.surfaces import SurfaceShader
@@ -68,7 +69,7 @@ class RenderedFrame:
     Attributes:
         t_ns: simulation time of the exposure, ns.
         image: (H, W) uint8 grey image.
-        pose_w: true robot pose (x_m, y_m, yaw_rad) in the world frame.
+        pose_w: true robot pose in the world frame.
         T_world_cam: (4, 4) float64 true camera pose (camera frame -> world frame).
         visible_ids: (K,) int64 ids of the landmarks drawn, near to far.
         visible_pixels_xy: (K, 2) float64 projected centres of those landmarks, px.
@@ -78,7 +79,7 @@ class RenderedFrame:
 
     t_ns: int
     image: npt.NDArray[np.uint8]
-    pose_w: tuple[float, float, float]
+    pose_w: Pose2
     T_world_cam: FloatArray
     visible_ids: npt.NDArray[np.int64]
     visible_pixels_xy: FloatArray

@@ -23,6 +23,7 @@ Rules:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -31,12 +32,13 @@ import pymunk
 
 from shared.config import SimConfig
 from shared.errors import ConfigError
+from shared.pose import Pose2
 from sim._shapes import Category, category_of, height_of, tag
 from sim.body import PioneerBody
 from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
 from sim.landmarks import LandmarkField, generate_landmarks
 from sim.people import People
-from sim.world import Pose2, World
+from sim.world import World
 
 OCCLUDER_FILTER = pymunk.ShapeFilter(mask=int(Category.WALL | Category.FURNITURE | Category.PERSON))
 """Ray-query filter that hits walls, furniture and people, never the robot."""
@@ -169,7 +171,7 @@ class Simulation:
         """
         probe_body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         probe_body.position = (pose.x_m, pose.y_m)
-        probe_body.angle = np.radians(pose.yaw_deg)
+        probe_body.angle = pose.yaw_rad
         probe = pymunk.Poly.create_box(
             probe_body, (self.config.body.length_m, self.config.body.width_m)
         )
@@ -178,7 +180,8 @@ class Simulation:
         if hits and hits[0].shape is not None:
             kind = Category(category_of(hits[0].shape)).name.lower()
             raise ConfigError(
-                "robot pose", f"({pose.x_m}, {pose.y_m}, {pose.yaw_deg} deg) overlaps a {kind}"
+                "robot pose",
+                f"({pose.x_m}, {pose.y_m}, {math.degrees(pose.yaw_rad)} deg) overlaps a {kind}",
             )
         self.body.place(pose)
         self.people.clear_robot_start()

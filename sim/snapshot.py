@@ -16,10 +16,11 @@ from shared.atomic_file import write_bytes_atomic, write_text_atomic
 from shared.camera_model import CameraModel
 from shared.config import SimConfig
 from shared.errors import InputError
+from shared.pose import Pose2
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
 from sim.topdown import draw_topdown
-from sim.world import Pose2, load_world
+from sim.world import load_world
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,5 +110,5 @@ def _summary(
 def _write_png(path: Path, image: npt.NDArray[np.uint8]) -> None:
     ok, data = cv2.imencode(".png", image)
     if not ok:
-        raise InputError(path, "PNG encoding failed")
+        raise RuntimeError(f"{path}: PNG encoding failed")
     write_bytes_atomic(path, data.tobytes())

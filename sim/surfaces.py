@@ -60,7 +60,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.camera_model import CameraModel
-from shared.errors import InputError, check_shape
+from shared.errors import check_shape
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.world import World
 
@@ -120,7 +120,7 @@ class SurfaceShader:
 
     Raises:
         ShapeError: ``R_base_cam`` is not (3, 3).
-        InputError: a camera height, downsample, bin count or blur out of range.
+        ValueError: a camera height, downsample, bin count or blur out of range.
     """
 
     def __init__(
@@ -381,9 +381,9 @@ class SurfaceShader:
 
 
 def _require(ok: bool, name: str, rule: str, value: float) -> None:
-    """Raise :class:`InputError` naming the argument unless ``ok``."""
+    """Raise ``ValueError`` naming the argument unless ``ok``."""
     if not ok:
-        raise InputError(f"SurfaceShader {name}", f"must be {rule}, got {value}")
+        raise ValueError(f"SurfaceShader {name}: must be {rule}, got {value}")
 
 
 def _falloff(distance_m: npt.ArrayLike) -> FloatArray:

@@ -30,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.config import TeachDriverConfig
+from shared.pose import Pose2
 from sim.driver import DriveCommand, PurePursuit
 
 FloatArray = npt.NDArray[np.float64]
@@ -153,8 +154,8 @@ class TeachDriver:
         """Length of the route, m."""
         return float(self.route_s_m[-1])
 
-    def command(self, pose_w: tuple[float, float, float]) -> DriveCommand:
-        """The command for the robot at ``pose_w`` (x_m, y_m, yaw_rad), true pose on the floor plan.
+    def command(self, pose_w: Pose2) -> DriveCommand:
+        """The command for the robot at ``pose_w``, true pose on the floor plan.
 
         The speed drift is indexed by the distance driven so far (the sum of the
         straight steps between the poses given to successive calls).

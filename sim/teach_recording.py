@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from shared.pose import Pose2
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.teach_driver import TeachDriver
@@ -33,14 +34,14 @@ class DriveFrame:
     Attributes:
         t_ns: simulation time of the exposure, ns.
         image: (H, W) uint8 grey frame.
-        odom_pose: wheel odometry (x_m, y_m, yaw_rad) in the drive's odometry frame.
-        pose_w: true robot pose (x_m, y_m, yaw_rad) in the world, for evaluation only.
+        odom_pose: wheel odometry in the drive's odometry frame.
+        pose_w: true robot pose in the world, for evaluation only.
     """
 
     t_ns: int
     image: npt.NDArray[np.uint8]
-    odom_pose: tuple[float, float, float]
-    pose_w: tuple[float, float, float]
+    odom_pose: Pose2
+    pose_w: Pose2
 
 
 def record_drive(

@@ -3,7 +3,9 @@
 A world is plain data: frozen dataclasses, written by hand as a TOML file (the
 built-in ``sim/worlds/lab.toml`` and ``sim/worlds/campus.toml`` are commented
 examples of the format) or built in Python. Frame: x, y on the floor plan, z up,
-the floor at z = 0, metres; yaw counter-clockwise from +x, degrees in files.
+the floor at z = 0, metres; yaw counter-clockwise from +x, degrees in files and
+in furniture, radians in the start pose (:class:`shared.pose.Pose2`; a file's
+``start`` table gives degrees, converted when the file is read).
 
 Rules a world must satisfy (checked when it is built; a file that breaks one
 raises :class:`ConfigError` naming the file and the problem):
@@ -19,6 +21,7 @@ raises :class:`ConfigError` naming the file and the problem):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from importlib import resources
@@ -28,6 +31,7 @@ import numpy as np
 
 from shared.config import from_mapping, load_toml, require
 from shared.errors import ConfigError
+from shared.pose import Pose2
 from sim._geometry import (
     box_corners,
     point_segment_distances,
@@ -44,7 +48,6 @@ __all__ = [
     "Ceiling",
     "LandmarkDensity",
     "Lighting",
-    "Pose2",
     "Route",
     "Wall",
     "World",
@@ -179,21 +182,6 @@ class Lighting:
 
 
 @dataclass(frozen=True, slots=True)
-class Pose2:
-    """A pose on the floor plan."""
-
-    x_m: float
-    """x, m."""
-    y_m: float
-    """y, m."""
-    yaw_deg: float = 0.0
-    """Heading, counter-clockwise from +x, degrees."""
-
-    def __post_init__(self) -> None:
-        _finite("pose", self.x_m, self.y_m, self.yaw_deg)
-
-
-@dataclass(frozen=True, slots=True)
 class Route:
     """A named polyline through free space, for the scripted teach driver."""
 
@@ -213,7 +201,7 @@ class Route:
     def start_pose(self) -> Pose2:
         """The pose at the first waypoint, facing the second."""
         (x0, y0), (x1, y1) = self.waypoints[0], self.waypoints[1]
-        return Pose2(x0, y0, math.degrees(math.atan2(y1 - y0, x1 - x0)))
+        return Pose2(x0, y0, math.atan2(y1 - y0, x1 - x0))
 
 
 @dataclass(frozen=True, slots=True)
@@ -225,7 +213,7 @@ class World:
     walls: tuple[Wall, ...]
     """The floor plan's walls; their bounding box is the world's extent."""
     start: Pose2
-    """Where the robot starts."""
+    """Where the robot starts, on the floor plan (yaw in radians)."""
     description: str = ""
     """One or two sentences for humans."""
     furniture: tuple[Box, ...] = ()
@@ -245,6 +233,7 @@ class World:
         names = [r.name for r in self.routes]
         for name in names:
             require(names.count(name) == 1, f"route name '{name}' is used twice")
+        _finite("start pose", *self.start)
         obstacles = _Obstacles.of(self)
         obstacles.check_point("start pose", (self.start.x_m, self.start.y_m))
         for route in self.routes:
@@ -342,6 +331,48 @@ def builtin_world_names() -> tuple[str, ...]:
     )
 
 
+@dataclass(frozen=True, slots=True)
+class _StartInFile:
+    """A world file's ``start`` table: the start pose with its heading in degrees."""
+
+    x_m: float
+    """x, m."""
+    y_m: float
+    """y, m."""
+    yaw_deg: float = 0.0
+    """Heading, counter-clockwise from +x, degrees."""
+
+    def pose(self) -> Pose2:
+        """The pose as the code holds it, heading in radians."""
+        return Pose2(self.x_m, self.y_m, math.radians(self.yaw_deg))
+
+
+@dataclass(frozen=True, slots=True)
+class _WorldFile(World):
+    """A world as its file states it: :class:`World`'s fields, the start as a :class:`_StartInFile`.
+
+    Only :func:`load_world` builds one (with ``from_mapping``, which reads the field
+    types) and turns it into a :class:`World` at once; that checks the rules.
+    """
+
+    start: _StartInFile  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        """Nothing to check yet: :meth:`world` builds the :class:`World` that checks."""
+
+    def world(self, source: str) -> World:
+        """The world, its start heading in radians.
+
+        Raises:
+            ConfigError: the world breaks a rule (``"<source>: <problem>"``).
+        """
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(World)}
+        try:
+            return World(**{**values, "start": self.start.pose()})
+        except ValueError as e:
+            raise ConfigError(source, str(e)) from None
+
+
 def load_world(name_or_path: str | Path) -> World:
     """Load a built-in world by name, or a world TOML file by path.
 
@@ -355,7 +386,7 @@ def load_world(name_or_path: str | Path) -> World:
     text = str(name_or_path)
     if text in builtin_world_names():
         with resources.as_file(resources.files("sim") / "worlds" / f"{text}.toml") as path:
-            return from_mapping(World, load_toml(path), str(path))
+            return from_mapping(_WorldFile, load_toml(path), str(path)).world(str(path))
     path = Path(text)
     if path.suffix != ".toml" and not path.exists():
         raise ConfigError(
@@ -363,4 +394,4 @@ def load_world(name_or_path: str | Path) -> World:
             f"unknown world (built-in: {', '.join(builtin_world_names())}; "
             "or the path of a .toml world file)",
         )
-    return from_mapping(World, load_toml(path), str(path))
+    return from_mapping(_WorldFile, load_toml(path), str(path)).world(str(path))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from tools import sim_serve_cmd
@@ -45,15 +46,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 def run_snapshot(args: argparse.Namespace) -> int:
     """Write the snapshot files and print a one-paragraph summary."""
     from shared.errors import InputError
+    from shared.pose import Pose2
     from sim.snapshot import take_snapshot
-    from sim.world import Pose2
 
     config, camera = sim_config_from_args(args)
     pose = None
     if args.x is not None or args.y is not None or args.yaw is not None:
         if args.x is None or args.y is None:
             raise InputError("--x/--y", "give both --x and --y to place the robot")
-        pose = Pose2(x_m=args.x, y_m=args.y, yaw_deg=args.yaw if args.yaw is not None else 0.0)
+        pose = Pose2(args.x, args.y, math.radians(args.yaw) if args.yaw is not None else 0.0)
     snap = take_snapshot(config, camera, args.out, pose)
     s = snap.summary
     p = s["pose_w"]

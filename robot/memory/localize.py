@@ -41,7 +41,6 @@ from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import match_zncc
 from shared.camera_model import CameraModel
 from shared.config import FeatureConfig, LocalizeConfig
-from shared.errors import InputError
 from shared.memory import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,
@@ -110,7 +109,7 @@ class Localizer:
         config: prefilter and verification parameters.
 
     Raises:
-        InputError: the three sequences differ in length, or a thumbnail has the wrong shape.
+        ValueError: the three sequences differ in length, or a thumbnail has the wrong shape.
     """
 
     def __init__(
@@ -123,9 +122,8 @@ class Localizer:
         config: LocalizeConfig,
     ) -> None:
         if not len(keyframe_ids) == len(thumbnails) == len(features):
-            raise InputError(
-                "localizer",
-                f"{len(keyframe_ids)} key image ids, {len(thumbnails)} thumbnails and "
+            raise ValueError(
+                f"localizer: {len(keyframe_ids)} key image ids, {len(thumbnails)} thumbnails and "
                 f"{len(features)} feature sets: expected one of each per key image",
             )
         self._ids = tuple(int(i) for i in keyframe_ids)
@@ -173,7 +171,7 @@ class Localizer:
             image: (H, W) uint8 grey query of the camera's size.
 
         Raises:
-            InputError: the image has the wrong size or type, or is empty.
+            ValueError: the image has the wrong size or type, or is empty.
         """
         query = self._query_features(image)
         if not self._ids:
@@ -189,7 +187,7 @@ class Localizer:
         """The paper's rule over every key image: the one with the most matches (the baseline).
 
         Raises:
-            InputError: the image has the wrong size or type, or is empty.
+            ValueError: the image has the wrong size or type, or is empty.
         """
         query = self._query_features(image)
         if not self._ids:
@@ -225,9 +223,9 @@ class Localizer:
         image = np.asarray(image)
         size = (self._camera.height, self._camera.width)
         if image.dtype != np.uint8 or image.shape != size:
-            raise InputError(
-                "query image",
-                f"expected a {size[1]}x{size[0]} uint8 grey image, got shape {image.shape} "
+            raise ValueError(
+                f"query image: expected a {size[1]}x{size[0]} uint8 grey image, got shape "
+                f"{image.shape} "
                 f"dtype {image.dtype}",
             )
         return detect_harris(image, self._feature_config, self._mask)
@@ -252,9 +250,9 @@ class _Prefilter:
         rows = []
         for i, thumb in enumerate(thumbnails):
             if thumb.shape != shape or thumb.dtype != np.uint8:
-                raise InputError(
-                    f"thumbnail {i}",
-                    f"expected {shape[1]}x{shape[0]} uint8, got shape {thumb.shape} dtype "
+                raise ValueError(
+                    f"thumbnail {i}: expected {shape[1]}x{shape[0]} uint8, got shape "
+                    f"{thumb.shape} dtype "
                     f"{thumb.dtype}",
                 )
             rows.append(_unit(self._normalised(thumb).reshape(1, -1))[0])
@@ -315,6 +313,6 @@ def localize(
         config: prefilter and verification parameters.
 
     Raises:
-        InputError: the image has the wrong size or type, or is empty.
+        ValueError: the image has the wrong size or type, or is empty.
     """
     return Localizer.from_memory(memory, feature_config, config).localize(image)

@@ -39,10 +39,11 @@ import numpy.typing as npt
 from shared.errors import InputError
 from shared.logs import topics
 from shared.logs.series import log_series, series_name
+from shared.pose import Pose2
 
 if TYPE_CHECKING:
     from robot.memory.junctions import JunctionAttempt
-    from robot.teach import OdomPose, SelectedKeyImage, TeachFrame
+    from robot.teach import SelectedKeyImage, TeachFrame
     from shared.camera_model import CameraModel
     from shared.config import VmnavConfig
     from shared.memory import VisualMemory, VisualPath
@@ -63,14 +64,13 @@ class Odometry:
     y_m: npt.NDArray[np.float64]
     yaw_rad: npt.NDArray[np.float64]
 
-    def pose_at(self, t_ns: int) -> OdomPose | None:
-        """The pose (x_m, y_m, yaw_rad) at ``t_ns``, interpolated linearly; None outside
-        the logged span."""
+    def pose_at(self, t_ns: int) -> Pose2 | None:
+        """The pose at ``t_ns``, interpolated linearly; None outside the logged span."""
         if not self.t_ns[0] <= t_ns <= self.t_ns[-1]:
             return None
         x, y, yaw = (float(np.interp(t_ns, self.t_ns, v)) for v in (self.x_m, self.y_m,
                                                                        self.yaw_rad))
-        return (x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
+        return Pose2(x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,7 +129,7 @@ def read_odometry(files: Sequence[Path]) -> Odometry:
     """
     from shared.logs.reader import read_messages
 
-    poses: dict[int, tuple[float, float, float]] = {}
+    poses: dict[int, Pose2] = {}
     for file in files:
         for message in read_messages(file, [topics.TF]):
             for tf in message.data.get("transforms", []):
@@ -138,9 +138,10 @@ def read_odometry(files: Sequence[Path]) -> Odometry:
                     continue
                 try:
                     p, q = tf["translation"], tf["rotation"]
-                    poses[message.log_time_ns] = (float(p["x"]), float(p["y"]),
-                                                  yaw_from_quaternion(float(q["w"]), float(q["x"]),
-                                                                      float(q["y"]), float(q["z"])))
+                    poses[message.log_time_ns] = Pose2(
+                        float(p["x"]), float(p["y"]),
+                        yaw_from_quaternion(float(q["w"]), float(q["x"]), float(q["y"]),
+                                            float(q["z"])))
                 except (KeyError, TypeError, ValueError) as e:
                     raise InputError(file, f"{topics.TF} at {message.log_time_ns} ns: malformed "
                                      f"transform ({e!r})") from None

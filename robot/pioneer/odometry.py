@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 from shared.aria.sip import Sip, position_delta
+from shared.pose import Pose2
 
 HEADING_COUNTS = 4096
 """THPOS counts per turn; any modulo-4096 convention works (reference §5)."""
@@ -79,9 +80,9 @@ class Odometry:
         self._offset_rad = 0.0
 
     @property
-    def pose(self) -> tuple[float, float, float]:
-        """(x_m, y_m, yaw_rad) in the odometry frame; yaw in [-pi, pi]."""
-        return self._x_m, self._y_m, math.remainder(self._th_rad, math.tau)
+    def pose(self) -> Pose2:
+        """The pose in the odometry frame; yaw in [-pi, pi]."""
+        return Pose2(self._x_m, self._y_m, math.remainder(self._th_rad, math.tau))
 
     @property
     def distance_m(self) -> float:

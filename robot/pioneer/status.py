@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from shared.aria.handshake import RobotIdentity
+from shared.pose import Pose2
 
 
 class LinkState(Enum):
@@ -24,7 +25,7 @@ class PioneerStatus:
     Attributes:
         link: the link state.
         identity: the robot's SYNC2 reply on the current or last connection.
-        odom_pose: (x_m, y_m, yaw_rad) in the odometry frame (where the driver started).
+        odom_pose: in the odometry frame (where the driver started).
         odom_distance_m: path length driven, m.
         v_m_s: measured forward speed, m/s; 0 unless connected.
         omega_rad_s: measured turn rate, rad/s, counter-clockwise +; 0 unless connected.
@@ -41,7 +42,7 @@ class PioneerStatus:
 
     link: LinkState
     identity: RobotIdentity | None
-    odom_pose: tuple[float, float, float]
+    odom_pose: Pose2
     odom_distance_m: float
     v_m_s: float
     omega_rad_s: float

@@ -25,6 +25,7 @@ from shared.config import VmnavConfig
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
+from shared.pose import Pose2
 
 #: What the robot does when the ground heartbeat stops: "stop" (MANUAL: stop driving),
 #: "hold" (stop and wait in HOLD, mission kept), "continue" (carry on with the mission).
@@ -32,6 +33,8 @@ GcsLostAction = Literal["stop", "hold", "continue"]
 
 #: Mission states in which the robot is working on a goal.
 ACTIVE_STATES = frozenset({MissionState.LOCALIZING, MissionState.FOLLOWING, MissionState.LOST})
+#: The odometry frame's origin: the pose before the base reported any.
+_ODOM_ORIGIN = Pose2(0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,7 +73,7 @@ class VehicleTelemetry:
         mission_detail: one line on the last mission transition (its reason), for STATUSTEXT.
         teaching: a visual path is being recorded.
         battery_v: battery voltage, V (NaN unknown).
-        odom_pose: (x_m, y_m, yaw_rad) of the robot in the odometry frame.
+        odom_pose: the robot's pose in the odometry frame.
         velocity: (v_m_s forward, omega_rad_s counter-clockwise) in the robot frame.
         goal_key: goal key image of the current mission; None if none.
         servo: the follower's state while it runs; None otherwise.
@@ -78,7 +81,7 @@ class VehicleTelemetry:
             being driven to; None when the robot works on anything else (a photo goal).
         reached_seqs: mission items reached in the current run, in order; a run that
             starts again starts from ``()``.
-        home_pose: (x_m, y_m, yaw_rad) of the home in the odometry frame (where the
+        home_pose: the home's pose in the odometry frame (where the
             robot started); None while unknown.
         base_reporting: the mobile base's reports are current (``BaseState.reporting``).
     """
@@ -89,13 +92,13 @@ class VehicleTelemetry:
     mission_detail: str = ""
     teaching: bool = False
     battery_v: float = math.nan
-    odom_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    odom_pose: Pose2 = _ODOM_ORIGIN
     velocity: tuple[float, float] = (0.0, 0.0)
     goal_key: int | None = None
     servo: ServoTelemetry | None = None
     mission_seq: int | None = None
     reached_seqs: tuple[int, ...] = ()
-    home_pose: tuple[float, float, float] | None = None
+    home_pose: Pose2 | None = None
     base_reporting: bool = True
 
     @property

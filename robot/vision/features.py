@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.config import FeatureConfig
-from shared.errors import InputError, ShapeError, check_shape
+from shared.errors import ShapeError, check_shape
 
 PixelsXY = npt.NDArray[np.float64]
 """(N, 2) float64 pixel coordinates (x right, y down; centre of the top-left pixel is (0, 0))."""
@@ -130,17 +130,17 @@ def detect_harris(
 
     Raises:
         ShapeError: ``image`` is not 2-D, or ``mask`` differs from it in shape.
-        InputError: ``image`` is not uint8 or ``mask`` is not bool.
+        TypeError: ``image`` is not uint8 or ``mask`` is not bool.
     """
     image = np.ascontiguousarray(image)
     check_shape("image", image.shape, (None, None))
     if image.dtype != np.uint8:
-        raise InputError("image", f"expected dtype uint8, got {image.dtype}")
+        raise TypeError(f"image: expected dtype uint8, got {image.dtype}")
     if mask is not None:
         mask = np.asarray(mask)
         check_shape("mask", mask.shape, image.shape)
         if mask.dtype != np.bool_:
-            raise InputError("mask", f"expected dtype bool, got {mask.dtype}")
+            raise TypeError(f"mask: expected dtype bool, got {mask.dtype}")
     half = config.patch_size_px // 2
     margin = half + config.subpixel_half_window_px
     allowed = _allowed_centres(image.shape, margin, mask)

@@ -33,13 +33,14 @@ import numpy.typing as npt
 from robot.vision.bearings import LevelBearings, level_bearings
 from robot.vision.features import Features
 from robot.vision.image_errors import ImageErrors, image_errors
-from robot.vision.key_pair import KeyPairGeometry, Pose2D, key_pair_geometry
+from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.matching import match_zncc
 from robot.vision.path_state import PathState, state_from_views
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig, MatchConfig, PathStateConfig
-from shared.errors import InputError, check_shape
+from shared.errors import check_shape
+from shared.pose import Pose2
 
 IntArray = npt.NDArray[np.int64]
 
@@ -116,16 +117,16 @@ def key_correspondences(
 
     Raises:
         ShapeError: ``tracks_next_other`` is not (T, 2).
-        InputError: a track refers to a corner that does not exist.
+        ValueError: a track refers to a corner that does not exist.
     """
     tracks = np.zeros((0, 2), np.int64) if tracks_next_other is None else np.asarray(
         tracks_next_other, dtype=np.int64)
     check_shape("tracks_next_other", tracks.shape, (None, 2))
     for column, name, n in ((0, "next", len(next_features)), (1, "other", len(other_features))):
         if tracks.size and not (tracks[:, column].min() >= 0 and tracks[:, column].max() < n):
-            raise InputError("tracks_next_other",
-                             f"column {column} must index the {n} corners of the {name} key "
-                             f"image, got {tracks[:, column].min()}..{tracks[:, column].max()}")
+            raise ValueError(f"tracks_next_other: column {column} must index the {n} corners of "
+                             f"the {name} key image, got "
+                             f"{tracks[:, column].min()}..{tracks[:, column].max()}")
     free_next = np.setdiff1d(np.arange(len(next_features)), tracks[:, 0])
     free_other = np.setdiff1d(np.arange(len(other_features)), tracks[:, 1])
     matches = match_zncc(_subset(next_features, free_next), _subset(other_features, free_other),
@@ -140,8 +141,8 @@ def key_correspondences(
 def key_segment_from_key_images(
     next_features: Features,
     other_features: Features,
-    odom_next: Pose2D,
-    odom_other: Pose2D,
+    odom_next: Pose2,
+    odom_other: Pose2,
     camera: CameraModel,
     mount: CameraMountConfig,
     rng: np.random.Generator,
@@ -154,7 +155,7 @@ def key_segment_from_key_images(
         next_features: the next key image's corners and patches.
         other_features: the previous key image's (or, on a path's first segment,
             the key image after next).
-        odom_next: teach odometry base pose (x_m, y_m, yaw_rad) of the next key image.
+        odom_next: teach odometry base pose of the next key image.
         odom_other: teach odometry base pose of the other key image, same frame.
         camera: the lens of both key images.
         mount: where the camera sits on the robot.
@@ -167,7 +168,7 @@ def key_segment_from_key_images(
         key images do not give a trustworthy structure.
 
     Raises:
-        ShapeError, InputError: bad ``tracks_next_other``.
+        ShapeError, ValueError: bad ``tracks_next_other``.
         DegenerateGeometryError: the odometry puts the two optical centres less
             than 1 cm apart.
     """

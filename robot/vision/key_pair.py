@@ -27,11 +27,10 @@ from robot.vision.triangulation import triangulate_bearings
 from shared.camera_mount import R_BASE_LEVEL
 from shared.config import CameraMountConfig, PathStateConfig
 from shared.errors import DegenerateGeometryError, ShapeError, check_shape
+from shared.pose import Pose2
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
-Pose2D = tuple[float, float, float]
-"""(x_m, y_m, yaw_rad) of the robot base in an odometry frame."""
 
 #: Key images whose optical centres are closer than this (by odometry) are refused, m.
 _MIN_BASELINE_M = 0.01
@@ -83,12 +82,12 @@ class KeyPairGeometry:
         return np.where(found, rows, 0), found
 
 
-def camera_baseline_level(odom_next: Pose2D, odom_other: Pose2D,
+def camera_baseline_level(odom_next: Pose2, odom_other: Pose2,
                           mount: CameraMountConfig) -> FloatArray:
     """The other key image's optical centre in the next key image's level frame, by odometry.
 
     Args:
-        odom_next: odometry base pose of the next key image (x_m, y_m, yaw_rad).
+        odom_next: odometry base pose of the next key image.
         odom_other: odometry base pose of the other key image, same odometry frame.
         mount: where the camera sits on the robot.
 
@@ -112,7 +111,7 @@ def camera_baseline_level(odom_next: Pose2D, odom_other: Pose2D,
 
 def key_pair_geometry(
     bearings_next: FloatArray, bearings_other: FloatArray, feature_idx_next: npt.ArrayLike,
-    odom_next: Pose2D, odom_other: Pose2D, mount: CameraMountConfig, rng: np.random.Generator,
+    odom_next: Pose2, odom_other: Pose2, mount: CameraMountConfig, rng: np.random.Generator,
     config: PathStateConfig,
 ) -> KeyPairGeometry:
     """Triangulate the matches of two key images in the next key image's level frame.
@@ -122,7 +121,7 @@ def key_pair_geometry(
         bearings_other: (K, 3) unit rays of the same matches in the other key image's
             level frame (the previous key image, or the one after next).
         feature_idx_next: (K,) the next key image's feature index of each match.
-        odom_next: teach odometry base pose of the next key image (x_m, y_m, yaw_rad).
+        odom_next: teach odometry base pose of the next key image.
         odom_other: teach odometry base pose of the other key image, same frame.
         mount: where the camera sits on the robot.
         rng: draws the RANSAC samples.

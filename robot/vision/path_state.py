@@ -45,7 +45,7 @@ from robot.vision.key_pair import KeyPairGeometry
 from robot.vision.resection import resect_planar
 from shared.camera_mount import transform_base_level
 from shared.config import CameraMountConfig, PathStateConfig
-from shared.errors import InputError, ShapeError, check_shape
+from shared.errors import ShapeError, check_shape
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -196,10 +196,10 @@ def state_from_two_views(
     Raises:
         ShapeError: the arrays disagree in shape.
         DegenerateGeometryError: a bearing is not a finite unit vector.
-        InputError: ``distance_m`` is negative or not finite.
+        ValueError: ``distance_m`` is negative or not finite.
     """
     if not (math.isfinite(distance_m) and distance_m >= 0):
-        raise InputError("distance_m", f"must be finite and >= 0, got {distance_m}")
+        raise ValueError(f"distance_m must be finite and >= 0, got {distance_m}")
     fc = check_bearings("bearings_current", bearings_current)
     fn = check_bearings("bearings_next", bearings_next, len(fc))
     fit = relative_pose(fc, fn, rng, config.relative_pose)

@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.errors import MemoryFormatError, ShapeError, check_shape
+from shared.pose import Pose2
 
 GreyImage = npt.NDArray[np.uint8]
 """(H, W) uint8 grey image."""
@@ -179,7 +180,7 @@ class KeyframeRecord:
 
     Attributes:
         t_ns: capture time, ns, teach clock.
-        odom_pose: teach odometry ``(x_m, y_m, yaw_rad)`` in the path's odometry frame.
+        odom_pose: teach odometry pose in the path's odometry frame.
         distance_m: odometric distance travelled since any fixed origin (e.g. the
             start of the recording), m; the memory stores it relative to the
             path's first key image.
@@ -191,7 +192,7 @@ class KeyframeRecord:
     """
 
     t_ns: int
-    odom_pose: tuple[float, float, float]
+    odom_pose: Pose2
     distance_m: float
     image: GreyImage
     pixels_xy: PixelsXY
@@ -210,7 +211,7 @@ class Keyframe:
         path_id: the visual path it was taught on.
         index: its position along that path (0, 1, 2, ...).
         t_ns: capture time, ns, teach clock.
-        odom_pose: teach odometry ``(x_m, y_m, yaw_rad)`` in the path's odometry frame.
+        odom_pose: teach odometry pose in the path's odometry frame.
         distance_m: odometric distance from the path's first key image, m, >= 0.
         image: (H, W) uint8 grey key image.
         pixels_xy: (N, 2) float64 Harris corners, px, inside the image.
@@ -229,7 +230,7 @@ class Keyframe:
     path_id: int
     index: int
     t_ns: int
-    odom_pose: tuple[float, float, float]
+    odom_pose: Pose2
     distance_m: float
     image: GreyImage
     pixels_xy: PixelsXY
@@ -250,7 +251,7 @@ class Keyframe:
                 where, f"odom_pose: expected (x_m, y_m, yaw_rad), got {self.odom_pose!r}"
             )
         object.__setattr__(
-            self, "odom_pose", tuple(_finite(where, "odom_pose", v) for v in pose)
+            self, "odom_pose", Pose2(*(_finite(where, "odom_pose", v) for v in pose))
         )
         distance_m = _finite(where, "distance_m", self.distance_m)
         if distance_m < 0.0:

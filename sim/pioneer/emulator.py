@@ -72,7 +72,8 @@ from shared.aria import (
 from shared.aria.state import OPEN_STATES
 from shared.config import EmulatorConfig
 from shared.errors import ConfigError, LocalProtocolError
-from sim.pioneer.motion import MotionController, Pose
+from shared.pose import Pose2
+from sim.pioneer.motion import MotionController
 from sim.pioneer.p3at import (
     ANGLE_CONV_RAD,
     DIFF_CONV_RAD_PER_M,
@@ -146,7 +147,7 @@ class EmulatedPioneer:
         self._flash = _flash(config, simulation)
         self._motion = MotionController(self._flash)
         self._sonar = SonarRing(simulation.space, config, rng)
-        self._origin: Pose = (0.0, 0.0, 0.0)
+        self._origin = Pose2(0.0, 0.0, 0.0)
         self._wheel_travel_m = 0.0
         self._battest_v: float | None = None
         self._counts: Counter[str] = Counter(sessions=1)
@@ -335,13 +336,13 @@ class EmulatedPioneer:
         self._wheel_travel_m += (abs(left) + abs(right)) / 2 * dt_s
         self._sonar.fire_due(now_ns, self._body.pose_w)
 
-    def _odom_pose(self) -> Pose:
-        """The body's wheel odometry in the frame of the last SETO (x_m, y_m, th_rad)."""
+    def _odom_pose(self) -> Pose2:
+        """The body's wheel odometry in the frame of the last SETO."""
         x, y, th = self._body.odom_pose
         x0, y0, th0 = self._origin
         c, s = math.cos(th0), math.sin(th0)
         dx, dy = x - x0, y - y0
-        return c * dx + s * dy, -s * dx + c * dy, th - th0
+        return Pose2(c * dx + s * dy, -s * dx + c * dy, th - th0)
 
     def _sip(self) -> Sip:
         body, motion = self._body, self._motion

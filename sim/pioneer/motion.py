@@ -33,11 +33,9 @@ import math
 from dataclasses import replace
 
 from shared.aria import ConfigPacket
+from shared.pose import Pose2
 from sim.body import ramp
 from sim.pioneer.p3at import DIFF_CONV_RAD_PER_M
-
-Pose = tuple[float, float, float]
-"""(x_m, y_m, th_rad), odometry frame."""
 
 MOVE_TOLERANCE_M = 0.005
 """A MOVE is done within this distance of its goal, m."""
@@ -153,7 +151,7 @@ class MotionController:
         self.set_velocity((left_m_s + right_m_s) / 2)
         self.set_rot_velocity((right_m_s - left_m_s) / 2 * DIFF_CONV_RAD_PER_M)
 
-    def move(self, distance_m: float, pose: Pose) -> None:
+    def move(self, distance_m: float, pose: Pose2) -> None:
         """MOVE: travel ``distance_m`` (m, negative backwards) along the current heading."""
         if self._motors:
             self._move = (pose, distance_m)
@@ -163,11 +161,11 @@ class MotionController:
         if self._motors:
             self._heading_goal = _wrap(heading_rad)
 
-    def turn_by(self, delta_rad: float, pose: Pose) -> None:
+    def turn_by(self, delta_rad: float, pose: Pose2) -> None:
         """DHEAD: turn by ``delta_rad`` from the current heading, rad."""
         self.set_heading(pose[2] + delta_rad)
 
-    def turn_setpoint_by(self, delta_rad: float, pose: Pose) -> None:
+    def turn_setpoint_by(self, delta_rad: float, pose: Pose2) -> None:
         """DCHEAD: move the heading setpoint by ``delta_rad`` (from the heading if none)."""
         base = self._heading_goal if self._heading_goal is not None else pose[2]
         self.set_heading(base + delta_rad)
@@ -200,7 +198,7 @@ class MotionController:
 
     # -- the physics step -------------------------------------------------------
 
-    def step(self, dt_s: float, pose: Pose) -> tuple[float, float]:
+    def step(self, dt_s: float, pose: Pose2) -> tuple[float, float]:
         """Advance the profile by ``dt_s`` (s) from odometry ``pose``.
 
         Returns:
@@ -215,7 +213,7 @@ class MotionController:
         self._w = ramp(self._w, w_des, lim.rot_accel_rad_s2 * dt_s, lim.rot_decel_rad_s2 * dt_s)
         return self._v, self._w
 
-    def _translation_target(self, pose: Pose) -> float:
+    def _translation_target(self, pose: Pose2) -> float:
         if self._move is None:
             return self._v_target
         (x0, y0, th0), distance = self._move
@@ -225,7 +223,7 @@ class MotionController:
             return 0.0
         return _approach(left, self._limits.trans_vel_max_m_s, self._limits.trans_decel_m_s2)
 
-    def _rotation_target(self, pose: Pose) -> float:
+    def _rotation_target(self, pose: Pose2) -> float:
         if self._heading_goal is None:
             return self._w_target
         left = _wrap(self._heading_goal - pose[2])
@@ -235,7 +233,7 @@ class MotionController:
 
     def _clear_targets(self) -> None:
         self._v_target = self._w_target = 0.0
-        self._move: tuple[Pose, float] | None = None
+        self._move: tuple[Pose2, float] | None = None
         self._heading_goal: float | None = None
 
     def _set_limit(self, **changes: float) -> None:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+from shared.pose import Pose2
+
 SUBCLASS = "p3at-sh"
 """The SYNC2 subclass; ARIA loads ``params/p3at-sh.p``."""
 ROBOT_CLASS = "Pioneer"
@@ -30,8 +32,8 @@ front/rear contact, not which segment)."""
 REAR_BUMPER_SEGMENTS = 0x1F
 """The five rear bumper segments."""
 
-SONAR_POSES: tuple[tuple[float, float, float], ...] = tuple(
-    (x_mm / 1000, y_mm / 1000, math.radians(th_deg))
+SONAR_POSES: tuple[Pose2, ...] = tuple(
+    Pose2(x_mm / 1000, y_mm / 1000, math.radians(th_deg))
     for x_mm, y_mm, th_deg in (
         (147, 136, 90), (193, 119, 50), (227, 79, 30), (245, 27, 10),
         (245, -27, -10), (227, -79, -30), (193, -119, -50), (147, -136, -90),

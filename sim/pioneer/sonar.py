@@ -23,6 +23,7 @@ import numpy as np
 import pymunk
 
 from shared.config import EmulatorConfig
+from shared.pose import Pose2
 from sim.pioneer.p3at import SONAR_POSES, SONARS_PER_ARRAY
 from sim.simulation import OCCLUDER_FILTER
 
@@ -57,8 +58,8 @@ class SonarRing:
             self._pending.clear()
             self._next_fire_ns = None
 
-    def fire_due(self, now_ns: int, pose_w: tuple[float, float, float]) -> None:
-        """Fire the pings due by ``now_ns`` (ns) from the robot's true pose (x_m, y_m, yaw_rad)."""
+    def fire_due(self, now_ns: int, pose_w: Pose2) -> None:
+        """Fire the pings due by ``now_ns`` (ns) from the robot's true pose, world frame."""
         if not self._enabled:
             return
         if self._next_fire_ns is None:
@@ -77,8 +78,8 @@ class SonarRing:
         self._pending.clear()
         return readings
 
-    def range_m(self, number: int, pose_w: tuple[float, float, float]) -> float:
-        """One ping of sonar ``number`` from true pose (x_m, y_m, yaw_rad): range, m (rule 2)."""
+    def range_m(self, number: int, pose_w: Pose2) -> float:
+        """One ping of sonar ``number`` from the true pose, world frame: range, m (rule 2)."""
         x, y, yaw = pose_w
         sx, sy, heading = SONAR_POSES[number]
         c, s = math.cos(yaw), math.sin(yaw)

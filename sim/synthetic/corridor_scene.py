@@ -25,10 +25,9 @@ import numpy.typing as npt
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world
 from shared.config import CameraMountConfig
+from shared.pose import Pose2
 
 FloatArray = npt.NDArray[np.float64]
-Pose2D = tuple[float, float, float]
-"""(x_m, y_m, yaw_rad) of the robot base on the floor plan."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,12 +35,12 @@ class SceneView:
     """One camera view of the scene.
 
     Attributes:
-        pose_w: true base pose (x_m, y_m, yaw_rad) in the world.
+        pose_w: true base pose in the world.
         pixels_xy: (N, 2) float64 observed pixels (with noise), px.
         point_ids: (N,) int64 index into ``CorridorScene.points_w`` of each feature.
     """
 
-    pose_w: Pose2D
+    pose_w: Pose2
     pixels_xy: FloatArray
     point_ids: npt.NDArray[np.int64]
 
@@ -85,9 +84,9 @@ class CorridorScene:
     next: SceneView
     after: SceneView
     current: SceneView
-    odom_previous: Pose2D
-    odom_next: Pose2D
-    odom_after: Pose2D
+    odom_previous: Pose2
+    odom_next: Pose2
+    odom_after: Pose2
     previous_next: SceneMatches
     after_next: SceneMatches
     current_next: SceneMatches
@@ -96,11 +95,11 @@ class CorridorScene:
     s_m: float
 
 
-def compose(pose: Pose2D, delta: Pose2D) -> Pose2D:
+def compose(pose: Pose2, delta: Pose2) -> Pose2:
     """Planar pose composition ``pose (+) delta`` (delta in pose's frame)."""
     x, y, yaw = pose
     c, s = math.cos(yaw), math.sin(yaw)
-    return (x + c * delta[0] - s * delta[1], y + s * delta[0] + c * delta[1], yaw + delta[2])
+    return Pose2(x + c * delta[0] - s * delta[1], y + s * delta[0] + c * delta[1], yaw + delta[2])
 
 
 def _corridor_points(rng: np.random.Generator, n: int, half_width: float, height: float,
@@ -117,7 +116,7 @@ def _corridor_points(rng: np.random.Generator, n: int, half_width: float, height
 
 
 def _view(rng: np.random.Generator, camera: CameraModel, mount: CameraMountConfig,
-          points_w: FloatArray, pose_w: Pose2D, noise_px: float) -> SceneView:
+          points_w: FloatArray, pose_w: Pose2, noise_px: float) -> SceneView:
     T = camera_pose_world(pose_w, mount)
     points_c = (points_w - T[:3, 3]) @ T[:3, :3]
     pixels, valid = camera.project(points_c)
@@ -144,15 +143,15 @@ def _matches(rng: np.random.Generator, view: SceneView, key: SceneView,
                         outlier=outlier)
 
 
-def _odometry(rng: np.random.Generator, start: Pose2D, true_from: Pose2D, true_to: Pose2D,
-              scale_sigma: float, yaw_sigma_rad: float) -> Pose2D:
+def _odometry(rng: np.random.Generator, start: Pose2, true_from: Pose2, true_to: Pose2,
+              scale_sigma: float, yaw_sigma_rad: float) -> Pose2:
     """``start`` composed with the true relative motion, its length and heading perturbed."""
     dx, dy = true_to[0] - true_from[0], true_to[1] - true_from[1]
     c, s = math.cos(true_from[2]), math.sin(true_from[2])
     forward, left = c * dx + s * dy, -s * dx + c * dy
     scale = 1.0 + rng.normal(0.0, scale_sigma)
     dyaw = true_to[2] - true_from[2] + rng.normal(0.0, yaw_sigma_rad)
-    return compose(start, (scale * forward, scale * left, dyaw))
+    return compose(start, Pose2(scale * forward, scale * left, dyaw))
 
 
 def corridor_scene(
@@ -199,22 +198,22 @@ def corridor_scene(
     half_width = 0.5 * float(rng.uniform(*width_m))
     wobble_m, wobble_rad = teach_wobble[0], math.radians(teach_wobble[1])
 
-    def key_pose(x: float) -> Pose2D:
-        return (x, float(rng.uniform(-wobble_m, wobble_m)),
-                float(rng.uniform(-wobble_rad, wobble_rad)))
+    def key_pose(x: float) -> Pose2:
+        return Pose2(x, float(rng.uniform(-wobble_m, wobble_m)),
+                     float(rng.uniform(-wobble_rad, wobble_rad)))
 
     pose_previous, pose_next, pose_after = key_pose(-d), key_pose(0.0), key_pose(d)
     s = float(rng.uniform(-d, 0.0))
     y = float(rng.uniform(-max_offset_m, max_offset_m))
     theta = float(rng.uniform(-math.radians(max_yaw_deg), math.radians(max_yaw_deg)))
-    pose_current = compose(pose_next, (s, y, theta))
+    pose_current = compose(pose_next, Pose2(s, y, theta))
     points_w = _corridor_points(rng, n_points, half_width, height_m, (-d - 6.0, d + 8.0))
     previous, next_, after, current = (
         _view(rng, camera, mount, points_w, pose, noise_px)
         for pose in (pose_previous, pose_next, pose_after, pose_current)
     )
     yaw_sigma = math.radians(odometry_yaw_sigma_deg)
-    odom_previous: Pose2D = (0.0, 0.0, 0.0)
+    odom_previous = Pose2(0.0, 0.0, 0.0)
     odom_next = _odometry(rng, odom_previous, pose_previous, pose_next, odometry_scale_sigma,
                           yaw_sigma)
     odom_after = _odometry(rng, odom_next, pose_next, pose_after, odometry_scale_sigma, yaw_sigma)

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from robot.control_law import Twist, gains, settling_distance_m, steer
 from shared.config import ControlConfig
-from shared.errors import DegenerateGeometryError, InputError
+from shared.errors import DegenerateGeometryError
 
 FRAME_RATE_HZ = 15.0
 DT_S = 1.0 / FRAME_RATE_HZ
@@ -124,7 +124,7 @@ class TestSteer:
 
     @pytest.mark.parametrize("bad", [math.nan, math.inf])
     def test_non_finite_input(self, bad: float) -> None:
-        with pytest.raises(InputError, match="theta_rad must be finite"):
+        with pytest.raises(ValueError, match="theta_rad must be finite"):
             steer(0.0, bad, ControlConfig())
 
 
@@ -197,7 +197,7 @@ class TestSettlingDistance:
         assert settling_distance_m(1.0, -0.3, 0.05) == settling_distance_m(1.0, 0.3, 0.05)
 
     def test_bad_arguments(self) -> None:
-        with pytest.raises(InputError, match="pole_1_m must be > 0"):
+        with pytest.raises(ValueError, match="pole_1_m must be > 0"):
             settling_distance_m(0.0, 0.3, 0.05)
-        with pytest.raises(InputError, match="tolerance_m must be > 0"):
+        with pytest.raises(ValueError, match="tolerance_m must be > 0"):
             settling_distance_m(1.0, 0.3, 0.0)

@@ -10,7 +10,6 @@ import pytest
 from robot.estimator import Estimator, EstimatorLost
 from shared.clock import ManualClock, ns_from_s
 from shared.config import EstimatorConfig
-from shared.errors import InputError
 
 FRAME_NS = 66_666_667  # 15 frames/s
 CONFIG = EstimatorConfig()
@@ -65,7 +64,7 @@ class TestPredict:
         assert estimator.estimate.theta_rad == pytest.approx(-math.pi + 0.01)
 
     def test_non_finite_odometry(self, manual_clock: ManualClock) -> None:
-        with pytest.raises(InputError, match="ds_m must be finite"):
+        with pytest.raises(ValueError, match="ds_m must be finite"):
             started(manual_clock).predict(math.nan, 0.0)
 
 
@@ -122,7 +121,7 @@ class TestUpdate:
             estimator.update(5, 0.0, 0.0, 0.0)
 
     def test_non_finite_estimate(self, manual_clock: ManualClock) -> None:
-        with pytest.raises(InputError, match="y_m must be finite"):
+        with pytest.raises(ValueError, match="y_m must be finite"):
             Estimator(CONFIG, 0).update(0, 0.0, math.inf, 0.0)
 
 

@@ -21,7 +21,6 @@ from robot.vision.frame_state import FrameState
 from robot.vision.image_errors import ImageErrors
 from robot.vision.path_state import PathState
 from shared.config import VmnavConfig
-from shared.errors import InputError
 from shared.interfaces import BaseState
 from tests.shared.memory.builders import loop_memory
 
@@ -50,7 +49,7 @@ class TestTargetsFromRoute:
         assert targets_from_route(memory, [3, 4, 5]) == (4, 5)
 
     def test_an_empty_route_is_an_error(self, memory) -> None:
-        with pytest.raises(InputError, match="does not connect start and goal"):
+        with pytest.raises(ValueError, match="does not connect start and goal"):
             targets_from_route(memory, [])
 
 

@@ -14,6 +14,7 @@ import dataclasses
 import io
 import itertools
 import json
+import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,10 +31,11 @@ from shared.errors import InputError
 from shared.interfaces import BaseState, MobileBase
 from shared.logs.series import log_series
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
+from shared.pose import Pose2
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 from tests.tools.short_routes import teach_east_a
 from tools.cli import main
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
@@ -74,7 +76,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     camera = memory.camera
 
     sim = Simulation(world, sim_config)
-    sim.place_robot(Pose2(2.05, 10.05, 3.0))
+    sim.place_robot(Pose2(2.05, 10.05, math.radians(3.0)))
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, CONFIG.pioneer, np.random.default_rng(7))
     frames = RememberingFrames(SimFrameSource(sim, camera, clock))
@@ -219,7 +221,7 @@ class TestCore:
     def test_the_replay_base_reports_logged_states_and_records_commands(self) -> None:
         base = ReplayBase()
         assert isinstance(base, MobileBase)
-        with pytest.raises(InputError, match="before any was logged"):
+        with pytest.raises(RuntimeError, match="before any was logged"):
             base.state()
         state = ConstantBase().state()
         base.report(state)

@@ -26,10 +26,11 @@ from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
+from shared.pose import Pose2
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 from tests.tools.short_routes import teach_east_a
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
@@ -131,7 +132,7 @@ class TestTeleoperation:
 class TestMissions:
     def test_an_auto_mission_reaches_its_goals_in_order_then_holds(
             self, taught, memory_dir) -> None:
-        robot = SimRobot(taught[0], memory_dir, Pose2(2.0, 10.1, 5.0))
+        robot = SimRobot(taught[0], memory_dir, Pose2(2.0, 10.1, math.radians(5.0)))
         ids = robot.runtime.memory.paths[0].keyframe_ids
         goals = (Goal(ids[len(ids) // 2]), Goal(ids[-1]))
         assert robot.runtime.validate_goals(goals) is None

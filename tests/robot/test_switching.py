@@ -16,7 +16,6 @@ from robot.switching import (
     observe_frame,
 )
 from shared.config import SwitchingConfig
-from shared.errors import InputError
 
 CONFIG = SwitchingConfig()  # 20 px, s >= 0 m, 2 frames
 
@@ -87,7 +86,7 @@ class TestObserveFrame:
 
     def test_finished_takes_no_more_frames(self) -> None:
         state, _ = run(SwitchState(route_length=1), [(5.0, None), (5.0, None)])
-        with pytest.raises(InputError, match=r"last key image \(index 0\) was already reached"):
+        with pytest.raises(RuntimeError, match=r"last key image \(index 0\) was already reached"):
             observe_frame(state, FrameEvidence(9, 5.0, None), CONFIG)
 
     @given(frames=st.lists(st.tuples(
@@ -122,5 +121,5 @@ class TestSwitchState:
         (3, -1, "next_index must be in"),
     ])
     def test_bad_values(self, length: int, index: int, message: str) -> None:
-        with pytest.raises(InputError, match=message):
+        with pytest.raises(ValueError, match=message):
             SwitchState(route_length=length, next_index=index)

@@ -9,7 +9,6 @@ import numpy.typing as npt
 import pytest
 
 from shared.clock import ManualClock
-from shared.errors import InputError
 from shared.interfaces import BaseState, Clock, FrameSource, MobileBase
 
 
@@ -54,7 +53,7 @@ class TestBaseState:
         ({"odom_distance_m": -0.1}, "odom_distance_m must be finite and >= 0"),
     ])
     def test_bad_values(self, changes: dict[str, object], message: str) -> None:
-        with pytest.raises(InputError, match=message):
+        with pytest.raises(ValueError, match=message):
             base_state(**changes)
 
 

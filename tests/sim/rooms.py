@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from sim.world import LandmarkDensity, Pose2, Wall, World
+from shared.pose import Pose2
+from sim.world import LandmarkDensity, Wall, World
 
 
 def box_room(

@@ -8,10 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared.config import BodyConfig, OdometryConfig, SimConfig
-from shared.errors import InputError
+from shared.pose import Pose2
 from sim.body import ramp
 from sim.simulation import Simulation
-from sim.world import Pose2, World
+from sim.world import World
 from tests.sim.rooms import box_room
 
 DT_S = 0.01
@@ -84,7 +84,7 @@ class TestLimits:
         assert w.max() == pytest.approx(cfg.max_omega_rad_s)
 
     def test_non_finite_command_is_refused(self) -> None:
-        with pytest.raises(InputError, match="finite"):
+        with pytest.raises(ValueError, match="finite"):
             make_sim().body.command(math.nan, 0.0)
 
     def test_unicycle_motion_has_no_lateral_slide(self) -> None:
@@ -137,7 +137,7 @@ class TestWalls:
         assert sim.body.bumped_rear and not sim.body.bumped_front
 
 
-START = Pose2(10.0, 10.0, 30.0)
+START = Pose2(10.0, 10.0, math.radians(30.0))
 
 
 class TestOdometry:

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared.errors import ShapeError
+from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
 from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
 from sim.landmarks import (
@@ -20,7 +21,7 @@ from sim.landmarks import (
     generate_landmarks,
     make_textures,
 )
-from sim.world import Box, Ceiling, LandmarkDensity, Pose2, Wall, World, load_world
+from sim.world import Box, Ceiling, LandmarkDensity, Wall, World, load_world
 from tests.sim.rooms import box_room
 
 GAP_M = 0.03  # the documented least plain gap between neighbouring patches

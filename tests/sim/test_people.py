@@ -5,11 +5,12 @@ import pytest
 
 from shared.config import PeopleConfig, SimConfig
 from shared.errors import ConfigError
+from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.people import SIDESTEP_MARGIN_M
 from sim.simulation import Simulation
-from sim.world import Pose2, World, load_world
+from sim.world import World, load_world
 from tests.sim.rooms import box_room
 
 

@@ -9,10 +9,11 @@ import pytest
 
 from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig, PeopleConfig, RenderConfig, SimConfig
+from shared.pose import Pose2
 from sim._geometry import segments_cross
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 
 
 def make(

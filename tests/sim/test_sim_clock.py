@@ -4,9 +4,9 @@ import pytest
 
 from shared.clock import Clock
 from shared.config import SimConfig
+from shared.pose import Pose2
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
-from sim.world import Pose2
 from tests.sim.rooms import box_room
 
 

@@ -8,8 +8,9 @@ import pytest
 
 from shared.config import OdometryConfig, PeopleConfig, SimConfig
 from shared.errors import ConfigError
+from shared.pose import Pose2
 from sim.simulation import OCCLUDER_FILTER, Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 
 
 @pytest.fixture(scope="module")
@@ -100,7 +101,7 @@ class TestPlaceRobot:
     def test_place_restarts_odometry_at_the_new_pose(self, lab) -> None:
         sim = Simulation(lab, SimConfig(landmark_density_scale=0.0, odometry=OdometryConfig()))
         trajectory(sim, 1.0)
-        sim.place_robot(Pose2(20.0, 10.0, 180.0))
+        sim.place_robot(Pose2(20.0, 10.0, math.radians(180.0)))
         assert sim.body.pose_w == pytest.approx((20.0, 10.0, -math.pi))
         assert sim.body.odom_pose == (0.0, 0.0, 0.0) and sim.body.odom_distance_m == 0.0
 

@@ -13,13 +13,14 @@ from hypothesis import strategies as st
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
 from shared.config import CameraMountConfig, RenderConfig, SimConfig
-from shared.errors import InputError, ShapeError
+from shared.errors import ShapeError
+from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.surfaces import SurfaceShader
-from sim.world import Box, Ceiling, Pose2, Wall, World, load_world
+from sim.world import Box, Ceiling, Wall, World, load_world
 
 CAMERA = CameraModel.default()
 H_CAM = 0.3
@@ -194,11 +195,11 @@ class TestBadInput:
         ],
     )
     def test_out_of_range(self, name: str, value: float) -> None:
-        with pytest.raises(InputError, match=name):
+        with pytest.raises(ValueError, match=name):
             SurfaceShader(room(), CAMERA, np.eye(3), H_CAM, **{name: value})
 
     def test_camera_height(self) -> None:
-        with pytest.raises(InputError, match="camera_height_m"):
+        with pytest.raises(ValueError, match="camera_height_m"):
             SurfaceShader(room(), CAMERA, np.eye(3), 0.0)
 
 

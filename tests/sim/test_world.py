@@ -114,7 +114,7 @@ class TestBuiltinWorlds:
 
     def test_route_start_pose_faces_the_second_waypoint(self) -> None:
         route = Route("r", ((1.0, 1.0), (1.0, 3.0)))
-        assert route.start_pose() == Pose2(1.0, 1.0, 90.0)
+        assert route.start_pose() == Pose2(1.0, 1.0, math.radians(90.0))
 
 
 class TestLoadWorld:
@@ -123,6 +123,16 @@ class TestLoadWorld:
         assert world.name == "tiny"
         assert world.furniture[0] == Box((5.0, 3.3), (1.2, 0.6), 0.0, 0.75)
         assert world.routes[0].waypoints == ((1.0, 2.0), (5.0, 2.0))
+
+    def test_the_start_heading_in_degrees_becomes_radians(self, tmp_path: Path) -> None:
+        text = GOOD.replace("yaw_deg = 0.0 }", "yaw_deg = 30.0 }", 1)
+        world = load_world(write(tmp_path, text))
+        assert world.start == Pose2(1.0, 2.0, math.radians(30.0))
+
+    def test_a_start_table_with_an_unknown_key_is_refused(self, tmp_path: Path) -> None:
+        path = write(tmp_path, GOOD.replace("yaw_deg = 0.0 }", "yaw_rad = 0.0 }", 1))
+        with pytest.raises(ConfigError, match="start: unknown key 'yaw_rad'"):
+            load_world(path)
 
     def test_patch_sizes_per_element_and_default(self, tmp_path: Path) -> None:
         text = (
@@ -277,5 +287,5 @@ class TestWorldDataclass:
             Ceiling((0.0, 0.0), (1.0, 1.0), 2.0, patch_size_m=0.0)
         with pytest.raises(ValueError, match=re.escape(refused + "-0.1")):
             LandmarkDensity(patch_size_m=-0.1)
-        with pytest.raises(ValueError, match="finite"):
-            Pose2(math.inf, 0.0)
+        with pytest.raises(ValueError, match="start pose must be finite"):
+            box_room((4.0, 3.0), Pose2(1.0, 1.0, math.nan))

@@ -19,9 +19,10 @@ import pytest
 
 from shared.clock import WallClock
 from shared.config import SimConfig
+from shared.pose import Pose2
 from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 from tools.cli import main
 
 ODOMETRY = re.compile(r"t +2\.0 s: odometry x ([-+.\d]+) m, y ([-+.\d]+) m, yaw ([-+.\d]+) deg, "

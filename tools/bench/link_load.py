@@ -49,6 +49,7 @@ from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
+from shared.pose import Pose2
 from tools.bench.link_vehicles import AppContext
 
 #: Distance between neighbouring key images on the ring, m.
@@ -251,15 +252,15 @@ class LinkLoadApp:
         angle = 2 * math.pi * (now_ns % ERROR_PERIOD_NS) / ERROR_PERIOD_NS + self._phase
         return Y_AMPLITUDE_M * math.sin(angle), THETA_AMPLITUDE_RAD * math.cos(angle)
 
-    def _pose(self, now_ns: int) -> tuple[float, float, float]:
-        """(x_m, y_m, yaw_rad) in the odometry frame: on the ring, offset by the errors
-        while following."""
+    def _pose(self, now_ns: int) -> Pose2:
+        """The pose in the odometry frame: on the ring, offset by the errors while following."""
         phi = self._arc_m / self._radius_m
         x_m, y_m = self._radius_m * math.sin(phi), self._radius_m * (1 - math.cos(phi))
         if self._state is not MissionState.FOLLOWING:
-            return x_m, y_m, phi
+            return Pose2(x_m, y_m, phi)
         lateral_m, theta_rad = self._errors(now_ns)
-        return x_m - lateral_m * math.sin(phi), y_m + lateral_m * math.cos(phi), phi + theta_rad
+        return Pose2(x_m - lateral_m * math.sin(phi), y_m + lateral_m * math.cos(phi),
+                     phi + theta_rad)
 
     def _servo(self, now_ns: int) -> ServoTelemetry:
         passed = int(self._arc_m // KEY_SPACING_M)

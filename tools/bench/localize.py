@@ -42,13 +42,11 @@ from shared.camera_model import CameraModel
 from shared.config import SimConfig, VmnavConfig
 from shared.errors import ConfigError
 from shared.memory import VisualMemory
+from shared.pose import Pose2
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
-from sim.world import Pose2, World, load_world
+from sim.world import World, load_world
 from tools.harness.teach import TaughtRoute, find_route, teach_in_sim
-
-Pose = tuple[float, float, float]
-"""(x_m, y_m, yaw_rad) on the floor plan."""
 
 #: Key images heading more than this away from a query are never its "nearest".
 _MAX_HEADING_GAP_RAD = math.radians(45.0)
@@ -67,7 +65,7 @@ class TaughtMemory:
     """
 
     memory: VisualMemory
-    true_poses: dict[int, Pose]
+    true_poses: dict[int, Pose2]
     routes: tuple[TaughtRoute, ...]
 
 
@@ -83,7 +81,7 @@ class QueryOutcome:
         time_ms: time of the localization, ms.
     """
 
-    pose: Pose
+    pose: Pose2
     nearest_id: int
     result: Localization
     correct: bool
@@ -103,7 +101,7 @@ def teach_memory(
         InputError: an unknown route, or a drive that does not reach its end.
     """
     memory = VisualMemory(camera)
-    true_poses: dict[int, Pose] = {}
+    true_poses: dict[int, Pose2] = {}
     routes = []
     for name in route_names:
         taught = teach_in_sim(world, find_route(world, name), config, sim_config, camera)
@@ -115,7 +113,7 @@ def teach_memory(
 
 def sample_query_pose(
     taught: TaughtMemory, rng: np.random.Generator, max_offset_m: float, max_yaw_deg: float
-) -> Pose:
+) -> Pose2:
     """A pose near a taught path: a random point of a random path (uniform in length),
     shifted sideways by U(-max_offset_m, max_offset_m) and turned by U(-max_yaw_deg, max_yaw_deg).
     """
@@ -133,10 +131,11 @@ def sample_query_pose(
     yaw = float(a[2] + t * _wrap(b[2] - a[2]))
     offset = rng.uniform(-max_offset_m, max_offset_m)
     turn = math.radians(rng.uniform(-max_yaw_deg, max_yaw_deg))
-    return float(x - offset * math.sin(yaw)), float(y + offset * math.cos(yaw)), _wrap(yaw + turn)
+    return Pose2(float(x - offset * math.sin(yaw)), float(y + offset * math.cos(yaw)),
+                 _wrap(yaw + turn))
 
 
-def nearest_keyframe(taught: TaughtMemory, pose: Pose) -> int:
+def nearest_keyframe(taught: TaughtMemory, pose: Pose2) -> int:
     """The key image nearest to ``pose`` among those heading within 45 degrees of it
     (among all if none does)."""
     ids = np.array(sorted(taught.true_poses))
@@ -156,7 +155,7 @@ def accepted_answers(memory: VisualMemory, keyframe_id: int) -> set[int]:
     return set(ids[max(0, keyframe.index - 1) : keyframe.index + 2])
 
 
-def acceptable_answers(taught: TaughtMemory, pose: Pose) -> set[int]:
+def acceptable_answers(taught: TaughtMemory, pose: Pose2) -> set[int]:
     """The right answers for a query at ``pose``.
 
     The nearest key image and its path neighbours (:func:`accepted_answers`), plus
@@ -211,11 +210,11 @@ def _place_near_path(
     rng: np.random.Generator,
     max_offset_m: float,
     max_yaw_deg: float,
-) -> Pose:
+) -> Pose2:
     for _ in range(_PLACEMENT_TRIES):
         pose = sample_query_pose(taught, rng, max_offset_m, max_yaw_deg)
         try:
-            sim.place_robot(Pose2(pose[0], pose[1], math.degrees(pose[2])))
+            sim.place_robot(pose)
         except ConfigError:
             continue
         return pose
@@ -349,9 +348,9 @@ def measure_localization(
 
 
 def _render_at(
-    sim: Simulation, renderer: FisheyeRenderer, pose: Pose
+    sim: Simulation, renderer: FisheyeRenderer, pose: Pose2
 ) -> npt.NDArray[np.uint8]:
-    sim.place_robot(Pose2(pose[0], pose[1], math.degrees(pose[2])))
+    sim.place_robot(pose)
     return renderer.render(sim).image
 
 

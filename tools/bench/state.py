@@ -33,6 +33,7 @@ from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.path_state import PathState, state_from_two_views, state_from_views
 from shared.camera_mount import rotation_level_cam
 from shared.config import PathStateConfig
+from shared.pose import Pose2
 from sim.synthetic.corridor_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 
 #: Errors larger than this count as gross failures, m and degrees.
@@ -110,7 +111,7 @@ def _two_view(s: CorridorScene, distance_m: float, rng: np.random.Generator,
 
 def _centre_distance(s: CorridorScene) -> float:
     """True distance between the current and next optical centres, m."""
-    def centre(pose: tuple[float, float, float]) -> np.ndarray:
+    def centre(pose: Pose2) -> np.ndarray:
         x, y, yaw = pose
         return np.array([x + s.mount.x_m * math.cos(yaw) - s.mount.y_m * math.sin(yaw),
                          y + s.mount.x_m * math.sin(yaw) + s.mount.y_m * math.cos(yaw)])

@@ -62,11 +62,11 @@ from robot.vision.lens_mask import lens_mask
 from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig, PathStateConfig, SimConfig, VmnavConfig
 from shared.errors import ConfigError, DegenerateGeometryError
+from shared.pose import Pose2
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
-from sim.world import Pose2, World, load_world
+from sim.world import World, load_world
 from tools.bench.localize import (
-    Pose,
     TaughtMemory,
     key_images_per_metre,
     measure_localization,
@@ -458,7 +458,7 @@ def _true_spacings(route: TaughtRoute) -> np.ndarray:
 
 def _place_between_key_images(
     taught: TaughtMemory, sim: Simulation, rng: np.random.Generator, plan: VisionBenchPlan
-) -> tuple[TaughtRoute, int, Pose, int]:
+) -> tuple[TaughtRoute, int, Pose2, int]:
     """Draw a free query pose between two key images (module docstring) and place the robot.
 
     Returns:
@@ -479,10 +479,10 @@ def _place_between_key_images(
         offset = rng.uniform(-plan.max_offset_m, plan.max_offset_m)
         yaw = wrap_angle(direction + math.radians(rng.uniform(-plan.max_yaw_deg,
                                                               plan.max_yaw_deg)))
-        pose = (xa + t * (xb - xa) - offset * math.sin(direction),
-                ya + t * (yb - ya) + offset * math.cos(direction), yaw)
+        pose = Pose2(xa + t * (xb - xa) - offset * math.sin(direction),
+                     ya + t * (yb - ya) + offset * math.cos(direction), yaw)
         try:
-            sim.place_robot(Pose2(pose[0], pose[1], math.degrees(yaw)))
+            sim.place_robot(pose)
         except ConfigError:
             continue
         return route, k, pose, tries

@@ -22,7 +22,8 @@ import numpy.typing as npt
 from robot.control_law import settling_distance_m
 from robot.mission import MissionState
 from shared.config import ControlConfig
-from tools.harness.demo import START_OFFSET_M, RepeatRun, TaughtMemory, TruePose
+from shared.pose import Pose2
+from tools.harness.demo import START_OFFSET_M, RepeatRun, TaughtMemory
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -103,7 +104,7 @@ def following_errors(run: RepeatRun, taught: TaughtMemory) -> TrackErrors | None
     The distance runs on across plans (the true distance driven while following).
     """
     moving = (MissionState.FOLLOWING, MissionState.ARRIVED)
-    blocks: list[tuple[tuple[int, ...], list[TruePose]]] = []
+    blocks: list[tuple[tuple[int, ...], list[Pose2]]] = []
     for sample in run.samples:
         record = sample.record
         if record.state not in moving or len(record.route) < 2:

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 from ground.station import GroundError
 from shared.errors import InputError
+from shared.pose import Pose2
 
 if TYPE_CHECKING:
     from robot.field_log import FieldLog
@@ -67,8 +68,6 @@ _OUTCOME_GRACE_S = 5.0
 _TIME_MARGIN = 3.0
 _EXTRA_S = 30.0
 
-TruePose = tuple[float, float, float]
-
 
 @dataclass(frozen=True, eq=False)
 class TaughtMemory:
@@ -82,7 +81,7 @@ class TaughtMemory:
     """
 
     memory: VisualMemory
-    true_poses: dict[int, TruePose]
+    true_poses: dict[int, Pose2]
     path_ids: tuple[int, ...]
     reused: bool
 
@@ -97,7 +96,7 @@ class CycleSample:
     """
 
     record: CycleRecord
-    pose_w: TruePose
+    pose_w: Pose2
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,7 +104,7 @@ class RepeatRun:
     """A repeat: the mission's result, every cycle, and what the ground station saw."""
 
     result: MissionResult
-    start_pose: TruePose
+    start_pose: Pose2
     goal_id: int
     samples: tuple[CycleSample, ...]
     sim_time_s: float
@@ -149,11 +148,11 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
                                         "another --out")
         return TaughtMemory(
             memory=read_memory(directory),
-            true_poses={int(k): (v[0], v[1], v[2]) for k, v in stored["true_poses"].items()},
+            true_poses={int(k): Pose2(*v) for k, v in stored["true_poses"].items()},
             path_ids=tuple(stored["path_ids"]), reused=True)
     teach_config = replace(sim_config, people=replace(sim_config.people, count=0))
     memory = VisualMemory(camera)
-    true_poses: dict[int, TruePose] = {}
+    true_poses: dict[int, Pose2] = {}
     path_ids: list[int] = []
     for route in wanted:
         taught = teach_in_sim(world, route, config, teach_config, camera)
@@ -199,12 +198,12 @@ def default_goal(taught: TaughtMemory) -> int:
     return ids[len(ids) // 2]
 
 
-def start_pose(taught: TaughtMemory) -> TruePose:
+def start_pose(taught: TaughtMemory) -> Pose2:
     """Off the first path at its key image ``START_KEY_INDEX``: shifted left and turned."""
     ids = taught.memory.paths[taught.path_ids[0]].keyframe_ids
     x, y, yaw = taught.true_poses[ids[min(START_KEY_INDEX, len(ids) - 1)]]
-    return (x - START_OFFSET_M * math.sin(yaw), y + START_OFFSET_M * math.cos(yaw),
-            yaw + math.radians(START_OFFSET_DEG))
+    return Pose2(x - START_OFFSET_M * math.sin(yaw), y + START_OFFSET_M * math.cos(yaw),
+                 yaw + math.radians(START_OFFSET_DEG))
 
 
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
@@ -244,7 +243,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
     from sim.simulation import Simulation
-    from sim.world import Pose2, load_world
+    from sim.world import load_world
     from tools.harness.ground_dispatch import GroundDispatch
     from tools.harness.lockstep_pioneer import lockstep_pioneer
 
@@ -256,7 +255,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     sim = Simulation(load_world(sim_config.world), sim_config)
     sim.landmarks = drop_landmarks(sim.landmarks, landmark_dropout, rng)
     start = start_pose(taught)
-    sim.place_robot(Pose2(start[0], start[1], math.degrees(start[2])))
+    sim.place_robot(start)
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)

@@ -19,6 +19,7 @@ from robot.field_log import FieldLog
 from shared.config import CameraMountConfig, LogConfig
 from shared.logs import topics
 from shared.logs.messages import FrameTransform
+from shared.pose import Pose2
 
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
@@ -45,7 +46,7 @@ class DemoLog(FieldLog):
     def __init__(self, config: LogConfig, mount: CameraMountConfig,
                  run: Mapping[str, str]) -> None:
         super().__init__(config, NAME, mount, run)
-        self._world_odom: tuple[float, float, float] | None = None
+        self._world_odom: Pose2 | None = None
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
         """Log the truth of one mission cycle (the ``on_cycle`` of
@@ -58,14 +59,14 @@ class DemoLog(FieldLog):
             FrameTransform.planar(FRAME_WORLD, FRAME_BASE_TRUTH, *sample.pose_w)], TRUTH_TF)
 
 
-def world_odom(pose_w: tuple[float, float, float],
-               odom: tuple[float, float, float]) -> tuple[float, float, float]:
-    """The odometry frame in the world, (x_m, y_m, yaw_rad): T_world_base T_odom_base^-1.
+def world_odom(pose_w: Pose2, odom: Pose2) -> Pose2:
+    """The odometry frame's pose in the world: T_world_base T_odom_base^-1.
 
     Args:
-        pose_w: the true pose of the robot, (x_m, y_m, yaw_rad) in the world.
-        odom: its odometry pose at the same time, (x_m, y_m, yaw_rad) in ``odom``.
+        pose_w: the true pose of the robot in the world.
+        odom: its odometry pose at the same time, in ``odom``.
     """
     yaw = pose_w[2] - odom[2]
     c, s = math.cos(yaw), math.sin(yaw)
-    return (pose_w[0] - (c * odom[0] - s * odom[1]), pose_w[1] - (s * odom[0] + c * odom[1]), yaw)
+    return Pose2(pose_w[0] - (c * odom[0] - s * odom[1]), pose_w[1] - (s * odom[0] + c * odom[1]),
+                 yaw)

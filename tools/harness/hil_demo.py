@@ -54,10 +54,11 @@ from shared.logs import topics
 from shared.logs.reader import read_messages
 from shared.mavlink.mission.goal import Goal
 from shared.memory import read_memory
+from shared.pose import Pose2
 from sim.teach_driver import TeachDriver
 from sim.world import load_world
 from tools.figures.demo_report import SETTLED_M, track_errors, track_metrics
-from tools.harness.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M, TruePose
+from tools.harness.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M
 from tools.harness.teach import DRIVER_STREAM, find_route
 from tools.harness.vmnav_process import VmnavProcess
 
@@ -83,13 +84,13 @@ class SimControl:
     def __init__(self, url: str) -> None:
         self.url = url
 
-    def truth(self) -> tuple[int, TruePose]:
+    def truth(self) -> tuple[int, Pose2]:
         """(simulation time ns, true pose)."""
         data = self._call("GET", "/truth", None)
         x, y, yaw = data["pose_w"]
-        return int(data["t_ns"]), (x, y, yaw)
+        return int(data["t_ns"]), Pose2(x, y, yaw)
 
-    def place(self, pose_w: TruePose) -> None:
+    def place(self, pose_w: Pose2) -> None:
         """Carry the robot to ``pose_w``.
 
         Raises:
@@ -184,8 +185,7 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         aria = processes.wait_for("sim", r"ARIA on tcp (\S+)").group(1)
         camera = processes.wait_for("sim", r"camera on (\S+/stream\.mjpg)").group(1)
         sim = SimControl(processes.wait_for("sim", r"control on (\S+) ").group(1))
-        start = route.start_pose()
-        sim.place((start.x_m, start.y_m, math.radians(start.yaw_deg)))
+        sim.place(route.start_pose())
         station = stack.enter_context(GroundStation.open("udpin:127.0.0.1:0", clock))
         ground_log = GroundLog(LogConfig(output_dir=str(logs)), clock,
                                time.time_ns() - clock.now_ns())
@@ -276,15 +276,16 @@ def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: Vmnav
     return Drive(np.array(times), np.array(poses))
 
 
-def offset_start(taught: Drive, distance_m: float) -> TruePose:
+def offset_start(taught: Drive, distance_m: float) -> Pose2:
     """The lock-step demo's start: the taught drive's pose ``distance_m`` along it, moved
     ``START_OFFSET_M`` to its left and turned ``START_OFFSET_DEG``."""
     steps = np.hypot(*np.diff(taught.poses_w[:, :2], axis=0).T)
     along = np.concatenate([[0.0], np.cumsum(steps)])
     i = int(np.searchsorted(along, distance_m).clip(0, len(along) - 1))
     x, y, yaw = taught.poses_w[i]
-    return (float(x - START_OFFSET_M * math.sin(yaw)), float(y + START_OFFSET_M * math.cos(yaw)),
-            float(yaw + math.radians(START_OFFSET_DEG)))
+    return Pose2(float(x - START_OFFSET_M * math.sin(yaw)),
+                 float(y + START_OFFSET_M * math.cos(yaw)),
+                 float(yaw + math.radians(START_OFFSET_DEG)))
 
 
 def follow(station: GroundStation, sim: SimControl, goal: int,

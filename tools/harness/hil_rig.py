@@ -102,7 +102,7 @@ def teach(folder: Path) -> Taught:
     memory = read_memory(folder / "memory")
     (path,) = memory.paths.values()
     start = load_world(world_file).start
-    yaw = math.radians(start.yaw_deg)
+    yaw = start.yaw_rad
     goal_xy = {}
     for key in path.keyframe_ids:
         x, y, _ = memory.keyframes[key].odom_pose  # the teach odometry began at the start

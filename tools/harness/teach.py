@@ -18,9 +18,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError
+from shared.pose import Pose2
 
 if TYPE_CHECKING:
-    from robot.teach import OdomPose, SelectedKeyImage
+    from robot.teach import SelectedKeyImage
     from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
     from shared.config import SimConfig, VmnavConfig
@@ -34,7 +35,6 @@ _DURATION_MARGIN = 3.0
 _DURATION_EXTRA_S = 30.0
 
 
-
 @dataclass(frozen=True, eq=False)
 class TaughtRoute:
     """A route driven in the simulator and cut into key images.
@@ -42,14 +42,14 @@ class TaughtRoute:
     Attributes:
         route: the route driven.
         key_images: the selected key images in driving order.
-        true_poses: the true robot pose (x_m, y_m, yaw_rad) of each key image (evaluation only).
+        true_poses: the true robot pose of each key image, world frame (evaluation only).
         frames: frames recorded.
         sim_time_s: simulated duration of the drive, s.
     """
 
     route: Route
     key_images: tuple[SelectedKeyImage, ...]
-    true_poses: tuple[tuple[float, float, float], ...]
+    true_poses: tuple[Pose2, ...]
     frames: int
     sim_time_s: float
 
@@ -73,7 +73,7 @@ def teach_in_sim(
     config: VmnavConfig,
     sim_config: SimConfig,
     camera: CameraModel,
-    on_frame: Callable[[int, GreyImage, OdomPose], None] | None = None,
+    on_frame: Callable[[int, GreyImage, Pose2], None] | None = None,
 ) -> TaughtRoute:
     """Drive ``route`` in lock-step and select its key images from frames and odometry.
 
@@ -108,7 +108,7 @@ def teach_in_sim(
     max_duration_s = _DURATION_MARGIN * driver.length_m / slowest_m_s + _DURATION_EXTRA_S
     selector = KeyImageSelector(camera, config.features, config.teach)
     key_images: list[SelectedKeyImage] = []
-    true_poses: list[tuple[float, float, float]] = []
+    true_poses: list[Pose2] = []
     frames = 0
     for frame in record_drive(sim, renderer, driver, round(max_duration_s * 1e9)):
         true_poses.append(frame.pose_w)

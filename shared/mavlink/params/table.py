@@ -80,18 +80,19 @@ class ParamTable:
         specs: at least one parameter, names unique.
 
     Raises:
-        ConfigError: duplicate names, or a default that its own spec refuses.
+        ValueError: no specs, or duplicate names (a bug of the declaration).
+        ConfigError: a default (from the config) that its own spec refuses.
     """
 
     def __init__(self, specs: Sequence[ParamSpec]) -> None:
         if not specs:
-            raise ConfigError("parameters", "at least one parameter must be declared")
+            raise ValueError("at least one parameter must be declared")
         self._specs = tuple(specs)
         self._index = {spec.name: i for i, spec in enumerate(self._specs)}
         if len(self._index) != len(self._specs):
             names = [s.name for s in self._specs]
             duplicate = next(n for n in names if names.count(n) > 1)
-            raise ConfigError("parameters", f"{duplicate} is declared twice")
+            raise ValueError(f"parameter {duplicate} is declared twice")
         for spec in self._specs:
             if (problem := spec.problem(spec.default)) is not None:
                 raise ConfigError("parameters", f"{spec.name}: default {problem}")

@@ -10,7 +10,6 @@ import pytest
 
 from robot.memory import Localizer, keyframe_features, localize
 from shared.config import LocalizeConfig
-from shared.errors import InputError
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
@@ -116,17 +115,17 @@ class TestBadInput:
         ],
     )
     def test_the_query_image(self, localizer: Localizer, image: np.ndarray, message: str) -> None:
-        with pytest.raises(InputError, match=f"query image: .*{message}"):
+        with pytest.raises(ValueError, match=f"query image: .*{message}"):
             localizer.localize(image)
-        with pytest.raises(InputError, match="query image"):
+        with pytest.raises(ValueError, match="query image"):
             localizer.localize_exhaustive(image)
 
     def test_inconsistent_inputs(self, memory: VisualMemory) -> None:
         keyframe = memory.keyframe(0)
-        with pytest.raises(InputError, match="2 key image ids, 1 thumbnails"):
+        with pytest.raises(ValueError, match="2 key image ids, 1 thumbnails"):
             Localizer([0, 1], [keyframe.thumbnail], [], memory.camera, FEATURES, CONFIG)
         features = [keyframe_features(keyframe)]
-        with pytest.raises(InputError, match="thumbnail 0: expected 80x60 uint8, got shape"):
+        with pytest.raises(ValueError, match="thumbnail 0: expected 80x60 uint8, got shape"):
             Localizer([0], [keyframe.image], features, memory.camera, FEATURES, CONFIG)
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from robot.vision.features import Features, detect_harris
 from shared.config import FeatureConfig
-from shared.errors import InputError, ShapeError
+from shared.errors import ShapeError
 from sim.synthetic.image_pairs import texture
 
 CONFIG = FeatureConfig()
@@ -86,9 +86,9 @@ class TestDetectHarris:
                 detect_harris(np.zeros(shape, np.uint8), CONFIG, np.ones((60, 81), bool))
 
     def test_dtype_errors(self) -> None:
-        with pytest.raises(InputError, match="image: expected dtype uint8, got float64"):
+        with pytest.raises(TypeError, match="image: expected dtype uint8, got float64"):
             detect_harris(np.zeros((60, 80)), CONFIG)
-        with pytest.raises(InputError, match="mask: expected dtype bool, got uint8"):
+        with pytest.raises(TypeError, match="mask: expected dtype bool, got uint8"):
             detect_harris(np.zeros((60, 80), np.uint8), CONFIG, np.ones((60, 80), np.uint8))
 
     def test_square_corners_known_answer(self) -> None:

@@ -19,7 +19,7 @@ from robot.vision.frame_state import (
     state_from_frame,
 )
 from shared.config import MatchConfig, PathStateConfig
-from shared.errors import DegenerateGeometryError, InputError, ShapeError
+from shared.errors import DegenerateGeometryError, ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
 
 CONFIG = PathStateConfig()
@@ -95,9 +95,9 @@ class TestKeyCorrespondences:
         f_next, f_prev = features(scene.next, table), features(scene.previous, table)
         with pytest.raises(ShapeError, match="tracks_next_other"):
             key_correspondences(f_next, f_prev, CONFIG.matching, np.zeros(4, np.int64))
-        with pytest.raises(InputError, match=r"column 1 must index the .* other key image"):
+        with pytest.raises(ValueError, match=r"column 1 must index the .* other key image"):
             key_correspondences(f_next, f_prev, CONFIG.matching, [[0, len(f_prev)]])
-        with pytest.raises(InputError, match="column 0 must index"):
+        with pytest.raises(ValueError, match="column 0 must index"):
             key_correspondences(f_next, f_prev, CONFIG.matching, [[-1, 0]])
 
 

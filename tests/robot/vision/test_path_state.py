@@ -18,7 +18,7 @@ from robot.vision.path_state import (
 )
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig, PathStateConfig
-from shared.errors import InputError, ShapeError
+from shared.errors import ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 from tests.robot.vision.test_key_pair import level_pose_world
 
@@ -162,7 +162,7 @@ class TestStateFromTwoViews:
             state_from_two_views(np.eye(3), np.eye(3)[:2], 1.0, CameraMountConfig(), rng, CONFIG)
 
     def test_bad_distance(self, rng: np.random.Generator) -> None:
-        with pytest.raises(InputError, match="distance_m"):
+        with pytest.raises(ValueError, match="distance_m"):
             state_from_two_views(np.eye(3), np.eye(3), -0.1, CameraMountConfig(), rng, CONFIG)
-        with pytest.raises(InputError, match="distance_m"):
+        with pytest.raises(ValueError, match="distance_m"):
             state_from_two_views(np.eye(3), np.eye(3), math.nan, CameraMountConfig(), rng, CONFIG)

@@ -17,10 +17,11 @@ from robot.vision.lens_mask import lens_mask
 from robot.vision.path_state import PathState
 from shared.camera_model import CameraModel
 from shared.config import FeatureConfig, PathStateConfig, SimConfig
+from shared.pose import Pose2
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
-from sim.synthetic.corridor_scene import Pose2D, compose
-from sim.world import Pose2, load_world
+from sim.synthetic.corridor_scene import compose
+from sim.world import load_world
 
 CAMERA = CameraModel.default()
 #: Key images about 0.5 m apart (the teach default gives about two per metre).
@@ -34,8 +35,8 @@ class _Views:
         self.renderer = FisheyeRenderer.for_simulation(self.sim, CAMERA)
         self.mask = lens_mask(CAMERA)
 
-    def features(self, pose: Pose2D) -> Features:
-        self.sim.place_robot(Pose2(pose[0], pose[1], math.degrees(pose[2])))
+    def features(self, pose: Pose2) -> Features:
+        self.sim.place_robot(pose)
         return detect_harris(self.renderer.render(self.sim).image, FeatureConfig(), self.mask)
 
 
@@ -44,7 +45,7 @@ def views() -> _Views:
     return _Views()
 
 
-def _state(views: _Views, previous: Pose2D, next_: Pose2D, current: Pose2D,
+def _state(views: _Views, previous: Pose2, next_: Pose2, current: Pose2,
            rng: np.random.Generator) -> PathState:
     mount, config = views.config.camera, PathStateConfig()
     f_prev, f_next, f_cur = (views.features(p) for p in (previous, next_, current))
@@ -68,7 +69,7 @@ def lab_state_errors(views: _Views, rng: np.random.Generator, segments: tuple[fl
     """
     y_err, theta_err, not_ok = [], [], 0
     for x0 in segments:
-        previous: Pose2D = (x0, 10.0, 0.0)
+        previous = Pose2(x0, 10.0, 0.0)
         next_ = compose(previous, (SPACING_M, 0.0, math.radians(1.0)))
         for _ in range(per_segment):
             s = float(rng.uniform(-SPACING_M, 0.0))

@@ -177,7 +177,7 @@ def test_table_refuses_bad_declarations() -> None:
         ParamSpec("SEVENTEEN_CHARS_X", 0, 0, 1, "")
     with pytest.raises(ValueError, match="choices need min 0 and max 2"):
         ParamSpec("MODE", 0, 0, 1, "", choices=("a", "b", "c"))
-    with pytest.raises(ConfigError, match="A is declared twice"):
+    with pytest.raises(ValueError, match="parameter A is declared twice"):
         ParamTable([ParamSpec("A", 0, 0, 1, ""), ParamSpec("A", 0, 0, 1, "")])
     with pytest.raises(ConfigError, match=r"parameters: B: default 5 is outside \[0, 1\]"):
         ParamTable([ParamSpec("B", 5, 0, 1, "")])

@@ -7,10 +7,11 @@ import numpy as np
 from shared.aria import Command, ConnState, Sip
 from shared.byte_link import pipe_pair
 from shared.config import EmulatorConfig, SimConfig
+from shared.pose import Pose2
 from sim.pioneer.emulator import EmulatedPioneer
 from sim.pioneer.server import PioneerServer
 from sim.simulation import Simulation
-from sim.world import Pose2, World
+from sim.world import World
 from tests.sim.pioneer.aria_host import AriaHost
 from tests.sim.rooms import box_room
 

@@ -8,9 +8,9 @@ import pytest
 
 from shared.aria import Command, SipFlags
 from shared.config import EmulatorConfig
+from shared.pose import Pose2
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.pioneer.p3at import FRONT_BUMPER_SEGMENTS, SONAR_POSES
-from sim.world import Pose2
 from tests.sim.pioneer.rig import Rig
 
 ROOM = (12.0, 6.0)
@@ -19,7 +19,7 @@ MAX_RANGE_M = 5.0
 
 def expected_range(number: int, pose: Pose2) -> float:
     """Range of sonar ``number`` from ``pose`` to the inner faces of the bare room, m."""
-    yaw = math.radians(pose.yaw_deg)
+    yaw = pose.yaw_rad
     sx, sy, heading = SONAR_POSES[number]
     x = pose.x_m + math.cos(yaw) * sx - math.sin(yaw) * sy
     y = pose.y_m + math.sin(yaw) * sx + math.cos(yaw) * sy
@@ -46,7 +46,7 @@ def collect_readings(rig: Rig, seconds: float) -> tuple[dict[int, list[float]], 
 
 
 class TestSonar:
-    @pytest.mark.parametrize("pose", [Pose2(10.0, 3.0, 0.0), Pose2(4.0, 2.0, 35.0)])
+    @pytest.mark.parametrize("pose", [Pose2(10.0, 3.0, 0.0), Pose2(4.0, 2.0, math.radians(35.0))])
     def test_ranges_match_the_walls(self, pose: Pose2) -> None:
         rig = Rig(world=None, start=pose)
         rig.connect()

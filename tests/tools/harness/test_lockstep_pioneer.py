@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from shared.config import PioneerDriverConfig, SimConfig
 from shared.interfaces import MobileBase
+from shared.pose import Pose2
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
-from sim.world import Pose2, load_world
+from sim.world import load_world
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
 
@@ -66,7 +69,8 @@ def test_a_cut_cable_makes_the_base_not_reporting_until_it_reconnects(clock: Sim
 
 
 def test_driving_into_a_wall_bumps_or_stalls(clock: SimClock) -> None:
-    clock.simulation.place_robot(Pose2(8.0, 10.0, 90.0))  # the corridor's north wall ahead
+    # The corridor's north wall ahead.
+    clock.simulation.place_robot(Pose2(8.0, 10.0, math.radians(90.0)))
     base, _ = lockstep_pioneer(clock, PioneerDriverConfig(), np.random.default_rng(0))
     base.command(0.4, 0.0)
     start, seen = clock.now_ns(), False
