@@ -81,6 +81,9 @@ class VehicleTelemetry:
         home_pose: (x_m, y_m, yaw_rad) of the home in the odometry frame (where the
             robot started); None while unknown.
         base_reporting: the mobile base's reports are current (``BaseState.reporting``).
+        run_count: goal runs started so far (each goal of a mission is one run, a photo
+            goal is one): a change tells a new run started, even when its states came
+            and went between two snapshots the endpoint read.
     """
 
     mode: Mode
@@ -97,6 +100,7 @@ class VehicleTelemetry:
     reached_seqs: tuple[int, ...] = ()
     home_pose: tuple[float, float, float] | None = None
     base_reporting: bool = True
+    run_count: int = 0
 
     @property
     def mission_running(self) -> bool:
