@@ -23,40 +23,32 @@ loop thread touches the base, the missions and the memory reference; the link th
 reads immutable snapshots and the memory reference, which teaching replaces whole
 (never mutated in place). A request shows in the telemetry from the next frame on.
 
-Rules (the table of :mod:`robot.modes` holds the decisions; this is what they mean):
+Rules: :mod:`robot.modes` holds the decisions (modes, arming, teaching, goal runs,
+failsafes, photo goals) in one table; what they rest on here:
 
-1. Modes (ArduRover's): the robot starts in HOLD, armed. HOLD: stopped. MANUAL:
-   driven by MANUAL_CONTROL (``x`` forward, ``r`` yaw clockwise, scaled by
-   ``TeleopConfig``); no MANUAL_CONTROL for ``deadman_ns`` stops it. AUTO: the
-   uploaded mission's goals in order, one :class:`~robot.mission_run.MissionRun`
-   each, from the item the ground started; after the last goal, or when a mission
-   run fails or aborts, the robot stops in HOLD. GUIDED: one goal found from a photo
-   (:meth:`goto_image`), then HOLD; GUIDED without a goal is stopped.
-2. Leaving AUTO or GUIDED for another mode (or the GCS failsafe's "hold") aborts the
-   mission run as the operator's abort; AUTO again restarts from the current item.
-3. Disarmed, the robot does not move in any mode; disarming during a mission run
-   needs ``force``; missions and photo goals are refused while disarmed.
-4. Teaching (``teach_start``/``teach_stop``) is refused during a mission run and
-   puts the robot in MANUAL; every frame while teaching goes to a
-   :class:`~robot.teach.KeyImageSelector` with the odometry. Stopping it (in any
-   mode) hands the key images to the worker, which makes them a new path of the
-   memory, joined to the others (:func:`robot.memory.junctions.join_path`) and
-   written atomically to ``memory_dir`` (:func:`robot.worker.store_path`); the
-   runtime then works on the new memory. A drive shorter than
-   ``TeachConfig.min_path_length_m``, or a memory that cannot be written, is
-   reported and nothing stored changes.
+1. MANUAL drives by MANUAL_CONTROL (``x`` forward, ``r`` yaw clockwise, scaled by
+   ``TeleopConfig``); no MANUAL_CONTROL for ``deadman_ns`` stops it.
+2. AUTO runs the uploaded mission's goals in order, one
+   :class:`~robot.mission_run.MissionRun` each (:class:`~robot.goal_runs.GoalRuns`),
+   from the item the ground started; GUIDED, the one goal found from a photo
+   (:meth:`goto_image`). A bumper or stall ends a run (its rule); in MANUAL the
+   operator sees the base state in the telemetry and keeps control.
+3. Disarming during a mission run needs ``force`` (refused on the link thread).
+4. While teaching, every frame goes to a :class:`~robot.teach.KeyImageSelector`
+   with the odometry. Stopping it hands the key images to the worker, which makes
+   them a new path of the memory, joined to the others and written atomically to
+   ``memory_dir`` (:func:`robot.worker.store_path`); the runtime then works on the
+   new memory. A drive shorter than ``TeachConfig.min_path_length_m``, or a memory
+   that cannot be written, is reported and nothing stored changes.
 5. A photo goal is read and localized in the memory by the worker
-   (:func:`robot.worker.find_photo`); found, the robot goes there in GUIDED; not
-   found (or an unreadable photo, or one of another size than the camera's) is a
-   notice and nothing moves.
-6. A bumper or stall ends a mission run (its rule); in MANUAL the operator sees the
-   base state in the telemetry and keeps control.
-7. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
+   (:func:`robot.worker.find_photo`): found, the robot goes there in GUIDED; not found
+   (or an unreadable photo, or one of another size than the camera's) is a notice.
+6. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
    mission run carries on with the next frame.
-8. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
+7. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
    paths saved, photos found or not, refusals decided in the loop, camera stalls, the
    base going quiet and coming back.
-9. The base not reporting (``BaseState.reporting`` False: a cut ARIA cable): the robot
+8. The base not reporting (``BaseState.reporting`` False: a cut ARIA cable): the robot
    stops (its commands may not arrive; the Pioneer's watchdog stops it too), teaching
    skips those frames (the odometry is frozen), and a mission run follows
    ``MissionConfig.base_lost_action``: "hold" ends it (HOLD, as an abort), "continue"
@@ -76,17 +68,13 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from robot.goal_runs import GoalRuns
 from robot.memory.localize import Localizer
-from robot.mission import MissionState
-from robot.mission_run import CycleRecord, MissionResult, MissionRun
-from robot.modes import (
-    Action,
-    Activity,
+from robot.mission_run import CycleRecord, MissionResult
+from robot.mode_events import (
     Arm,
     BaseBack,
     BaseLost,
-    Decision,
-    Drive,
     Event,
     GcsLost,
     GoalGone,
@@ -98,13 +86,11 @@ from robot.modes import (
     StartGoals,
     TeachStart,
     TeachStop,
-    TopState,
-    decide,
-    drive_of,
 )
+from robot.modes import Action, Activity, Decision, Drive, TopState, decide, drive_of
 from robot.runtime_log import RuntimeLog
 from robot.teach import KeyImageSelector, OdomPose, SelectedKeyImage
-from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, ServoTelemetry, VehicleTelemetry
+from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
 from robot.worker import Worker, find_photo, store_path
 from shared.clock import Clock
 from shared.config import VmnavConfig
@@ -125,16 +111,6 @@ class _Teaching:
     name: str
     selector: KeyImageSelector
     key_images: list[SelectedKeyImage]
-
-
-@dataclass(eq=False)
-class _Mission:
-    """The goals being worked on: the uploaded mission's (``first_seq`` not None) or a photo's."""
-
-    goals: tuple[Goal, ...]
-    first_seq: int | None
-    index: int = 0
-    reached: tuple[int, ...] = ()
 
 
 class RobotRuntime:
@@ -165,24 +141,15 @@ class RobotRuntime:
         self._config = config
         self._base = base
         self._clock = clock
-        self._rng = rng
         self._log = log
-        self._stopwatch = stopwatch
         self._localizer = Localizer.from_memory(memory, config.features, config.localize)
         self._worker = Worker(lockstep)
         self._requests: deque[Event] = deque()
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)
         self._manual: tuple[float, float, int] | None = None  # (x, r, arrival ns)
         self._top = TopState()
-        self._run: MissionRun | None = None
-        self._runs = 0
-        self._events_seen = 0
-        self._mission: _Mission | None = None
+        self._goals = GoalRuns(base, rng, log, stopwatch)
         self._teaching: _Teaching | None = None
-        self._detail = ""
-        self._last_state = MissionState.IDLE
-        self._last_result: MissionResult | None = None
-        self._servo: ServoTelemetry | None = None
         self._twist = (0.0, 0.0)
         self._home: OdomPose | None = None
         self._stalled_since_ns: int | None = None
@@ -192,7 +159,7 @@ class RobotRuntime:
     @property
     def last_result(self) -> MissionResult | None:
         """How the last mission run ended; None before one ended."""
-        return self._last_result
+        return self._goals.last_result
 
     @property
     def memory(self) -> VisualMemory:
@@ -222,8 +189,7 @@ class RobotRuntime:
         record = None
         drive = drive_of(self._top)
         if drive is Drive.RUN:
-            assert self._run is not None
-            record = self._cycle(self._run, t_ns, image)
+            record = self._cycle(t_ns, image)
         elif drive is Drive.STICK:
             self._drive_manual()
         else:
@@ -247,8 +213,7 @@ class RobotRuntime:
         """Stop the base; a mission run ends as the operator's abort; teaching is dropped;
         the worker finishes the job in progress (a path being written) and stops."""
         now_ns = self._clock.now_ns()
-        if self._run is not None:
-            self._run.abort(now_ns, "the robot process is closing")
+        self._goals.abort(now_ns, "the robot process is closing")
         if self._teaching is not None:
             self._say(now_ns, logging.WARNING,
                       f"teach {self._teaching.name!r} dropped: the robot process is closing")
@@ -369,22 +334,22 @@ class RobotRuntime:
                 self._say(t_ns, logging.INFO, f"base reporting again after "
                           f"{(t_ns - self._base_lost_since_ns) / 1e9:.1f} s{resumes}")
             case Action.END_RUN:
-                self._end_run(t_ns, decision.why)
+                self._goals.end(t_ns, decision.why)
+                self._stop()
             case Action.SAY_MODE:
                 self._say(t_ns, logging.INFO, f"mode {self._top.mode.name}")
             case Action.DROP_STICK:
                 self._manual = None
             case Action.START_GOALS:
                 assert isinstance(event, StartGoals)
-                self._mission = _Mission(event.goals, event.first_seq)
+                self._goals.set_goals(event.goals, event.first_seq)
                 self._start_run(t_ns)
             case Action.NEXT_GOAL:
-                assert self._mission is not None
-                self._mission.index += 1
+                self._goals.next_goal()
                 self._start_run(t_ns)
             case Action.START_PHOTO_GOAL:
                 assert isinstance(event, PhotoFound)
-                self._mission = _Mission((Goal(event.goal_key),), None)
+                self._goals.set_goals((Goal(event.goal_key),), None)
                 self._start_run(t_ns)
             case Action.FIND_PHOTO:
                 assert isinstance(event, GotoPhoto)
@@ -403,66 +368,18 @@ class RobotRuntime:
     # -- missions -----------------------------------------------------------------------
 
     def _start_run(self, t_ns: int) -> None:
-        mission = self._mission
-        assert mission is not None
-        goal = mission.goals[mission.index].key_image_id
-        rng = np.random.default_rng(self._rng.integers(2**63))  # the run's alone: replayable
-        run = MissionRun(self._memory, self._config, self._base, rng,
-                         localizer=self._localizer, stopwatch=self._stopwatch)
-        if self._log is not None:
-            self._log.mission_started(t_ns, goal, rng.bit_generator.state, self._config)
         try:
-            run.start(goal, t_ns)
+            self._goals.start(t_ns, self._memory, self._localizer, self._config)
         except VmnavError as e:  # the goal left the memory since the upload was checked
             self._handle(t_ns, GoalGone(f"mission: {e}"))
-            return
-        self._run, self._events_seen, self._servo = run, 0, None
-        self._runs += 1
-        self._forward_events(run)
 
-    def _cycle(self, run: MissionRun, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
-        record = run.cycle(t_ns, image)
-        follow = record.follow
-        if follow is not None:
-            self._twist = (follow.twist.v_m_s, follow.twist.omega_rad_s)
-            self._servo = _servo_telemetry(run, record)
-        if self._log is not None:
-            self._log.cycle(record, image, () if run.follower is None else run.follower.targets)
-        self._forward_events(run)
-        if run.finished:
-            self._handle(t_ns, RunEnded(self._run_finished(run)))
+    def _cycle(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
+        record, next_goal = self._goals.cycle(t_ns, image)
+        if record.follow is not None:
+            self._twist = (record.follow.twist.v_m_s, record.follow.twist.omega_rad_s)
+        if next_goal is not None:
+            self._handle(t_ns, RunEnded(next_goal))
         return record
-
-    def _run_finished(self, run: MissionRun) -> bool:
-        """Keep how ``run`` ended; True when it arrived and the mission has goals left."""
-        mission = self._mission
-        assert mission is not None
-        result = self._last_result = run.result()
-        self._detail = f"{result.reason}: {result.detail}" if result.detail else result.reason
-        self._run = None
-        if result.state is MissionState.ARRIVED:
-            if mission.first_seq is not None:
-                mission.reached += (mission.first_seq + mission.index,)
-            if mission.index + 1 < len(mission.goals):
-                return True
-        self._last_state = result.state
-        return False
-
-    def _end_run(self, t_ns: int, why: str) -> None:
-        """Abort the run (the operator's abort, ``why``), keep its result, stop the base."""
-        run = self._run
-        assert run is not None
-        run.abort(t_ns, why)
-        self._forward_events(run)
-        self._run_finished(run)
-        self._stop()
-
-    def _forward_events(self, run: MissionRun) -> None:
-        events = run.events
-        if self._log is not None:
-            for event in events[self._events_seen:]:
-                self._log.event(event)
-        self._events_seen = len(events)
 
     # -- driving ------------------------------------------------------------------------
 
@@ -512,48 +429,13 @@ class RobotRuntime:
             self._log.note(t_ns, level, text)
 
     def _publish(self, base: BaseState) -> None:
-        run, mission, top = self._run, self._mission, self._top
-        if run is not None:
-            state, detail = run.state, _last_detail(run)
-        else:
-            state, detail = self._last_state, self._detail
-        self._snapshot = VehicleTelemetry(
-            mode=top.mode, mission_state=state, armed=top.armed, mission_detail=detail,
-            teaching=self._teaching is not None, battery_v=base.battery_v,
-            odom_pose=base.odom_pose, velocity=self._twist,
-            goal_key=None if mission is None else mission.goals[-1].key_image_id,
-            servo=self._servo if run is not None else None,
-            mission_seq=(None if mission is None or mission.first_seq is None
-                         else mission.first_seq + min(mission.index, len(mission.goals) - 1)),
-            reached_seqs=() if mission is None else mission.reached,
-            home_pose=self._home, base_reporting=not top.base_lost, run_count=self._runs)
+        top = self._top
+        self._snapshot = self._goals.with_goals(VehicleTelemetry(
+            mode=top.mode, armed=top.armed, teaching=self._teaching is not None,
+            battery_v=base.battery_v, odom_pose=base.odom_pose, velocity=self._twist,
+            home_pose=self._home, base_reporting=not top.base_lost))
 
 
 def _stick(value: float) -> float:
     """A MANUAL_CONTROL axis in [-1, 1]; an unused (NaN) axis is 0."""
     return 0.0 if math.isnan(value) else min(1.0, max(-1.0, value))
-
-
-def _last_detail(run: MissionRun) -> str:
-    """The detail of the run's last transition."""
-    result = run.result()
-    return f"{result.reason}: {result.detail}" if result.detail else result.reason
-
-
-def _servo_telemetry(run: MissionRun, record: CycleRecord) -> ServoTelemetry:
-    """The follower's state of a following cycle, for VISUAL_SERVO_STATUS."""
-    follow = record.follow
-    follower = run.follower
-    assert follow is not None and follower is not None
-    targets = follower.targets
-    vision = follow.vision
-    nan = math.nan
-    return ServoTelemetry(
-        current_key=targets[follow.target_index - 1] if follow.target_index > 0 else None,
-        next_key=targets[min(follow.target_index, len(targets) - 1)],
-        matches=0 if vision is None else vision.matches,
-        err_image_max_px=nan if vision is None else vision.image_errors.err_image_max_px,
-        err_points_px=nan if vision is None else vision.image_errors.err_points_px,
-        y_m=nan if follow.y_m is None else follow.y_m,
-        theta_rad=nan if follow.theta_rad is None else follow.theta_rad,
-        s_m=nan if follow.s_m is None else follow.s_m)

@@ -12,6 +12,7 @@ from robot.mission_run import AppEvent, CycleRecord
 from robot.teach import OdomPose
 from shared.config import VmnavConfig
 
+
 class RuntimeLog(Protocol):
     """Where the runtime records what it does (the robot's field log)."""
 

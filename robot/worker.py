@@ -31,7 +31,7 @@ import cv2
 
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
-from robot.modes import Event, PathNotStored, PathStored, PhotoFound, PhotoNotFound
+from robot.mode_events import Event, PathNotStored, PathStored, PhotoFound, PhotoNotFound
 from shared.camera_model import CameraModel
 from shared.config import VmnavConfig
 from shared.errors import VmnavError

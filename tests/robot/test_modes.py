@@ -9,14 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from robot.modes import (
-    _TRANSITIONS,
-    Action,
-    Activity,
+from robot.mode_events import (
     Arm,
     BaseBack,
     BaseLost,
-    Drive,
     GcsLost,
     GoalGone,
     GotoPhoto,
@@ -28,10 +24,8 @@ from robot.modes import (
     StartGoals,
     TeachStart,
     TeachStop,
-    TopState,
-    decide,
-    drive_of,
 )
+from robot.modes import _TRANSITIONS, Action, Activity, Drive, TopState, decide, drive_of
 from shared.errors import IllegalEventError
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
@@ -52,7 +46,7 @@ EVENTS = (SetMode(Mode.MANUAL), Arm(False), StartGoals((Goal(3),), 0), PHOTO, FO
 
 class TestRule1Modes:
     def test_the_robot_starts_in_hold_armed_and_idle(self) -> None:
-        assert IDLE == TopState(Mode.HOLD, True, Activity.IDLE, False, 0)
+        assert TopState(Mode.HOLD, True, Activity.IDLE, False, 0) == IDLE
         assert drive_of(IDLE) is Drive.STOP
 
     def test_a_mode_is_entered_with_its_notice_and_the_stick_dropped(self) -> None:
