@@ -127,3 +127,6 @@ class GcsLost:
 Event = (SetMode | Arm | StartGoals | GotoPhoto | PhotoFound | PhotoNotFound | TeachStart
          | TeachStop | PathStored | PathNotStored | RunEnded | GoalGone | BaseLost | BaseBack
          | GcsLost)
+
+#: Events that bring their own line for the operator (``text`` at ``level``).
+TOLD = (PhotoFound, PhotoNotFound, PathStored, PathNotStored, GoalGone)

@@ -72,6 +72,7 @@ from robot.goal_runs import GoalRuns
 from robot.memory.localize import Localizer
 from robot.mission_run import CycleRecord, MissionResult
 from robot.mode_events import (
+    TOLD,
     Arm,
     BaseBack,
     BaseLost,
@@ -302,7 +303,7 @@ class RobotRuntime:
     # -- events -------------------------------------------------------------------------
 
     def _take_news(self, t_ns: int, base: BaseState) -> None:
-        """The worker's results, the queued requests, then the base's reporting (rule 9)."""
+        """The worker's results, the queued requests, then the base's reporting (rule 8)."""
         for result in self._worker.results():
             self._handle(t_ns, result)
         while self._requests:
@@ -326,7 +327,7 @@ class RobotRuntime:
             case Action.SAY:
                 self._say(t_ns, logging.WARNING, decision.say)
             case Action.SAY_EVENT:
-                assert hasattr(event, "text") and hasattr(event, "level")
+                assert isinstance(event, TOLD)
                 self._say(t_ns, event.level, event.text)
             case Action.SAY_BASE_BACK:
                 assert self._base_lost_since_ns is not None
