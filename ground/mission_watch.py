@@ -1,15 +1,20 @@
-"""Whether a goal run reached its goal, from the vehicle's messages (pure).
+"""Whether a goal run reached its goal, from the vehicle's structured messages (pure).
 
-Rules (the vehicle's side: ``robot/vehicle/progress.py``):
+Rules (the vehicle's side: ``robot/vehicle/progress.py`` and ``telemetry.py``):
 
-1. Reached: MISSION_ITEM_REACHED for the last item of the mission; or
-   MISSION_CURRENT ``mission_state`` COMPLETE after it was ACTIVE (a COMPLETE left
-   from an earlier run does not count); or a STATUSTEXT ``mission arrived...``.
-2. Not reached: MISSION_CURRENT PAUSED after ACTIVE (stopped before the goal:
-   aborted, failed, or switched to HOLD), or a STATUSTEXT ``mission aborted...`` /
-   ``mission failed...``.
-3. A photo goal (no mission item) ends only by rule 1's and 2's STATUSTEXTs: the
-   vehicle reports no mission state for it.
+1. The outcome travels in VISUAL_SERVO_STATUS ``state`` (``VTR_STATE``): ARRIVED
+   is reached; ABORTED and FAILED are stopped short. The vehicle keeps the last
+   run's final state there, streamed, until the next run starts, so a final state
+   counts only after the watch saw a run working on the goal (LOCALIZING,
+   FOLLOWING or LOST): the one left from an earlier run does not. The vehicle
+   sends VISUAL_SERVO_STATUS at every change of state and reports each new run in
+   LOCALIZING first, so no run ends unseen.
+2. An uploaded mission (``last_seq`` not None) is also reached by
+   MISSION_ITEM_REACHED for its last item, or by MISSION_CURRENT
+   ``mission_state`` COMPLETE after ACTIVE; PAUSED after ACTIVE (stopped before the
+   goal: aborted, failed, or switched to HOLD) is stopped short.
+3. A photo goal (no mission item) ends by rule 1 alone.
+4. STATUSTEXT is for people: the watch does not read it.
 """
 
 from __future__ import annotations
@@ -18,9 +23,12 @@ from typing import Any
 
 from shared.mavlink.dialect import mavlink
 
-#: STATUSTEXT prefixes of the final mission states (robot.mission.MissionState values).
-ARRIVED_TEXT = "mission arrived"
-STOPPED_TEXTS = ("mission aborted", "mission failed")
+#: VISUAL_SERVO_STATUS states of a run working on its goal.
+WORKING_STATES = frozenset({mavlink.VTR_STATE_LOCALIZING, mavlink.VTR_STATE_FOLLOWING,
+                            mavlink.VTR_STATE_LOST})
+#: Final VISUAL_SERVO_STATUS states -> reached.
+FINAL_STATES = {mavlink.VTR_STATE_ARRIVED: True, mavlink.VTR_STATE_ABORTED: False,
+                mavlink.VTR_STATE_FAILED: False}
 
 
 class MissionWatch:
@@ -34,6 +42,7 @@ class MissionWatch:
         self.last_seq = last_seq
         self.outcome: bool | None = None
         """True once reached, False once stopped short; None while running."""
+        self._working = False
         self._active = False
 
     def handle_message(self, msg: Any) -> None:
@@ -41,11 +50,11 @@ class MissionWatch:
         if self.outcome is not None:
             return
         kind = msg.get_type()
-        if kind == "STATUSTEXT":
-            if msg.text.startswith(ARRIVED_TEXT):
-                self.outcome = True
-            elif msg.text.startswith(STOPPED_TEXTS):
-                self.outcome = False
+        if kind == "VISUAL_SERVO_STATUS":
+            if msg.state in WORKING_STATES:
+                self._working = True
+            elif self._working and msg.state in FINAL_STATES:
+                self.outcome = FINAL_STATES[msg.state]
         elif self.last_seq is None:
             return
         elif kind == "MISSION_ITEM_REACHED" and msg.seq == self.last_seq:

@@ -7,49 +7,48 @@ vehicle, and the loop's one call per camera frame. It drives a
 Theory of operation
 -------------------
 
-Two threads meet here. The link thread (the vehicle endpoint's) calls the
+Three threads meet here. The link thread (the vehicle endpoint's) calls the
 ``VehicleApp`` methods; they decide at once from the last telemetry snapshot whether
-the request can be taken (the ground station gets ACCEPTED or DENIED), and queue it.
-The loop thread calls :meth:`RobotRuntime.step` with each frame (or
-:meth:`RobotRuntime.stall` when frames stop); each call first applies the queued
-requests in order, then does what the mode says, then publishes a new snapshot.
-Only the loop thread touches the base, the missions and the memory; the link thread
+the request can be taken (the ground station gets ACCEPTED or DENIED), and queue it
+as an event of :mod:`robot.modes`. The loop thread calls :meth:`RobotRuntime.step`
+with each frame (or :meth:`RobotRuntime.stall` when frames stop); each call first
+takes the worker's finished results, then the queued requests, then what it sees of
+the base, each an event fed to the transition table (:func:`robot.modes.decide`),
+whose actions it carries out; then it does what the state says on this frame
+(:func:`robot.modes.drive_of`) and publishes a new snapshot. The worker thread
+(:class:`robot.worker.Worker`) reads and localizes photos and stores taught paths,
+so the loop never waits on a disk or a localization; its results come back as
+events on a later frame (in lock-step, exactly the next one: ``lockstep``). Only the
+loop thread touches the base, the missions and the memory reference; the link thread
 reads immutable snapshots and the memory reference, which teaching replaces whole
 (never mutated in place). A request shows in the telemetry from the next frame on.
 
-Rules:
+Rules: :mod:`robot.modes` holds the decisions (modes, arming, teaching, goal runs,
+failsafes, photo goals) in one table; what they rest on here:
 
-1. Modes (ArduRover's): the robot starts in HOLD, armed. HOLD: stopped. MANUAL:
-   driven by MANUAL_CONTROL (``x`` forward, ``r`` yaw clockwise, scaled by
-   ``TeleopConfig``); no MANUAL_CONTROL for ``deadman_ns`` stops it. AUTO: the
-   uploaded mission's goals in order, one :class:`~robot.mission_run.MissionRun`
-   each, from the item the ground started; after the last goal, or when a mission
-   run fails or aborts, the robot stops in HOLD. GUIDED: one goal found from a photo
-   (:meth:`goto_image`), then HOLD; GUIDED without a goal is stopped.
-2. Leaving AUTO or GUIDED for another mode (or the GCS failsafe's "hold") aborts the
-   mission run as the operator's abort; AUTO again restarts from the current item.
-3. Disarmed, the robot does not move in any mode; disarming during a mission run
-   needs ``force``; missions and photo goals are refused while disarmed.
-4. Teaching (``teach_start``/``teach_stop``) is refused during a mission run and
-   puts the robot in MANUAL; every frame while teaching goes to a
-   :class:`~robot.teach.KeyImageSelector` with the odometry. Stopping it (in any
-   mode) makes the key images a new path of the memory, joined to the others
-   (:func:`robot.memory.junctions.join_path`) and written atomically to
-   ``memory_dir``; the runtime then works on the new memory. A drive shorter than
-   ``TeachConfig.min_path_length_m``, or a memory that cannot be written, is
-   reported and nothing stored changes.
-5. A photo goal is localized in the memory (:class:`robot.memory.localize.Localizer`)
-   on the next frame; found, the robot goes there in GUIDED; not found (or an
-   unreadable photo, or one of another size than the camera's) is a notice and
-   nothing moves.
-6. A bumper or stall ends a mission run (its rule); in MANUAL the operator sees the
-   base state in the telemetry and keeps control.
-7. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
+1. MANUAL drives by MANUAL_CONTROL (``x`` forward, ``r`` yaw clockwise, scaled by
+   ``TeleopConfig``); no MANUAL_CONTROL for ``deadman_ns`` stops it.
+2. AUTO runs the uploaded mission's goals in order, one
+   :class:`~robot.mission_run.MissionRun` each (:class:`~robot.goal_runs.GoalRuns`),
+   from the item the ground started; GUIDED, the one goal found from a photo
+   (:meth:`goto_image`). A bumper or stall ends a run (its rule); in MANUAL the
+   operator sees the base state in the telemetry and keeps control.
+3. Disarming during a mission run needs ``force`` (refused on the link thread).
+4. While teaching, every frame goes to a :class:`~robot.teach.KeyImageSelector`
+   with the odometry. Stopping it hands the key images to the worker, which makes
+   them a new path of the memory, joined to the others and written atomically to
+   ``memory_dir`` (:func:`robot.worker.store_path`); the runtime then works on the
+   new memory. A drive shorter than ``TeachConfig.min_path_length_m``, or a memory
+   that cannot be written, is reported and nothing stored changes.
+5. A photo goal is read and localized in the memory by the worker
+   (:func:`robot.worker.find_photo`): found, the robot goes there in GUIDED; not found
+   (or an unreadable photo, or one of another size than the camera's) is a notice.
+6. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
    mission run carries on with the next frame.
-8. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
+7. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
    paths saved, photos found or not, refusals decided in the loop, camera stalls, the
    base going quiet and coming back.
-9. The base not reporting (``BaseState.reporting`` False: a cut ARIA cable): the robot
+8. The base not reporting (``BaseState.reporting`` False: a cut ARIA cable): the robot
    stops (its commands may not arrive; the Pioneer's watchdog stops it too), teaching
    skips those frames (the odometry is frozen), and a mission run follows
    ``MissionConfig.base_lost_action``: "hold" ends it (HOLD, as an abort), "continue"
@@ -62,21 +61,38 @@ import logging
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
-from robot.memory.junctions import join_path
+from robot.goal_runs import GoalRuns
 from robot.memory.localize import Localizer
-from robot.mission import MissionState
-from robot.mission_run import AppEvent, CycleRecord, MissionResult, MissionRun
+from robot.mission_run import CycleRecord, MissionResult
+from robot.mode_events import (
+    TOLD,
+    Arm,
+    BaseBack,
+    BaseLost,
+    Event,
+    GcsLost,
+    GoalGone,
+    GotoPhoto,
+    PathStored,
+    PhotoFound,
+    RunEnded,
+    SetMode,
+    StartGoals,
+    TeachStart,
+    TeachStop,
+)
+from robot.modes import Action, Activity, Decision, Drive, TopState, decide, drive_of
+from robot.runtime_log import RuntimeLog
 from robot.teach import KeyImageSelector, SelectedKeyImage
-from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, ServoTelemetry, VehicleTelemetry
+from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
+from robot.worker import Worker, find_photo, store_path
 from shared.clock import Clock
 from shared.config import VmnavConfig
 from shared.errors import VmnavError
@@ -85,74 +101,11 @@ from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
-from shared.memory import VisualMemory, read_memory, write_memory
-from shared.memory.store import check_no_orphans
+from shared.memory import VisualMemory
 from shared.pose import Pose2
 
-#: Modes in which a mission run drives the robot.
-_MISSION_MODES = frozenset({Mode.AUTO, Mode.GUIDED})
 #: Notices queued at most (the oldest go first when the link does not take them).
 _MAX_NOTICES = 64
-
-
-class RuntimeLog(Protocol):
-    """Where the runtime records what it does (the robot's field log)."""
-
-    def mission_started(self, t_ns: int, goal_id: int, rng_state: Any,
-                        config: VmnavConfig) -> None:
-        """A mission run to ``goal_id`` starts; ``rng_state`` is its generator's state."""
-        ...
-
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
-              targets: Sequence[int] = ()) -> None:
-        """One mission cycle on its (H, W) uint8 frame; ``targets``: the route's key images."""
-        ...
-
-    def event(self, event: AppEvent) -> None:
-        """A mission event (transition, key image, localization, lost)."""
-        ...
-
-    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:
-        """A frame recorded while teaching, with the odometry pose."""
-        ...
-
-    def note(self, t_ns: int, level: int, text: str) -> None:
-        """Anything else for the operator (``logging`` level, one line)."""
-        ...
-
-
-@dataclass(frozen=True, slots=True)
-class _SetMode:
-    mode: Mode
-
-
-@dataclass(frozen=True, slots=True)
-class _Arm:
-    armed: bool
-
-
-@dataclass(frozen=True, slots=True)
-class _StartMission:
-    goals: tuple[Goal, ...]
-    first_seq: int
-
-
-@dataclass(frozen=True, slots=True)
-class _GotoImage:
-    path: Path
-
-
-@dataclass(frozen=True, slots=True)
-class _TeachStart:
-    name: str
-
-
-@dataclass(frozen=True, slots=True)
-class _TeachStop:
-    pass
-
-
-_Request = _SetMode | _Arm | _StartMission | _GotoImage | _TeachStart | _TeachStop
 
 
 @dataclass(eq=False)
@@ -160,16 +113,6 @@ class _Teaching:
     name: str
     selector: KeyImageSelector
     key_images: list[SelectedKeyImage]
-
-
-@dataclass(eq=False)
-class _Mission:
-    """The goals being worked on: the uploaded mission's (``first_seq`` not None) or a photo's."""
-
-    goals: tuple[Goal, ...]
-    first_seq: int | None
-    index: int = 0
-    reached: tuple[int, ...] = ()
 
 
 class RobotRuntime:
@@ -186,44 +129,39 @@ class RobotRuntime:
             log records for replay.
         log: the field log; None records nothing.
         stopwatch: wall-time counter for the cycles' compute time, ns.
+        lockstep: the loop runs on a simulated clock: the worker's results land exactly
+            one frame after their job (:class:`robot.worker.Worker`), the same on every run.
     """
 
     def __init__(self, memory: VisualMemory, memory_dir: Path, config: VmnavConfig,
                  base: MobileBase, clock: Clock, rng: np.random.Generator, *,
                  log: RuntimeLog | None = None,
-                 stopwatch: Callable[[], int] = time.perf_counter_ns) -> None:
+                 stopwatch: Callable[[], int] = time.perf_counter_ns,
+                 lockstep: bool = False) -> None:
         self._memory = memory
         self._memory_dir = memory_dir
         self._config = config
         self._base = base
         self._clock = clock
-        self._rng = rng
         self._log = log
-        self._stopwatch = stopwatch
         self._localizer = Localizer.from_memory(memory, config.features, config.localize)
-        self._requests: deque[_Request] = deque()
+        self._worker = Worker(lockstep)
+        self._requests: deque[Event] = deque()
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)
         self._manual: tuple[float, float, int] | None = None  # (x, r, arrival ns)
-        self._mode = Mode.HOLD
-        self._armed = True
-        self._run: MissionRun | None = None
-        self._events_seen = 0
-        self._mission: _Mission | None = None
+        self._top = TopState()
+        self._goals = GoalRuns(base, rng, log, stopwatch)
         self._teaching: _Teaching | None = None
-        self._detail = ""
-        self._last_state = MissionState.IDLE
-        self._last_result: MissionResult | None = None
-        self._servo: ServoTelemetry | None = None
         self._twist = (0.0, 0.0)
         self._home: Pose2 | None = None
         self._stalled_since_ns: int | None = None
         self._base_lost_since_ns: int | None = None
-        self._snapshot = VehicleTelemetry(mode=self._mode, armed=self._armed)
+        self._snapshot = VehicleTelemetry(mode=self._top.mode, armed=self._top.armed)
 
     @property
     def last_result(self) -> MissionResult | None:
         """How the last mission run ended; None before one ended."""
-        return self._last_result
+        return self._goals.last_result
 
     @property
     def memory(self) -> VisualMemory:
@@ -233,7 +171,7 @@ class RobotRuntime:
     # -- the loop's side ----------------------------------------------------------------
 
     def step(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord | None:
-        """One frame: queued requests, then the mode's work (module rules).
+        """One frame: the news (worker, requests, base), then the state's work.
 
         Args:
             t_ns: the frame's time on the loop's clock, ns.
@@ -249,18 +187,16 @@ class RobotRuntime:
         base = self._base.state()
         if self._home is None and base.reporting:
             self._home = base.odom_pose
-        self._apply_requests(t_ns, image)
-        self._watch_base(t_ns, base)
+        self._take_news(t_ns, base)
         record = None
-        if self._base_lost_since_ns is not None:
-            self._stop()
-        elif self._run is not None and self._mode in _MISSION_MODES and self._armed:
-            record = self._cycle(self._run, t_ns, image)
-        elif self._mode is Mode.MANUAL and self._armed:
-            self._drive_manual(t_ns)
+        drive = drive_of(self._top)
+        if drive is Drive.RUN:
+            record = self._cycle(t_ns, image)
+        elif drive is Drive.STICK:
+            self._drive_manual()
         else:
             self._stop()
-        if self._teaching is not None and self._base_lost_since_ns is None:
+        if self._teaching is not None and not self._top.base_lost:
             self._teach_frame(self._teaching, t_ns, image, base)
         self._publish(base)
         return record
@@ -270,22 +206,22 @@ class RobotRuntime:
         if self._stalled_since_ns is None:
             self._stalled_since_ns = now_ns
             self._say(now_ns, logging.WARNING, "camera stalled: stopped until frames return")
-        self._apply_requests(now_ns, None)
         base = self._base.state()
-        self._watch_base(now_ns, base)
+        self._take_news(now_ns, base)
         self._stop()
         self._publish(base)
 
     def close(self) -> None:
-        """Stop the base; a mission run ends as the operator's abort; teaching is dropped."""
+        """Stop the base; a mission run ends as the operator's abort; teaching is dropped;
+        the worker finishes the job in progress (a path being written) and stops."""
         now_ns = self._clock.now_ns()
-        if self._run is not None:
-            self._run.abort(now_ns, "the robot process is closing")
+        self._goals.abort(now_ns, "the robot process is closing")
         if self._teaching is not None:
             self._say(now_ns, logging.WARNING,
                       f"teach {self._teaching.name!r} dropped: the robot process is closing")
             self._teaching = None
         self._stop()
+        self._worker.close()
 
     # -- VehicleApp (the link thread's side) ------------------------------------------
 
@@ -312,25 +248,25 @@ class RobotRuntime:
     def set_mode(self, mode: Mode) -> bool:
         if mode is Mode.AUTO:
             return False
-        self._requests.append(_SetMode(mode))
+        self._requests.append(SetMode(mode))
         return True
 
     def arm(self, armed: bool, force: bool) -> bool:
         if not armed and not force and self._snapshot.mission_state in ACTIVE_STATES:
             return False
-        self._requests.append(_Arm(armed))
+        self._requests.append(Arm(armed))
         return True
 
     def start_mission(self, goals: tuple[Goal, ...], first_seq: int) -> bool:
         if self._snapshot.teaching or not self._snapshot.armed or not goals:
             return False
-        self._requests.append(_StartMission(goals, first_seq))
+        self._requests.append(StartGoals(goals, first_seq))
         return True
 
     def goto_image(self, path: Path) -> bool:
         if self._snapshot.teaching or not self._snapshot.armed:
             return False
-        self._requests.append(_GotoImage(path))
+        self._requests.append(GotoPhoto(path))
         return True
 
     def params_changed(self, config: VmnavConfig) -> None:
@@ -344,20 +280,17 @@ class RobotRuntime:
         t = self._snapshot
         if t.teaching or t.mission_state in ACTIVE_STATES:
             return False
-        self._requests.append(_TeachStart(name))
+        self._requests.append(TeachStart(name))
         return True
 
     def teach_stop(self) -> bool:
         if not self._snapshot.teaching:
             return False
-        self._requests.append(_TeachStop())
+        self._requests.append(TeachStop())
         return True
 
     def gcs_lost(self, action: GcsLostAction) -> None:
-        if action == "stop":
-            self._manual = None
-        elif action == "hold":
-            self._requests.append(_SetMode(Mode.HOLD))
+        self._requests.append(GcsLost(action))
 
     def gcs_regained(self) -> None:
         """Nothing to undo: the robot stays where the failsafe left it."""
@@ -368,146 +301,91 @@ class RobotRuntime:
         except IndexError:
             return None
 
-    # -- requests -----------------------------------------------------------------------
+    # -- events -------------------------------------------------------------------------
 
-    def _apply_requests(self, t_ns: int, image: npt.NDArray[np.uint8] | None) -> None:
+    def _take_news(self, t_ns: int, base: BaseState) -> None:
+        """The worker's results, the queued requests, then the base's reporting (rule 8)."""
+        for result in self._worker.results():
+            self._handle(t_ns, result)
         while self._requests:
-            request = self._requests.popleft()
-            if isinstance(request, _SetMode):
-                self._enter(request.mode, t_ns)
-            elif isinstance(request, _Arm):
-                self._armed = request.armed
-                if not request.armed:
-                    self._end_run(t_ns, "disarmed")
-            elif isinstance(request, _StartMission):
-                self._end_run(t_ns, "a new mission started")
-                self._mission = _Mission(request.goals, request.first_seq)
-                self._mode = Mode.AUTO
+            self._handle(t_ns, self._requests.popleft())
+        if not base.reporting and not self._top.base_lost:
+            self._base_lost_since_ns = t_ns
+            self._handle(t_ns, BaseLost(self._config.mission.base_lost_action == "hold"))
+        elif base.reporting and self._top.base_lost:
+            self._handle(t_ns, BaseBack())
+            self._base_lost_since_ns = None
+
+    def _handle(self, t_ns: int, event: Event) -> None:
+        """Feed ``event`` to the table and carry out its decision."""
+        decision = decide(self._top, event)
+        self._top = decision.state
+        for action in decision.actions:
+            self._act(action, t_ns, event, decision)
+
+    def _act(self, action: Action, t_ns: int, event: Event, decision: Decision) -> None:
+        match action:
+            case Action.SAY:
+                self._say(t_ns, logging.WARNING, decision.say)
+            case Action.SAY_EVENT:
+                assert isinstance(event, TOLD)
+                self._say(t_ns, event.level, event.text)
+            case Action.SAY_BASE_BACK:
+                assert self._base_lost_since_ns is not None
+                resumes = ", mission resumes" if self._top.activity is Activity.RUNNING else ""
+                self._say(t_ns, logging.INFO, f"base reporting again after "
+                          f"{(t_ns - self._base_lost_since_ns) / 1e9:.1f} s{resumes}")
+            case Action.END_RUN:
+                self._goals.end(t_ns, decision.why)
+                self._stop()
+            case Action.SAY_MODE:
+                self._say(t_ns, logging.INFO, f"mode {self._top.mode.name}")
+            case Action.DROP_STICK:
+                self._manual = None
+            case Action.START_GOALS:
+                assert isinstance(event, StartGoals)
+                self._goals.set_goals(event.goals, event.first_seq)
                 self._start_run(t_ns)
-            elif isinstance(request, _GotoImage):
-                self._goto_image(t_ns, request.path)
-            elif isinstance(request, _TeachStart):
-                self._teach_start(t_ns, request.name)
-            else:
-                self._teach_stop(t_ns)
-
-    def _enter(self, mode: Mode, t_ns: int) -> None:
-        if mode is not self._mode:
-            self._end_run(t_ns, f"mode {mode.name}")
-            self._say(t_ns, logging.INFO, f"mode {mode.name}")
-        self._mode = mode
-        self._manual = None
-
-    def _goto_image(self, t_ns: int, path: Path) -> None:
-        camera = self._memory.camera
-        photo = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-        if photo is None:
-            self._say(t_ns, logging.ERROR, f"photo {path.name}: not a readable image")
-            return
-        if photo.shape != (camera.height, camera.width):
-            self._say(t_ns, logging.ERROR,
-                      f"photo {path.name}: {photo.shape[1]}x{photo.shape[0]} px, the camera's "
-                      f"images are {camera.width}x{camera.height}")
-            return
-        found = self._localizer.localize(photo)
-        if not found.ok or found.keyframe_id is None:
-            self._say(t_ns, logging.WARNING,
-                      f"photo {path.name}: not in the memory (best key image "
-                      f"{found.keyframe_id}, {found.matches} matches)")
-            return
-        self._say(t_ns, logging.INFO, f"photo {path.name}: key image {found.keyframe_id} "
-                                      f"({found.matches} matches), going there")
-        self._end_run(t_ns, "a new goal")
-        self._mission = _Mission((Goal(found.keyframe_id),), None)
-        self._mode = Mode.GUIDED
-        self._start_run(t_ns)
+            case Action.NEXT_GOAL:
+                self._goals.next_goal()
+                self._start_run(t_ns)
+            case Action.START_PHOTO_GOAL:
+                assert isinstance(event, PhotoFound)
+                self._goals.set_goals((Goal(event.goal_key),), None)
+                self._start_run(t_ns)
+            case Action.FIND_PHOTO:
+                assert isinstance(event, GotoPhoto)
+                self._worker.submit(find_photo, event.path, self._localizer, self._memory.camera)
+            case Action.START_TEACH:
+                assert isinstance(event, TeachStart)
+                self._teach_start(t_ns, event.name)
+            case Action.SAVE_PATH:
+                self._save_path()
+            case Action.ADOPT_MEMORY:
+                assert isinstance(event, PathStored)
+                self._memory, self._localizer = event.memory, event.localizer
+            case Action.STOP:
+                self._stop()
 
     # -- missions -----------------------------------------------------------------------
 
     def _start_run(self, t_ns: int) -> None:
-        mission = self._mission
-        assert mission is not None
-        goal = mission.goals[mission.index].key_image_id
-        rng = np.random.default_rng(self._rng.integers(2**63))  # the run's alone: replayable
-        run = MissionRun(self._memory, self._config, self._base, rng,
-                         localizer=self._localizer, stopwatch=self._stopwatch)
-        if self._log is not None:
-            self._log.mission_started(t_ns, goal, rng.bit_generator.state, self._config)
         try:
-            run.start(goal, t_ns)
+            self._goals.start(t_ns, self._memory, self._localizer, self._config)
         except VmnavError as e:  # the goal left the memory since the upload was checked
-            self._say(t_ns, logging.ERROR, f"mission: {e}")
-            self._mode = Mode.HOLD
-            return
-        self._run, self._events_seen, self._servo = run, 0, None
-        self._forward_events(run)
+            self._handle(t_ns, GoalGone(f"mission: {e}"))
 
-    def _cycle(self, run: MissionRun, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
-        record = run.cycle(t_ns, image)
-        follow = record.follow
-        if follow is not None:
-            self._twist = (follow.twist.v_m_s, follow.twist.omega_rad_s)
-            self._servo = _servo_telemetry(run, record)
-        if self._log is not None:
-            self._log.cycle(record, image, () if run.follower is None else run.follower.targets)
-        self._forward_events(run)
-        if run.finished:
-            self._run_finished(run, t_ns)
+    def _cycle(self, t_ns: int, image: npt.NDArray[np.uint8]) -> CycleRecord:
+        record, next_goal = self._goals.cycle(t_ns, image)
+        if record.follow is not None:
+            self._twist = (record.follow.twist.v_m_s, record.follow.twist.omega_rad_s)
+        if next_goal is not None:
+            self._handle(t_ns, RunEnded(next_goal))
         return record
-
-    def _run_finished(self, run: MissionRun, t_ns: int) -> None:
-        mission = self._mission
-        assert mission is not None
-        result = self._last_result = run.result()
-        self._detail = f"{result.reason}: {result.detail}" if result.detail else result.reason
-        self._run = None
-        if result.state is MissionState.ARRIVED:
-            if mission.first_seq is not None:
-                mission.reached += (mission.first_seq + mission.index,)
-            if mission.index + 1 < len(mission.goals):
-                mission.index += 1
-                self._start_run(t_ns)
-                return
-        self._last_state = result.state
-        self._mode = Mode.HOLD
-        self._stop()
-
-    def _end_run(self, t_ns: int, why: str) -> None:
-        run = self._run
-        if run is None:
-            return
-        run.abort(t_ns, why)
-        self._forward_events(run)
-        self._run_finished(run, t_ns)
-
-    def _forward_events(self, run: MissionRun) -> None:
-        events = run.events
-        if self._log is not None:
-            for event in events[self._events_seen:]:
-                self._log.event(event)
-        self._events_seen = len(events)
 
     # -- driving ------------------------------------------------------------------------
 
-    def _watch_base(self, t_ns: int, base: BaseState) -> None:
-        """Rule 9: notice the base going quiet and coming back; "hold" ends the run."""
-        lost_since = self._base_lost_since_ns
-        if not base.reporting and lost_since is None:
-            self._base_lost_since_ns = t_ns
-            if self._run is None:
-                self._say(t_ns, logging.WARNING, "base not reporting: stopped")
-            elif self._config.mission.base_lost_action == "hold":
-                self._say(t_ns, logging.WARNING, "base not reporting: stopped, mission held")
-                self._end_run(t_ns, "the base stopped reporting")
-            else:
-                self._say(t_ns, logging.WARNING, "base not reporting: stopped, mission paused")
-        elif base.reporting and lost_since is not None:
-            self._base_lost_since_ns = None
-            resumes = ", mission resumes" if self._run is not None else ""
-            self._say(t_ns, logging.INFO,
-                      f"base reporting again after {(t_ns - lost_since) / 1e9:.1f} s{resumes}")
-
-    def _drive_manual(self, t_ns: int) -> None:
+    def _drive_manual(self) -> None:
         manual = self._manual
         teleop = self._config.teleop
         if manual is None or self._clock.now_ns() - manual[2] > teleop.deadman_ns:
@@ -524,14 +402,10 @@ class RobotRuntime:
     # -- teaching -----------------------------------------------------------------------
 
     def _teach_start(self, t_ns: int, name: str) -> None:
-        if self._run is not None:
-            self._say(t_ns, logging.WARNING, "teach start refused: a mission is running")
-            return
         name = name or f"path-{len(self._memory.paths) + 1}"
         config = self._config
         selector = KeyImageSelector(self._memory.camera, config.features, config.teach)
         self._teaching = _Teaching(name, selector, [])
-        self._enter(Mode.MANUAL, t_ns)
         self._say(t_ns, logging.INFO, f"teaching {name!r}: drive the route in MANUAL")
 
     def _teach_frame(self, teaching: _Teaching, t_ns: int, image: npt.NDArray[np.uint8],
@@ -540,36 +414,14 @@ class RobotRuntime:
             self._log.teach_frame(t_ns, image, base.odom_pose)
         teaching.key_images += teaching.selector.push(t_ns, image, base.odom_pose)
 
-    def _teach_stop(self, t_ns: int) -> None:
+    def _save_path(self) -> None:
+        """Hand the taught key images to the worker (rule 4)."""
         teaching = self._teaching
         assert teaching is not None
         self._teaching = None
-        self._stop()
         key_images = teaching.key_images + list(teaching.selector.finish())
-        config = self._config
-        length_m = key_images[-1].record.distance_m if key_images else 0.0
-        if len(key_images) < 2 or length_m < config.teach.min_path_length_m:
-            self._say(t_ns, logging.ERROR,
-                      f"teach {teaching.name!r}: {length_m:.2f} m driven, a path needs "
-                      f"{config.teach.min_path_length_m:.2f} m: nothing stored")
-            return
-        try:
-            check_no_orphans(self._memory_dir)
-            memory = (read_memory(self._memory_dir)
-                      if (self._memory_dir / "manifest.json").exists()
-                      else VisualMemory(self._memory.camera))
-            path = memory.add_path(teaching.name, [k.record for k in key_images])
-            attempts = join_path(memory, path, config.features, config.localize, config.teach)
-            write_memory(self._memory_dir, memory)
-        except (VmnavError, OSError) as e:
-            self._say(t_ns, logging.ERROR, f"teach {teaching.name!r} not stored: {e}")
-            return
-        self._memory = memory
-        self._localizer = Localizer.from_memory(memory, config.features, config.localize)
-        joined = sum(a.accepted for a in attempts)
-        self._say(t_ns, logging.INFO,
-                  f"path {path.id} {teaching.name!r}: {len(key_images)} key images, "
-                  f"{joined} junction(s)")
+        self._worker.submit(store_path, self._memory_dir, self._memory.camera, teaching.name,
+                            tuple(k.record for k in key_images), self._config)
 
     # -- output -------------------------------------------------------------------------
 
@@ -579,50 +431,13 @@ class RobotRuntime:
             self._log.note(t_ns, level, text)
 
     def _publish(self, base: BaseState) -> None:
-        run, mission = self._run, self._mission
-        if run is not None:
-            state, detail = run.state, _last_detail(run)
-        else:
-            state, detail = self._last_state, self._detail
-        self._snapshot = VehicleTelemetry(
-            mode=self._mode, mission_state=state, armed=self._armed, mission_detail=detail,
-            teaching=self._teaching is not None, battery_v=base.battery_v,
-            odom_pose=base.odom_pose, velocity=self._twist,
-            goal_key=None if mission is None else mission.goals[-1].key_image_id,
-            servo=self._servo if run is not None else None,
-            mission_seq=(None if mission is None or mission.first_seq is None
-                         else mission.first_seq + min(mission.index, len(mission.goals) - 1)),
-            reached_seqs=() if mission is None else mission.reached,
-            home_pose=self._home, base_reporting=self._base_lost_since_ns is None)
+        top = self._top
+        self._snapshot = self._goals.with_goals(VehicleTelemetry(
+            mode=top.mode, armed=top.armed, teaching=self._teaching is not None,
+            battery_v=base.battery_v, odom_pose=base.odom_pose, velocity=self._twist,
+            home_pose=self._home, base_reporting=not top.base_lost))
 
 
 def _stick(value: float) -> float:
     """A MANUAL_CONTROL axis in [-1, 1]; an unused (NaN) axis is 0."""
     return 0.0 if math.isnan(value) else min(1.0, max(-1.0, value))
-
-
-def _last_detail(run: MissionRun) -> str:
-    """The detail of the run's last transition."""
-    result = run.result()
-    return f"{result.reason}: {result.detail}" if result.detail else result.reason
-
-
-def _servo_telemetry(run: MissionRun, record: CycleRecord) -> ServoTelemetry:
-    """The follower's state of a following cycle, for VISUAL_SERVO_STATUS."""
-    follow = record.follow
-    follower = run.follower
-    assert follow is not None and follower is not None
-    targets = follower.targets
-    vision = follow.vision
-    nan = math.nan
-    return ServoTelemetry(
-        current_key=targets[follow.target_index - 1] if follow.target_index > 0 else None,
-        next_key=targets[min(follow.target_index, len(targets) - 1)],
-        matches=0 if vision is None else vision.matches,
-        err_image_max_px=nan if vision is None else vision.image_errors.err_image_max_px,
-        err_points_px=nan if vision is None else vision.image_errors.err_points_px,
-        y_m=nan if follow.y_m is None else follow.y_m,
-        theta_rad=nan if follow.theta_rad is None else follow.theta_rad,
-        s_m=nan if follow.s_m is None else follow.s_m)
-
-

@@ -84,6 +84,9 @@ class VehicleTelemetry:
         home_pose: the home's pose in the odometry frame (where the
             robot started); None while unknown.
         base_reporting: the mobile base's reports are current (``BaseState.reporting``).
+        run_count: goal runs started so far (each goal of a mission is one run, a photo
+            goal is one): a change tells a new run started, even when its states came
+            and went between two snapshots the endpoint read.
     """
 
     mode: Mode
@@ -100,6 +103,7 @@ class VehicleTelemetry:
     reached_seqs: tuple[int, ...] = ()
     home_pose: Pose2 | None = None
     base_reporting: bool = True
+    run_count: int = 0
 
     @property
     def mission_running(self) -> bool:

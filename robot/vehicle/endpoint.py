@@ -35,8 +35,9 @@ Rules:
    application gets the new config (``params_changed``), at construction too.
 6. Telemetry streams by default (``telemetry.default_periods_ns``), adjustable
    with SET_MESSAGE_INTERVAL; REQUEST_MESSAGE answers any of them, and
-   AUTOPILOT_VERSION. Mission progress and events go out as MISSION_ITEM_REACHED,
-   MISSION_CURRENT and STATUSTEXT (``progress``); the application's notices
+   AUTOPILOT_VERSION. Mission progress and outcomes go out as MISSION_ITEM_REACHED,
+   MISSION_CURRENT and VISUAL_SERVO_STATUS, and as STATUSTEXT for people
+   (``progress``); the application's notices
    (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
    SYS_STATUS ``errors_comm`` counts the corrupt packets received (:meth:`stats`).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
@@ -227,7 +228,7 @@ class VehicleEndpoint:
             self._signing_clock.handle_timer(now_ns)
         out, self._outbox = self._outbox, []
         t = self._app.telemetry()
-        out += self._progress.update(t)
+        out += self._progress.update(t, self._time_usec())
         while (notice := self._app.next_notice()) is not None:
             out += self._notice(_SEVERITIES.get(notice[0], mavlink.MAV_SEVERITY_INFO), notice[1])
         out += self._check_gcs(t, now_ns)

@@ -10,18 +10,26 @@ Rules:
 3. While the uploaded mission runs (``mission_seq`` not None) the mission server
    follows the application's current item and mission state; a change of current
    item broadcasts MISSION_CURRENT.
-4. A change of mission state, or teaching starting or stopping, goes out as a
-   STATUSTEXT with the application's detail line (WARNING for LOST, ABORTED and
-   FAILED, INFO otherwise) and a MISSION_CURRENT. The first snapshot only sets the
-   baseline.
+4. A change of mission state, a new goal run (``run_count``), or teaching starting
+   or stopping, goes out as a STATUSTEXT for people with the application's detail
+   line (WARNING for LOST, ABORTED and FAILED, INFO otherwise) and a
+   MISSION_CURRENT. The first snapshot only sets the baseline.
+5. The same changes send VISUAL_SERVO_STATUS at once, besides its stream: its
+   ``state`` carries the outcome of every goal run, photo goals included
+   (``ground/mission_watch.py``). A new run already out of its working states when
+   first seen (it ended between two polls) is first reported in LOCALIZING, the
+   state every run starts in, so a ground station sees each run start before its
+   outcome. The final state then stays in the stream until the next run starts.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 from robot.mission import MissionState
 from robot.vehicle.app_port import ACTIVE_STATES, VehicleTelemetry
+from robot.vehicle.telemetry import visual_servo_message
 from shared.mavlink.dialect import Message, mavlink
 from shared.mavlink.mission.vehicle import MissionServer
 
@@ -56,10 +64,11 @@ class MissionProgress:
         self._server = server
         self._notice = notice
         self._reported: list[int] = []
-        self._last: tuple[MissionState, bool] | None = None
+        self._last: tuple[MissionState, bool, int] | None = None
 
-    def update(self, t: VehicleTelemetry) -> list[Message]:
-        """The messages the change from the last snapshot calls for."""
+    def update(self, t: VehicleTelemetry, time_usec: int) -> list[Message]:
+        """The messages the change from the last snapshot calls for; ``time_usec``: time
+        since boot, us."""
         server = self._server
         out: list[Message] = []
         if self._reported != list(t.reached_seqs[:len(self._reported)]):
@@ -71,10 +80,14 @@ class MissionProgress:
             server.set_run_state(mission_state_code(t.mission_state))
             if t.mission_seq != server.current_seq and server.set_current(t.mission_seq):
                 out.append(server.current_message())
-        state = (t.mission_state, t.teaching)
+        state = (t.mission_state, t.teaching, t.run_count)
         if self._last is not None and state != self._last:
             out += self._notice(*self._describe(t))
             out.append(server.current_message())
+            if t.run_count != self._last[2] and t.mission_state not in ACTIVE_STATES:
+                start = replace(t, mission_state=MissionState.LOCALIZING, servo=None)
+                out.append(visual_servo_message(start, time_usec))
+            out.append(visual_servo_message(t, time_usec))
         self._last = state
         return out
 

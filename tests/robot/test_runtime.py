@@ -59,7 +59,8 @@ class SimRobot:
         self.memory_dir = memory_dir
         memory = read_memory(memory_dir)
         self.frames = SimFrameSource(self.sim, memory.camera, self.clock)
-        self.runtime = RobotRuntime(memory, memory_dir, config, self.base, self.clock, rng)
+        self.runtime = RobotRuntime(memory, memory_dir, config, self.base, self.clock, rng,
+                                    lockstep=True)
         self.notices: list[tuple[int, str]] = []
 
     def run(self, seconds: float, until=lambda t: False) -> None:

@@ -259,7 +259,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng, log=robot_log)
+    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng, log=robot_log,
+                           lockstep=True)
     files = VehicleFiles(out / "memory", out / "vehicle" / "upload",
                          out / "vehicle" / "params.parm")
     files.param_file.unlink(missing_ok=True)

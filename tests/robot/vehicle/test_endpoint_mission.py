@@ -144,3 +144,36 @@ class TestProgress:
                                                   "mission aborted: bumper")
         assert net.ground.of_type("MISSION_CURRENT")[-1].mission_state == \
             mavlink.MISSION_STATE_PAUSED
+
+
+class TestOutcome:
+    def servo_states(self, net: Net) -> list[int]:
+        return [m.state for m in net.ground.of_type("VISUAL_SERVO_STATUS")]
+
+    def test_each_change_of_state_goes_out_at_once(self, net: Net, app: FakeApp) -> None:
+        net.advance(0.1)
+        seen = len(self.servo_states(net))
+        app.update(mission_state=MissionState.LOCALIZING, run_count=1, goal_key=4)
+        net.advance(0.05)  # well before the stream's next slot
+        app.update(mission_state=MissionState.FAILED, mission_detail="no match")
+        net.advance(0.05)
+        assert self.servo_states(net)[seen:] == [mavlink.VTR_STATE_LOCALIZING,
+                                                 mavlink.VTR_STATE_FAILED]
+
+    def test_a_run_that_ended_between_two_polls_is_seen_starting(
+            self, net: Net, app: FakeApp) -> None:
+        app.update(mission_state=MissionState.ARRIVED, run_count=1, goal_key=4)
+        net.advance(0.1)
+        seen = len(self.servo_states(net))
+        app.update(run_count=2)  # a second run to the same goal came and went
+        net.advance(0.05)
+        assert self.servo_states(net)[seen:] == [mavlink.VTR_STATE_LOCALIZING,
+                                                 mavlink.VTR_STATE_ARRIVED]
+        assert net.ground.notices()[-1] == "mission arrived"
+
+    def test_the_outcome_stays_in_the_stream(self, net: Net, app: FakeApp) -> None:
+        app.update(mission_state=MissionState.FOLLOWING, run_count=1)
+        net.advance(0.1)
+        app.update(mission_state=MissionState.ABORTED, mission_detail="bumper")
+        net.advance(3.0)
+        assert self.servo_states(net)[-4:] == [mavlink.VTR_STATE_ABORTED] * 4

@@ -1,0 +1,40 @@
+"""What the robot's runtime records as it works (the field log's side of it)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from robot.mission_run import AppEvent, CycleRecord
+from shared.config import VmnavConfig
+from shared.pose import Pose2
+
+
+class RuntimeLog(Protocol):
+    """Where the runtime records what it does (the robot's field log)."""
+
+    def mission_started(self, t_ns: int, goal_id: int, rng_state: Any,
+                        config: VmnavConfig) -> None:
+        """A mission run to ``goal_id`` starts; ``rng_state`` is its generator's state."""
+        ...
+
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
+              targets: Sequence[int] = ()) -> None:
+        """One mission cycle on its (H, W) uint8 frame; ``targets``: the route's key images."""
+        ...
+
+    def event(self, event: AppEvent) -> None:
+        """A mission event (transition, key image, localization, lost)."""
+        ...
+
+    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:
+        """A frame recorded while teaching, with the odometry pose."""
+        ...
+
+    def note(self, t_ns: int, level: int, text: str) -> None:
+        """Anything else for the operator (``logging`` level, one line)."""
+        ...
+
