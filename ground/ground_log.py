@@ -191,6 +191,12 @@ class GroundLog:
         self.tlog.close()
         return self.writer.close()
 
+    def summary_text(self, stats: LogStats) -> str:
+        """``logged N packets to DIR/ground-0001.mcap, DIR/ground-<stamp>.tlog``: what the
+        closed log holds (``stats`` from :meth:`close`; N the tlog's packets)."""
+        files = ", ".join(str(path) for path in (*stats.files, self.tlog.path))
+        return f"logged {self.tlog.records} packets to {files}"
+
     def __enter__(self) -> GroundLog:
         return self
 

@@ -1,4 +1,5 @@
-"""One-line texts of a vehicle's telemetry, for ``vmnav ground status`` and ``watch`` (pure).
+"""One-line texts of a vehicle's telemetry, for ``vmnav ground status``, ``watch`` and
+``goto --wait`` (pure).
 
 Wire units stop here: mV become V, FRD odometry becomes the robot's FLU frame
 (x forward, y left, yaw counter-clockwise; ``robot/vehicle/telemetry.py`` does the
@@ -8,6 +9,7 @@ opposite), radians are printed as degrees for people.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 from ground.fleet import VehicleState, mode_name
@@ -46,6 +48,15 @@ def status_line(vehicle: VehicleState, now_ns: int) -> str:
     age_s = (now_ns - vehicle.last_heartbeat_ns) / 1e9
     return (f"vehicle {vehicle.system_id}: mode {vehicle.mode_name}, {state}, "
             f"battery {battery}, mission {mission}, heartbeat {age_s:.1f} s ago")
+
+
+def not_reached_text(outcome: bool | None, waited_s: float, notices: Sequence[str]) -> str:
+    """Why a goal was not reached: ``still on the way after 600 s`` (``outcome`` None, the
+    wait of ``waited_s`` s over) or ``the run stopped short`` (False), then the vehicle's
+    last notice in brackets if it sent any."""
+    why = f"still on the way after {waited_s:g} s" if outcome is None else "the run stopped short"
+    last = f" (last notice: {notices[-1]})" if notices else ""
+    return why + last
 
 
 def _yaw_flu_deg(q_wxyz: list[float]) -> float:

@@ -12,11 +12,19 @@ space       stop: both axes 0
 
 The robot stops by itself when MANUAL_CONTROL stops coming (its dead-man timer), so
 the loop sends the held command every period, changed or not.
+
+:func:`drive_in_terminal` reads the keys from a terminal, put in cbreak mode (each key
+as typed, no Enter needed) for the drive and restored after it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import select
+import termios
+import tty
+from collections.abc import Callable, Iterator
+from typing import TextIO
 
 from ground.station import GroundStation
 from shared.clock import Clock
@@ -25,6 +33,8 @@ from shared.clock import Clock
 STEP = 0.2
 #: MANUAL_CONTROL period, ns (10 Hz).
 PERIOD_NS = 100_000_000
+#: The keys, for people.
+KEYS_HELP = "w/s speed, a/d turn, space stop, q quit"
 _QUIT = frozenset("q\x1b")
 
 
@@ -78,3 +88,45 @@ def drive(station: GroundStation, read_keys: Callable[[], str], clock: Clock,
             station.run_until(lambda: False, max(0, deadline_ns - clock.now_ns()))
     finally:
         station.send_manual_control(0.0, 0.0)
+
+
+@contextlib.contextmanager
+def terminal_keys(terminal: TextIO) -> Iterator[Callable[[], str]]:
+    """Put ``terminal`` in cbreak mode until exit; yields its ``read_keys`` for :func:`drive`.
+
+    Raises:
+        termios.error: ``terminal`` is not a terminal.
+    """
+    fd = terminal.fileno()
+
+    def read_keys() -> str:
+        keys = ""
+        while select.select([fd], [], [], 0)[0]:
+            keys += terminal.read(1)
+        return keys
+
+    saved = termios.tcgetattr(fd)
+    tty.setcbreak(fd)
+    try:
+        yield read_keys
+    finally:
+        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def drive_in_terminal(station: GroundStation, terminal: TextIO, out: TextIO) -> None:
+    """:func:`drive` from the keys typed in ``terminal``, after a line of help on ``out``;
+    the held command is shown on one line of ``out``, rewritten after each key.
+
+    Raises:
+        termios.error: ``terminal`` is not a terminal.
+    """
+
+    def show(teleop: KeyboardTeleop) -> None:
+        print(f"\rforward {teleop.x:+.1f}  yaw {teleop.r:+.1f}   ", end="", file=out, flush=True)
+
+    print(KEYS_HELP, file=out)
+    try:
+        with terminal_keys(terminal) as read_keys:
+            drive(station, read_keys, station.clock, show)
+    finally:
+        print(file=out)

@@ -6,6 +6,11 @@ heard), does its one thing and exits: 0 on success, 1 with one line on stderr wh
 vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. With
 ``--log DIR`` every MAVLink packet in and out also goes to ``DIR/ground-NNNN.mcap`` and
 ``DIR/ground-<stamp>.tlog`` (``ground.ground_log``).
+
+The subcommands with actions of their own are modules of their own, registered here:
+``memory`` (:mod:`tools.ground_memory_cmd`), ``teach`` (:mod:`tools.ground_teach_cmd`),
+``params`` (:mod:`tools.ground_params_cmd`). Every action is ``(station, args) -> exit
+code``, called by :func:`run` once the vehicle is heard.
 """
 
 from __future__ import annotations
@@ -14,19 +19,17 @@ import argparse
 import contextlib
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from tools import ground_memory_cmd, ground_params_cmd, ground_teach_cmd
 
 if TYPE_CHECKING:
-    from ground.fleet import VehicleState
-    from ground.station import GroundStation, PacketTap
-    from shared.clock import Clock
+    from ground.station import GroundStation
 
 #: Default wait for the vehicle's HEARTBEAT, s.
 DEFAULT_TIMEOUT_S = 5.0
 #: Default wait for a goal to be reached (``goto --wait``), s.
 DEFAULT_WAIT_S = 600.0
-#: Where the robot serves its key image thumbnails (``robot.vehicle.ftp_memory``).
-THUMBNAILS = "/memory/thumbnails"
 #: ``watch`` without ``--duration`` runs until Ctrl-C: about 31 years, ns.
 FOREVER_NS = 10**18
 
@@ -59,16 +62,7 @@ def add_parser(subparsers: Subparsers) -> None:
     watch = sub.add_parser("watch", help="live telemetry lines until Ctrl-C")
     watch.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     watch.set_defaults(action=run_watch)
-
-    memory = sub.add_parser("memory", help="the robot's visual memory over MAVLink FTP")
-    memory_sub = memory.add_subparsers(dest="memory_command", metavar="ACTION", required=True)
-    memory_sub.add_parser("list", help="key images with a thumbnail").set_defaults(
-        action=run_memory_list)
-    get = memory_sub.add_parser("get", help="download key image thumbnails (PNG)")
-    get.add_argument("ids", type=int, nargs="+", metavar="ID", help="key image ids")
-    get.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder to write to")
-    get.set_defaults(action=run_memory_get)
-
+    ground_memory_cmd.add_parser(sub)
     goto = sub.add_parser("goto", help="drive to a key image, or to where a photo was taken",
                           description="Upload a one-goal mission and start it, or upload a "
                           "photo and ask the robot to localize it and go there.")
@@ -79,26 +73,8 @@ def add_parser(subparsers: Subparsers) -> None:
     goto.add_argument("--wait-timeout", type=float, default=DEFAULT_WAIT_S, metavar="S",
                       help=f"give up waiting after S seconds (default {DEFAULT_WAIT_S:g})")
     goto.set_defaults(action=run_goto)
-
-    teach = sub.add_parser("teach", help="record a visual path while driving")
-    teach_sub = teach.add_subparsers(dest="teach_command", metavar="ACTION", required=True)
-    start = teach_sub.add_parser("start", help="start recording")
-    start.add_argument("name", metavar="NAME", help="the path's name (up to 21 ASCII characters)")
-    start.set_defaults(action=run_teach_start)
-    teach_sub.add_parser("stop", help="stop; the path joins the memory").set_defaults(
-        action=run_teach_stop)
-
-    params = sub.add_parser("params", help="the robot's parameters")
-    params_sub = params.add_subparsers(dest="params_command", metavar="ACTION", required=True)
-    params_sub.add_parser("list", help="every parameter").set_defaults(action=run_params_list)
-    param_get = params_sub.add_parser("get", help="one parameter")
-    param_get.add_argument("name", metavar="NAME")
-    param_get.set_defaults(action=run_params_get)
-    param_set = params_sub.add_parser("set", help="set one parameter (persisted on the robot)")
-    param_set.add_argument("name", metavar="NAME")
-    param_set.add_argument("value", type=float, metavar="VALUE")
-    param_set.set_defaults(action=run_params_set)
-
+    ground_teach_cmd.add_parser(sub)
+    ground_params_cmd.add_parser(sub)
     sub.add_parser("drive", help="keyboard teleoperation in MANUAL: w/s speed, a/d turn, "
                    "space stop, q quit").set_defaults(action=run_drive)
     ground.set_defaults(run=run)
@@ -108,8 +84,10 @@ def run(args: argparse.Namespace) -> int:
     """Connect, wait for the vehicle, and run the subcommand's action on the station."""
     import time
 
+    from ground.ground_log import GroundLog
     from ground.station import GroundStation
     from shared.clock import WallClock
+    from shared.config import LogConfig
     from shared.errors import InputError
     from shared.key_file import read_key_file
 
@@ -122,28 +100,12 @@ def run(args: argparse.Namespace) -> int:
         station = stack.enter_context(GroundStation.open(
             args.connect, clock, system_id=args.system, key=key, unix_offset_ns=unix_offset_ns))
         if args.log is not None:
-            station.packet_taps.append(open_ground_log(stack, args.log, clock, unix_offset_ns))
+            ground_log = GroundLog(LogConfig(output_dir=str(args.log)), clock, unix_offset_ns)
+            stack.callback(lambda: print(
+                f"vmnav ground: {ground_log.summary_text(ground_log.close())}", file=sys.stderr))
+            station.packet_taps.append(ground_log.record)
         station.wait_vehicle(args.timeout)
         return int(args.action(station, args))
-
-
-def open_ground_log(stack: contextlib.ExitStack, folder: Path, clock: Clock,
-                    unix_offset_ns: int) -> PacketTap:
-    """Open the ground log in ``folder``, closed by ``stack`` with a line on stderr naming
-    its files; its packet tap."""
-    from ground.ground_log import GroundLog
-    from shared.config import LogConfig
-
-    ground_log = GroundLog(LogConfig(output_dir=str(folder)), clock, unix_offset_ns)
-
-    def close() -> None:
-        stats = ground_log.close()
-        files = ", ".join(str(path) for path in (*stats.files, ground_log.tlog.path))
-        print(f"vmnav ground: logged {ground_log.tlog.records} packets to {files}",
-              file=sys.stderr)
-
-    stack.callback(close)
-    return ground_log.record
 
 
 def run_status(station: GroundStation, args: argparse.Namespace) -> int:
@@ -161,56 +123,19 @@ def run_status(station: GroundStation, args: argparse.Namespace) -> int:
 
 def run_watch(station: GroundStation, args: argparse.Namespace) -> int:
     """Print a line per telemetry message and per notice until Ctrl-C or ``--duration``."""
-    from ground.telemetry_text import describe
+    from ground.watch import watch
     from shared.clock import NS_PER_S
 
-    start_ns = station.clock.now_ns()
-    shown: dict[int, int] = {}  # system id -> notices printed
-
-    def show(vehicle: VehicleState, msg: Any) -> None:
-        elapsed_s = (station.clock.now_ns() - start_ns) / NS_PER_S
-        stamp = f"{elapsed_s:8.2f} s  vehicle {vehicle.system_id}"
-        for notice in vehicle.notices[shown.get(vehicle.system_id, 0):]:
-            print(f"{stamp}  NOTICE: {notice}", flush=True)
-        shown[vehicle.system_id] = len(vehicle.notices)
-        line = describe(msg)
-        if line is not None:
-            print(f"{stamp}  {msg.get_type()}: {line}", flush=True)
-
-    station.listeners.append(show)
     duration_ns = (round(args.duration * NS_PER_S) if args.duration is not None
                    else FOREVER_NS)
     with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C is the normal way out
-        station.run_until(lambda: False, duration_ns)
-    return 0
-
-
-def run_memory_list(station: GroundStation, args: argparse.Namespace) -> int:
-    """Print the key image ids that have a thumbnail, one per line with its size."""
-    entries = station.ftp_list(THUMBNAILS)
-    ids = sorted(int(e.name.removesuffix(".png")) for e in entries
-                 if not e.is_dir and e.name.removesuffix(".png").isdigit())
-    sizes = {e.name: e.size for e in entries}
-    for key in ids:
-        print(f"{key}\t{sizes[f'{key}.png']} bytes")
-    print(f"{len(ids)} key images", file=sys.stderr)
-    return 0
-
-
-def run_memory_get(station: GroundStation, args: argparse.Namespace) -> int:
-    """Download the thumbnails of ``args.ids`` into ``args.out``."""
-    from shared.atomic_file import write_bytes_atomic
-
-    args.out.mkdir(parents=True, exist_ok=True)
-    for key in args.ids:
-        path = args.out / f"{key}.png"
-        write_bytes_atomic(path, station.ftp_get(f"{THUMBNAILS}/{key}.png"))
-        print(path)
+        watch(station, lambda line: print(line, flush=True), duration_ns)
     return 0
 
 
 def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     """Dispatch the goal; with ``--wait``, 0 when reached and 1 when not."""
+    from ground.telemetry_text import not_reached_text
     from shared.errors import InputError
     from shared.mavlink.mission.goal import Goal
 
@@ -238,73 +163,16 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     if station.wait_mission_done(args.wait_timeout):
         print(f"vehicle {vehicle.system_id}: goal reached")
         return 0
-    last = f" (last notice: {vehicle.notices[-1]})" if vehicle.notices else ""
-    why = (f"still on the way after {args.wait_timeout:g} s" if station.mission_outcome is None
-           else "the run stopped short")
-    print(f"vmnav ground: goal not reached: {why}{last}", file=sys.stderr)
+    why = not_reached_text(station.mission_outcome, args.wait_timeout, vehicle.notices)
+    print(f"vmnav ground: goal not reached: {why}", file=sys.stderr)
     return 1
-
-
-def run_teach_start(station: GroundStation, args: argparse.Namespace) -> int:
-    """Start recording path ``args.name``."""
-    station.teach_start(args.name)
-    print(f"vehicle {station.vehicle.system_id}: teaching {args.name!r}")
-    return 0
-
-
-def run_teach_stop(station: GroundStation, args: argparse.Namespace) -> int:
-    """Stop recording."""
-    station.teach_stop()
-    print(f"vehicle {station.vehicle.system_id}: teaching stopped")
-    return 0
-
-
-def run_params_list(station: GroundStation, args: argparse.Namespace) -> int:
-    """Print every parameter as ``NAME = value``."""
-    for name, value in station.fetch_params().items():
-        print(f"{name} = {value:g}")
-    return 0
-
-
-def run_params_get(station: GroundStation, args: argparse.Namespace) -> int:
-    """Print one parameter."""
-    print(f"{args.name} = {station.get_param(args.name):g}")
-    return 0
-
-
-def run_params_set(station: GroundStation, args: argparse.Namespace) -> int:
-    """Set one parameter and print the value in force."""
-    print(f"{args.name} = {station.set_param(args.name, args.value):g}")
-    return 0
 
 
 def run_drive(station: GroundStation, args: argparse.Namespace) -> int:
     """Keyboard teleoperation in MANUAL from the terminal (``ground.teleop``)."""
-    import select
-    import termios
-    import tty
-
-    from ground.teleop import KeyboardTeleop, drive
+    from ground.teleop import drive_in_terminal
     from shared.mavlink.modes import Mode
 
     station.set_mode(Mode.MANUAL)
-    fd = sys.stdin.fileno()
-
-    def read_keys() -> str:
-        keys = ""
-        while select.select([fd], [], [], 0)[0]:
-            keys += sys.stdin.read(1)
-        return keys
-
-    def show(teleop: KeyboardTeleop) -> None:
-        print(f"\rforward {teleop.x:+.1f}  yaw {teleop.r:+.1f}   ", end="", flush=True)
-
-    print("w/s speed, a/d turn, space stop, q quit")
-    saved = termios.tcgetattr(fd)
-    tty.setcbreak(fd)
-    try:
-        drive(station, read_keys, station.clock, show)
-    finally:
-        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
-        print()
+    drive_in_terminal(station, sys.stdin, sys.stdout)
     return 0
