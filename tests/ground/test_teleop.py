@@ -1,8 +1,15 @@
-"""KeyboardTeleop: the held command (the 10 Hz loop runs in test_station.py)."""
+"""KeyboardTeleop: the held command, and keys from a terminal (a pty); the 10 Hz loop runs
+in test_station.py."""
 
 from __future__ import annotations
 
-from ground.teleop import KeyboardTeleop
+import os
+import pty
+import termios
+import time
+from collections.abc import Callable
+
+from ground.teleop import KeyboardTeleop, terminal_keys
 
 
 def test_keys_change_the_held_command_within_limits() -> None:
@@ -13,3 +20,26 @@ def test_keys_change_the_held_command_within_limits() -> None:
     assert (teleop.x, teleop.r) == (0.8, -0.4)
     assert teleop.press(" ") and (teleop.x, teleop.r) == (0.0, 0.0)
     assert not teleop.press("q") and not teleop.press("\x1b")
+
+
+def test_terminal_keys_reads_each_key_in_cbreak_mode_and_restores_the_terminal() -> None:
+    main_fd, terminal_fd = pty.openpty()
+    with os.fdopen(terminal_fd, "r") as terminal, os.fdopen(main_fd, "wb", buffering=0) as keys:
+        canonical = termios.tcgetattr(terminal_fd)
+        assert canonical[3] & termios.ICANON
+        with terminal_keys(terminal) as read_keys:
+            assert not termios.tcgetattr(terminal_fd)[3] & termios.ICANON
+            assert read_keys() == ""
+            keys.write(b"w")
+            assert wait_keys(read_keys) == "w"  # no Enter needed
+            keys.write(b"a")
+            assert wait_keys(read_keys) == "a"
+        assert termios.tcgetattr(terminal_fd) == canonical
+
+
+def wait_keys(read_keys: Callable[[], str]) -> str:
+    """The first keys read within 2 s (a pty hands them over at once, but not synchronously)."""
+    deadline = time.monotonic() + 2.0
+    while not (keys := read_keys()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return keys
