@@ -20,6 +20,7 @@ as typed, no Enter needed) for the drive and restored after it.
 from __future__ import annotations
 
 import contextlib
+import os
 import select
 import termios
 import tty
@@ -100,9 +101,12 @@ def terminal_keys(terminal: TextIO) -> Iterator[Callable[[], str]]:
     fd = terminal.fileno()
 
     def read_keys() -> str:
+        # From the descriptor, not ``terminal.read``: the text layer would buffer keys
+        # typed together (key repeat) where ``select`` no longer sees them. Keys are ASCII;
+        # anything else becomes U+FFFD, an unknown key.
         keys = ""
         while select.select([fd], [], [], 0)[0]:
-            keys += terminal.read(1)
+            keys += os.read(fd, 64).decode("ascii", errors="replace")
         return keys
 
     saved = termios.tcgetattr(fd)

@@ -31,15 +31,18 @@ def test_terminal_keys_reads_each_key_in_cbreak_mode_and_restores_the_terminal()
             assert not termios.tcgetattr(terminal_fd)[3] & termios.ICANON
             assert read_keys() == ""
             keys.write(b"w")
-            assert wait_keys(read_keys) == "w"  # no Enter needed
-            keys.write(b"a")
-            assert wait_keys(read_keys) == "a"
+            assert read_within(read_keys, 1) == "w"  # no Enter needed
+            keys.write(b"wwd")  # typed together (key repeat): none held back
+            assert read_within(read_keys, 3) == "wwd"
         assert termios.tcgetattr(terminal_fd) == canonical
 
 
-def wait_keys(read_keys: Callable[[], str]) -> str:
-    """The first keys read within 2 s (a pty hands them over at once, but not synchronously)."""
+def read_within(read_keys: Callable[[], str], count: int) -> str:
+    """The keys read until ``count`` of them or 2 s (a pty hands them over at once, but not
+    synchronously)."""
     deadline = time.monotonic() + 2.0
-    while not (keys := read_keys()) and time.monotonic() < deadline:
+    keys = ""
+    while len(keys) < count and time.monotonic() < deadline:
+        keys += read_keys()
         time.sleep(0.01)
     return keys
