@@ -2,8 +2,10 @@
 
 Modules: ``station`` (the link and the blocking API), ``fleet`` (vehicles by system
 id), ``mission_watch`` (whether a goal was reached), ``telemetry_text`` (lines for
-people), ``teleop`` (keyboard driving). The sans-I/O ends of the MAVLink protocols
-the station drives are the GCS roles in ``shared.mavlink`` (its module docstring).
+people), ``watch`` (live telemetry lines), ``teleop`` (keyboard driving, from a
+terminal), ``ground_log`` (every packet in and out, MCAP and tlog). The sans-I/O ends
+of the MAVLink protocols the station drives are the GCS roles in ``shared.mavlink``
+(its module docstring).
 """
 
 #: QGroundControl's listening address: vehicles send there by default.

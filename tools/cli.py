@@ -6,8 +6,9 @@ into config objects and calls package code that knows nothing about argparse: ro
 ground/, sim/, shared/, or the packages of tools/ (``harness``: what wires two of
 robot/, sim/ and ground/ together; ``bench``: the benchmarks; ``figures``: reports and
 plots). Subcommand modules do not import each other, except that a command registers
-its own nested subcommand's module (``sim serve``, ``memory localize``). Heavy imports
-(OpenCV, pymunk) happen inside ``run`` so ``vmnav --help`` is fast.
+its own nested subcommands' modules (``sim serve``, ``memory localize``, ``ground
+memory``/``teach``/``params``). Heavy imports (OpenCV, pymunk) happen inside ``run``
+so ``vmnav --help`` is fast.
 
 A :class:`~shared.errors.VmnavError` prints as one line on stderr with exit code 1;
 anything else is a bug and keeps its traceback.

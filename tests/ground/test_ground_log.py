@@ -119,6 +119,16 @@ def test_tlog_flushes_once_the_oldest_record_is_a_period_old(tmp_path: Path) -> 
                                                           1_795_274_557.5, 1_795_274_558.0]
 
 
+def test_summary_names_the_files_and_counts_the_packets(tmp_path: Path) -> None:
+    msg, packet = heartbeat_packet()
+    ground_log = GroundLog(LogConfig(output_dir=str(tmp_path)), ManualClock(), UNIX_NS)
+    for now_ns in (0, S):
+        ground_log.record("out", packet, msg, now_ns)
+    summary = ground_log.summary_text(ground_log.close())
+    assert summary == (f"logged 2 packets to {tmp_path / 'ground-0001.mcap'}, "
+                       f"{tmp_path / 'ground-20261121-152237.tlog'}")
+
+
 def test_tlogs_opened_in_the_same_second_get_their_own_files(tmp_path: Path) -> None:
     paths = []
     for i in range(3):
