@@ -71,6 +71,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mission import MissionState
@@ -78,7 +79,6 @@ from robot.mission_run import AppEvent, CycleRecord, MissionResult, MissionRun
 from robot.teach import KeyImageSelector, OdomPose, SelectedKeyImage
 from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, ServoTelemetry, VehicleTelemetry
 from shared.clock import Clock
-from shared.config import VmnavConfig
 from shared.errors import VmnavError
 from shared.interfaces import BaseState, MobileBase
 from shared.mavlink.dialect import mavlink

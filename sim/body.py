@@ -43,9 +43,9 @@ import math
 import numpy as np
 import pymunk
 
-from shared.config import BodyConfig, OdometryConfig
 from shared.errors import InputError
 from sim._shapes import Category, tag
+from sim.config import BodyConfig, OdometryConfig
 from sim.world import Pose2
 
 _FOLLOW_REL = 0.5  # the motion follows when within half the set-point...

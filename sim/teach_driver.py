@@ -29,7 +29,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from shared.config import TeachDriverConfig
+from sim.config import TeachDriverConfig
 from sim.driver import DriveCommand, PurePursuit
 
 FloatArray = npt.NDArray[np.float64]

@@ -177,7 +177,7 @@ def run_vision(args: argparse.Namespace) -> int:
     """Print the vision benchmark's JSON."""
     import dataclasses
 
-    from shared.config import load_config
+    from robot.config import load_config
     from shared.errors import InputError
     from tools.vision_bench import VisionBenchPlan, bench_vision
 
@@ -202,7 +202,7 @@ def run_vision(args: argparse.Namespace) -> int:
 
 def run_follow(args: argparse.Namespace) -> int:
     """Print the route-following benchmark's JSON."""
-    from shared.config import CONTROL_LAWS, load_config
+    from robot.config import CONTROL_LAWS, load_config
     from shared.errors import InputError
     from tools.demo import DEMO_MAX_OMEGA_DEG
     from tools.follow_bench import FollowBenchPlan, bench_follow

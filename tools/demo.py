@@ -33,11 +33,12 @@ from ground.station import GroundError
 from shared.errors import InputError
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.field_log import FieldLog
     from robot.mission_run import CycleRecord, MissionResult
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
     from shared.memory import VisualMemory
+    from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.demo_ground import DispatchResult

@@ -41,10 +41,10 @@ from shared.logs import topics
 from shared.logs.series import log_series, series_name
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.memory.junctions import JunctionAttempt
     from robot.teach import OdomPose, SelectedKeyImage, TeachFrame
     from shared.camera_model import CameraModel
-    from shared.config import VmnavConfig
     from shared.memory import VisualMemory, VisualPath
 
 

@@ -79,8 +79,8 @@ def run_localize(args: argparse.Namespace) -> int:
     """Print where ``args.image`` is in the memory in ``args.directory``."""
     import time
 
+    from robot.config import load_config
     from robot.memory import Localizer
-    from shared.config import load_config
     from shared.memory import read_memory
 
     config = load_config(args.config)
@@ -260,7 +260,7 @@ def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: i
 
 def run_build(args: argparse.Namespace) -> int:
     """Build a path of the memory in ``args.memory`` from ``args.log``; print a summary."""
-    from shared.config import load_config
+    from robot.config import load_config
     from tools.memory_build import build_path, summary_text
 
     config = load_config(args.config)

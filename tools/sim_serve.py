@@ -24,8 +24,8 @@ from tools.sim_args import add_sim_arguments, sim_config_from_args
 if TYPE_CHECKING:
     from shared.byte_link import ByteLink
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig
     from sim.camera_server import CameraServer
+    from sim.config import SimConfig
     from sim.pioneer import PioneerServer, TcpListener
 
 DEFAULT_ARIA = "tcp:8101"

@@ -33,13 +33,14 @@ from shared.errors import InputError
 from tools.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.memory.junctions import JunctionAttempt
     from robot.teach import OdomPose, SelectedKeyImage
     from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
     from shared.logs.writer import LogStats
     from shared.memory import VisualMemory, VisualPath
+    from sim.config import SimConfig
     from sim.world import Route, World
 
 #: Mixed with the simulation seed for the teach driver's random wander.
@@ -99,9 +100,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach the route, store the path and print a summary."""
+    from robot.config import load_config
     from robot.field_log import FieldLog
     from robot.memory.junctions import join_path
-    from shared.config import load_config
     from shared.memory import write_memory
     from sim.world import load_world
 
@@ -115,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     teach_log = None if args.log is None else FieldLog(
         dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",
-        sim_config.camera,
+        config.camera.mount,
         {"source": "vmnav teach --sim (lock-step)", "world": world.name, "route": route.name,
          "seed": str(sim_config.seed)})
     try:
@@ -200,8 +201,9 @@ def teach_in_sim(
     Args:
         world: the world of the route.
         route: the route to drive, from its start pose.
-        config: teach, driver and feature parameters.
-        sim_config: the simulation's config (its seed seeds the driver too).
+        config: teach and feature parameters.
+        sim_config: the simulation's config (the teach driver's too; its seed seeds the
+            driver).
         camera: the simulated camera.
         on_frame: called with each frame's (t_ns, image, odometry pose), e.g.
             :meth:`robot.field_log.FieldLog.teach_frame`.
@@ -220,7 +222,7 @@ def teach_in_sim(
     sim = Simulation(world, sim_config)
     sim.place_robot(route.start_pose())
     renderer = FisheyeRenderer.for_simulation(sim, camera)
-    driver_config = config.teach_driver
+    driver_config = sim_config.teach_driver
     driver = TeachDriver(
         route.waypoints, driver_config, np.random.default_rng([sim_config.seed, DRIVER_STREAM])
     )

@@ -26,8 +26,8 @@ import enum
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from robot.config import FeatureConfig, LocalizeConfig, TeachConfig
 from robot.memory.localize import Localizer
-from shared.config import FeatureConfig, LocalizeConfig, TeachConfig
 from shared.memory import Junction, VisualMemory, VisualPath
 
 

@@ -33,10 +33,10 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import FeatureConfig, MatchConfig
 from robot.vision.features import detect_harris
 from robot.vision.matching import match_zncc
 from robot.vision.synthetic import ImagePair, similarity_homography, transform_pixels, warped_pair
-from shared.config import FeatureConfig, MatchConfig
 
 #: A match is an inlier when it lies within this distance of the ground truth, px.
 INLIER_TOLERANCE_PX = 2.0

@@ -28,12 +28,12 @@ from typing import Any
 
 import numpy as np
 
+from robot.config import PathStateConfig
 from robot.vision.bearings import level_bearings
 from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.path_state import PathState, state_from_two_views, state_from_views
 from robot.vision.synthetic_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 from shared.camera_mount import rotation_level_cam
-from shared.config import PathStateConfig
 
 #: Errors larger than this count as gross failures, m and degrees.
 GROSS_Y_M = 0.10

@@ -70,8 +70,8 @@ from shared.aria import (
     wrap_position,
 )
 from shared.aria.state import OPEN_STATES
-from shared.config import EmulatorConfig
 from shared.errors import ConfigError, LocalProtocolError
+from sim.config import EmulatorConfig
 from sim.pioneer.motion import MotionController, Pose
 from sim.pioneer.p3at import (
     ANGLE_CONV_RAD,

@@ -21,15 +21,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robot.config import ControlConfig, VmnavConfig
 from robot.field_log import FieldLog
 from robot.logged_missions import read_missions
 from robot.mission_run import CycleRecord, MissionRun
 from robot.replay import LoggedCycle, MissionStart, ReplayBase, differs, replay
-from shared.config import ControlConfig, LogConfig, SimConfig, VmnavConfig
+from shared.config import LogConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState, MobileBase
 from shared.logs.series import log_series
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
+from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
@@ -79,8 +81,8 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     base, _ = lockstep_pioneer(clock, CONFIG.pioneer, np.random.default_rng(7))
     frames = RememberingFrames(SimFrameSource(sim, camera, clock))
     logs = [FieldLog(LogConfig(output_dir=str(folder / "png"), replay_frames=True,
-                               rotate_period_ns=2_000_000_000), "robot", CONFIG.sim.camera, {}),
-            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.sim.camera, {})]
+                               rotate_period_ns=2_000_000_000), "robot", CONFIG.camera.mount, {}),
+            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.camera.mount, {})]
     rng = np.random.default_rng(3)
     records: list[CycleRecord] = []
     for goal in GOALS:
@@ -160,7 +162,7 @@ class TestBadInput:
         assert message in err
 
     def test_a_log_without_missions(self, logged: Logged, tmp_path: Path) -> None:
-        with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.sim.camera,
+        with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.camera.mount,
                       {}) as log:
             log.teach_frame(0, np.zeros((600, 800), np.uint8), (0.0, 0.0, 0.0))
         self.check(*run_cli(str(tmp_path / "teach-0001.mcap"), "--memory", str(logged.memory)),

@@ -19,13 +19,14 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import VmnavConfig
 from robot.mission import MissionState
 from robot.runtime import RobotRuntime
-from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
+from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation

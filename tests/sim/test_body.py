@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shared.config import BodyConfig, OdometryConfig, SimConfig
 from shared.errors import InputError
 from sim.body import ramp
+from sim.config import BodyConfig, OdometryConfig, SimConfig
 from sim.simulation import Simulation
 from sim.world import Pose2, World
 from tests.sim.rooms import box_room

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from shared.camera_model import CameraModel
-from shared.config import CameraMountConfig, PeopleConfig, RenderConfig, SimConfig
+from shared.config import CameraMountConfig
 from sim._geometry import segments_cross
+from sim.config import PeopleConfig, RenderConfig, SimConfig
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world

@@ -3,7 +3,7 @@ from __future__ import annotations
 import pytest
 
 from shared.clock import Clock
-from shared.config import SimConfig
+from sim.config import SimConfig
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2

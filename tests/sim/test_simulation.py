@@ -6,8 +6,8 @@ import numpy as np
 import pymunk
 import pytest
 
-from shared.config import OdometryConfig, PeopleConfig, SimConfig
 from shared.errors import ConfigError
+from sim.config import OdometryConfig, PeopleConfig, SimConfig
 from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.world import Pose2, load_world
 

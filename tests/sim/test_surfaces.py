@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
-from shared.config import CameraMountConfig, RenderConfig, SimConfig
+from shared.config import CameraMountConfig
 from shared.errors import InputError, ShapeError
 from sim._geometry import point_segment_distances, points_in_polygons
+from sim.config import RenderConfig, SimConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shared.config import PioneerDriverConfig, SimConfig
+from robot.config import PioneerDriverConfig
 from shared.interfaces import MobileBase
+from sim.config import SimConfig
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world

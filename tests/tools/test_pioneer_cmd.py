@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from shared.clock import WallClock
-from shared.config import SimConfig
+from sim.config import SimConfig
 from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world

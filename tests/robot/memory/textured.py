@@ -10,11 +10,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robot.config import FeatureConfig
 from robot.vision.features import detect_harris
 from robot.vision.lens_mask import lens_mask
 from robot.vision.synthetic import similarity_homography, warped_pair
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig
 from shared.memory import KeyframeRecord, VisualMemory
 from tests.shared.memory.builders import small_camera
 

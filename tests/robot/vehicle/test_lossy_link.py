@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from robot.config import VmnavConfig
 from shared.clock import ManualClock
-from shared.config import VmnavConfig
 from shared.mavlink.dialect import to_float32
 from shared.mavlink.goal import Goal
 from shared.mavlink.mission_client import DownloadDone, UploadDone

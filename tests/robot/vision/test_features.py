@@ -8,9 +8,9 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig
 from robot.vision.features import Features, detect_harris
 from robot.vision.synthetic import texture
-from shared.config import FeatureConfig
 from shared.errors import InputError, ShapeError
 
 CONFIG = FeatureConfig()

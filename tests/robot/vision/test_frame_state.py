@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import MatchConfig, PathStateConfig
 from robot.vision.features import Features
 from robot.vision.frame_state import (
     key_correspondences,
@@ -19,7 +20,6 @@ from robot.vision.frame_state import (
     state_from_frame,
 )
 from robot.vision.synthetic_scene import CorridorScene, SceneView, corridor_scene
-from shared.config import MatchConfig, PathStateConfig
 from shared.errors import DegenerateGeometryError, InputError, ShapeError
 
 CONFIG = PathStateConfig()

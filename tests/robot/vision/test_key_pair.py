@@ -8,11 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import PathStateConfig
 from robot.vision.bearings import level_bearings
 from robot.vision.key_pair import KeyPairGeometry, camera_baseline_level, key_pair_geometry
 from robot.vision.synthetic_scene import CorridorScene, SceneView, corridor_scene
 from shared.camera_mount import camera_pose_world, rotation_level_cam
-from shared.config import CameraMountConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError, ShapeError
 
 CONFIG = PathStateConfig()

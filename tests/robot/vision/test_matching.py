@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from robot.config import FeatureConfig, MatchConfig
 from robot.vision.features import Features, detect_harris
 from robot.vision.matching import Matches, match_zncc
 from robot.vision.synthetic import similarity_homography, transform_pixels, warped_pair
-from shared.config import FeatureConfig, MatchConfig
 from shared.errors import ShapeError
 
 FEATURES = FeatureConfig()

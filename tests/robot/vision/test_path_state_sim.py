@@ -11,13 +11,14 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig, PathStateConfig
 from robot.vision.features import Features, detect_harris
 from robot.vision.frame_state import key_segment_from_key_images, state_from_frame
 from robot.vision.lens_mask import lens_mask
 from robot.vision.path_state import PathState
 from robot.vision.synthetic_scene import Pose2D, compose
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig, PathStateConfig, SimConfig
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
@@ -46,7 +47,7 @@ def views() -> _Views:
 
 def _state(views: _Views, previous: Pose2D, next_: Pose2D, current: Pose2D,
            rng: np.random.Generator) -> PathState:
-    mount, config = views.config.camera, PathStateConfig()
+    mount, config = views.config.camera_mount, PathStateConfig()
     f_prev, f_next, f_cur = (views.features(p) for p in (previous, next_, current))
     # Teach odometry: the true poses with a 1 % scale error on the spacing. No teach
     # tracks: the key images are matched directly.

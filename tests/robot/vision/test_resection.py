@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import PathStateConfig
 from robot.vision._epipolar_error import rotation_y
 from robot.vision.bearings import level_bearings
 from robot.vision.resection import resect_planar
 from robot.vision.synthetic_scene import CorridorScene, corridor_scene
 from shared.camera_mount import rotation_level_cam
-from shared.config import PathStateConfig
 from shared.errors import ShapeError
 from tests.robot.vision.test_key_pair import level_pose_world, previous_pair
 

@@ -6,7 +6,8 @@ import dataclasses
 
 import pytest
 
-from shared.config import ControlConfig, MavlinkConfig, VmnavConfig
+from robot.config import ControlConfig, VmnavConfig
+from shared.config import MavlinkConfig
 from shared.errors import ConfigError
 from shared.mavlink.param_table import NAME_LEN
 from shared.mavlink.params import ParamChanged, ParamClient, ParamServer
