@@ -38,7 +38,7 @@ import time
 import urllib.error
 import urllib.request
 from contextlib import ExitStack
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -343,5 +343,4 @@ def robot_config_text(config: VmnavConfig) -> str:
     return (f"[control]\nlaw = \"{config.control.law}\"\n"
             f"max_omega_rad_s = {config.control.max_omega_rad_s!r}\n"
             "[camera.mount]\n"
-            + "".join(f"{name} = {getattr(mount, name)!r}\n"
-                      for name in ("x_m", "y_m", "height_m", "yaw_deg", "pitch_deg", "roll_deg")))
+            + "".join(f"{f.name} = {getattr(mount, f.name)!r}\n" for f in fields(mount)))

@@ -15,12 +15,14 @@ import io
 import itertools
 import json
 import shutil
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from robot import logged_missions
 from robot.config import ControlConfig, VmnavConfig
 from robot.field_log import FieldLog
 from robot.logged_missions import read_missions
@@ -29,6 +31,8 @@ from robot.replay import LoggedCycle, MissionStart, ReplayBase, differs, replay
 from shared.config import LogConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState, MobileBase
+from shared.logs import topics
+from shared.logs.reader import LogMessage
 from shared.logs.series import log_series
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
 from sim.config import SimConfig
@@ -36,6 +40,7 @@ from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import Pose2, load_world
+from tests.robot.config.test_config import old_layout
 from tests.tools.short_routes import teach_east_a
 from tools.cli import main
 from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
@@ -71,7 +76,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     folder = tmp_path_factory.mktemp("replay")
     world_file = teach_east_a(folder, CONFIG)
     world = load_world(world_file)
-    sim_config = SimConfig(world=str(world_file), seed=1)
+    sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=CONFIG.camera.mount)
     memory = read_memory(folder / "memory")
     camera = memory.camera
 
@@ -124,6 +129,28 @@ class TestReplay:
         assert all(f == {"mismatches": 0, "max_abs_diff": 0.0}
                    for f in report["fields"].values())
         assert report["first_divergence"] is None
+
+    def test_a_log_written_before_the_mount_moved_replays_exactly(
+            self, logged: Logged, monkeypatch: pytest.MonkeyPatch) -> None:
+        # Its mission starts hold the config as the code before the move stored it: the
+        # simulator's tables inside, the camera mount in sim.camera.
+        old = old_layout()
+        assert "sim" in old and "mount" not in old["camera"]
+        real_read = logged_missions.read_messages
+
+        def read_old_layout(file: Path, wanted: Sequence[str]) -> Iterator[LogMessage]:
+            for message in real_read(file, wanted):
+                if message.topic == topics.MISSION_START:
+                    message = dataclasses.replace(message, data={**message.data, "config": old})
+                yield message
+
+        monkeypatch.setattr(logged_missions, "read_messages", read_old_layout)
+        code, out, err = run_cli(str(logged.lossless[0]), "--memory", str(logged.memory),
+                                 "--json")
+        assert (code, err) == (0, "")
+        report = json.loads(out)
+        assert report["identical"] and report["exact"]
+        assert (report["missions"], report["cycles"]) == (2, len(logged.records))
 
     def test_the_log_holds_what_the_mission_did(self, logged: Logged) -> None:
         items = list(itertools.islice(read_missions(log_series(logged.lossless[:1])), 40))
