@@ -165,8 +165,8 @@ class TestImage:
         sim.place_robot(pose)
         renderer = FisheyeRenderer.for_simulation(sim, CAMERA)
         frame = renderer.render(sim)
-        T = camera_pose_world(frame.pose_w, config.camera)
-        shader = SurfaceShader(sim.world, CAMERA, rotation_base_cam(config.camera), T[2, 3])
+        T = camera_pose_world(frame.pose_w, config.camera_mount)
+        shader = SurfaceShader(sim.world, CAMERA, rotation_base_cam(config.camera_mount), T[2, 3])
         background = shader.shade(T[:2, 3], frame.pose_w[2])
 
         def harris(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]:
