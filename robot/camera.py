@@ -42,9 +42,9 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import CameraSourceConfig
 from shared.camera_model import CameraModel
 from shared.clock import Clock
-from shared.config import CameraSourceConfig
 from shared.errors import InputError, TransportError
 
 log = logging.getLogger(__name__)

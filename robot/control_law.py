@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 from scipy.special import lambertw
 
-from shared.config import ControlConfig
+from robot.config import ControlConfig
 from shared.errors import DegenerateGeometryError
 
 

@@ -41,9 +41,9 @@ import numpy as np
 import numpy.typing as npt
 from filterpy.kalman import KalmanFilter
 
+from robot.config import EstimatorConfig
 from robot.segment_frame import coordinates_in_next_segment, wrap_angle
 from robot.vision.path_state import PathCoordinates
-from shared.config import EstimatorConfig
 from shared.pose import Pose2
 
 FloatArray = npt.NDArray[np.float64]

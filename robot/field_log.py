@@ -49,11 +49,12 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from robot.config import VmnavConfig
 from robot.mission_run import AppEvent, CycleRecord
 from robot.pioneer.status import LinkCounters, PioneerStatus
 from shared.aria.sip import Sip
 from shared.camera_mount import rotation_base_cam
-from shared.config import CameraMountConfig, LogConfig, VmnavConfig
+from shared.config import CameraMountConfig, LogConfig
 from shared.logs import topics
 from shared.logs.messages import FrameTransform, base_state_fields, sip_fields
 from shared.logs.series import RUN_METADATA, SERIES_KEY

@@ -40,6 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import (
+    ControlConfig,
+    EstimatorConfig,
+    FeatureConfig,
+    PathStateConfig,
+    SwitchingConfig,
+)
 from robot.control_law import Twist, steer
 from robot.estimator import Estimate, Estimator, EstimatorLost
 from robot.memory.localize import keyframe_features
@@ -54,14 +61,7 @@ from robot.vision.frame_state import (
 )
 from robot.vision.lens_mask import lens_mask
 from robot.vision.path_state import PathCoordinates
-from shared.config import (
-    CameraMountConfig,
-    ControlConfig,
-    EstimatorConfig,
-    FeatureConfig,
-    PathStateConfig,
-    SwitchingConfig,
-)
+from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError
 from shared.interfaces import BaseState
 from shared.memory import Keyframe, VisualMemory
@@ -70,7 +70,7 @@ from shared.pose import Pose2
 
 @dataclass(frozen=True, slots=True)
 class FollowerConfig:
-    """The configs one servo cycle uses (all from :class:`shared.config.VmnavConfig`)."""
+    """The configs one servo cycle uses (all from :class:`robot.config.VmnavConfig`)."""
 
     features: FeatureConfig
     path_state: PathStateConfig

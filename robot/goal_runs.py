@@ -17,12 +17,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.memory.localize import Localizer
 from robot.mission import MissionState
 from robot.mission_run import CycleRecord, MissionResult, MissionRun
 from robot.runtime_log import RuntimeLog
 from robot.vehicle.app_port import ServoTelemetry, VehicleTelemetry
-from shared.config import VmnavConfig
 from shared.interfaces import MobileBase
 from shared.mavlink.mission.goal import Goal
 from shared.memory import VisualMemory

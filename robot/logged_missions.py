@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from robot.config import config_from_log
 from robot.replay import LoggedCycle, MissionStart, generator_from_state, logged_fields
-from shared.config import VmnavConfig, from_mapping
 from shared.errors import InputError
 from shared.interfaces import BaseState
 from shared.logs import topics
@@ -101,7 +101,8 @@ def read_missions(files: Sequence[Path]) -> Iterator[MissionStart | LoggedCycle]
 
 
 def mission_start(file: Path, message: LogMessage) -> MissionStart:
-    """The :class:`robot.replay.MissionStart` of a ``vmnav.MissionStart`` message of ``file``.
+    """The :class:`robot.replay.MissionStart` of a ``vmnav.MissionStart`` message of ``file``
+    (its config in either layout, :func:`robot.config.config_from_log`).
 
     Raises:
         InputError: a field missing or malformed (``ConfigError`` for the config).
@@ -115,7 +116,7 @@ def mission_start(file: Path, message: LogMessage) -> MissionStart:
     goal = data["goal_key_image_id"]
     if not isinstance(goal, int) or isinstance(goal, bool):
         raise InputError(where, f"goal_key_image_id must be an integer, got {goal!r}")
-    config = from_mapping(VmnavConfig, data["config"], where, "config")
+    config = config_from_log(data["config"], where, "config")
     try:
         generator_from_state(data["rng_state"])
     except InputError as e:

@@ -44,7 +44,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from shared.config import MissionConfig
+from robot.config import MissionConfig
 from shared.errors import IllegalEventError
 
 

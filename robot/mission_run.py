@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.follower import FollowerConfig, FollowStep, RouteFollower
 from robot.memory.localize import Localization, Localizer
 from robot.mission import (
@@ -59,7 +60,6 @@ from robot.mission import (
 from robot.mission import Arrived as ArrivedInput
 from robot.mission import Lost as LostInput
 from shared.clock import Clock
-from shared.config import VmnavConfig
 from shared.interfaces import BaseState, FrameSource, MobileBase
 from shared.memory import VisualMemory
 
@@ -139,7 +139,7 @@ class MissionRun:
     Args:
         memory: the visual memory.
         config: all component configs (features, localize, path state, estimator,
-            switching, control, mission; the camera mount from ``config.sim.camera``).
+            switching, control, mission; the camera mount from ``config.camera.mount``).
         base: the mobile base.
         rng: draws the RANSAC samples.
         localizer: finds the robot in ``memory``; None builds one over all its key images.
@@ -159,7 +159,7 @@ class MissionRun:
         self._follower_config = FollowerConfig(
             features=config.features, path_state=config.path_state,
             estimator=config.estimator, switching=config.switching, control=config.control,
-            mount=config.sim.camera)
+            mount=config.camera.mount)
         self._mission = Mission(config.mission)
         self._events: list[AppEvent] = []
         self._follower: RouteFollower | None = None

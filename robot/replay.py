@@ -39,9 +39,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.field_log import servo_state
 from robot.mission_run import CycleRecord, MissionRun
-from shared.config import VmnavConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState
 from shared.memory import VisualMemory

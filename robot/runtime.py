@@ -68,6 +68,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.goal_runs import GoalRuns
 from robot.memory.localize import Localizer
 from robot.mission_run import CycleRecord, MissionResult
@@ -94,7 +95,6 @@ from robot.teach import KeyImageSelector, SelectedKeyImage
 from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
 from robot.worker import Worker, find_photo, store_path
 from shared.clock import Clock
-from shared.config import VmnavConfig
 from shared.errors import VmnavError
 from shared.interfaces import BaseState, MobileBase
 from shared.mavlink.dialect import mavlink

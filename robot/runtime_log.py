@@ -8,8 +8,8 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.mission_run import AppEvent, CycleRecord
-from shared.config import VmnavConfig
 from shared.pose import Pose2
 
 

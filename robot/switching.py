@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from shared.config import SwitchingConfig
+from robot.config import SwitchingConfig
 
 #: Reasons of a :class:`KeyImageSwitch`, in order of precedence when both hold.
 SWITCH_REASONS = ("image_error", "passed")

@@ -66,11 +66,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import FeatureConfig, TeachConfig
 from robot.vision.features import Features, GreyImage, detect_harris
 from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import match_zncc
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig, TeachConfig
 from shared.errors import InputError
 from shared.memory import KeyframeRecord
 from shared.pose import Pose2

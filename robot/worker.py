@@ -29,11 +29,11 @@ from typing import ParamSpec
 
 import cv2
 
+from robot.config import VmnavConfig
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mode_events import Event, PathNotStored, PathStored, PhotoFound, PhotoNotFound
 from shared.camera_model import CameraModel
-from shared.config import VmnavConfig
 from shared.errors import VmnavError
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
 from shared.memory.store import check_no_orphans

@@ -43,9 +43,9 @@ import math
 import numpy as np
 import pymunk
 
-from shared.config import BodyConfig, OdometryConfig
 from shared.pose import Pose2
 from sim._shapes import Category, tag
+from sim.config import BodyConfig, OdometryConfig
 
 _FOLLOW_REL = 0.5  # the motion follows when within half the set-point...
 _FOLLOW_ABS_M_S = 0.05  # ...or within 5 cm/s

@@ -39,10 +39,10 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from shared.config import PeopleConfig
 from shared.errors import ConfigError
 from sim._geometry import point_segment_distances
 from sim._shapes import Category, tag
+from sim.config import PeopleConfig
 from sim.free_space import FreeSpaceMap
 
 PAUSE_PROBABILITY = 0.3

@@ -37,8 +37,9 @@ import numpy.typing as npt
 
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
-from shared.config import CameraMountConfig, RenderConfig
+from shared.config import CameraMountConfig
 from shared.pose import Pose2
+from sim.config import RenderConfig
 from sim.landmarks import LandmarkField
 from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.surfaces import SurfaceShader
@@ -138,9 +139,11 @@ class FisheyeRenderer:
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
-        """A renderer for ``sim``'s world, landmarks and config, seeded from its seed."""
+        """A renderer for ``sim``'s world, landmarks and config (the camera at its
+        ``camera_mount``), seeded from its seed."""
         rng = np.random.default_rng([sim.config.seed, _RENDER_STREAM])
-        return cls(camera, sim.config.camera, sim.config.render, sim.world, sim.landmarks, rng)
+        return cls(camera, sim.config.camera_mount, sim.config.render, sim.world, sim.landmarks,
+                   rng)
 
     def render(self, sim: Simulation) -> RenderedFrame:
         """Render the simulation's current state from the robot's camera.

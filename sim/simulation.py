@@ -30,11 +30,11 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from shared.config import SimConfig
 from shared.errors import ConfigError
 from shared.pose import Pose2
 from sim._shapes import Category, category_of, height_of, tag
 from sim.body import PioneerBody
+from sim.config import SimConfig
 from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
 from sim.landmarks import LandmarkField, generate_landmarks
 from sim.people import People

@@ -14,9 +14,9 @@ import numpy.typing as npt
 
 from shared.atomic_file import write_bytes_atomic, write_text_atomic
 from shared.camera_model import CameraModel
-from shared.config import SimConfig
 from shared.errors import InputError
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
 from sim.topdown import draw_topdown

@@ -29,8 +29,8 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from shared.config import TeachDriverConfig
 from shared.pose import Pose2
+from sim.config import TeachDriverConfig
 from sim.driver import DriveCommand, PurePursuit
 
 FloatArray = npt.NDArray[np.float64]

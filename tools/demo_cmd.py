@@ -15,14 +15,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from shared.config import CONTROL_LAWS
+from robot.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
-    from shared.config import SimConfig, VmnavConfig
+    from robot.config import VmnavConfig
     from shared.logs.writer import LogStats
+    from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.harness.demo import CycleSample
@@ -71,7 +72,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach (or reuse), repeat, write the outputs and print the summary."""
-    from shared.config import load_config
+    from robot.config import load_config
     from tools.figures.demo_plots import VideoWriter, write_plots
     from tools.figures.demo_report import build_report, summary_text
     from tools.harness.demo import (
@@ -90,8 +91,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--routes", "names no route")
     sim_config, camera = sim_config_from_args(args)
     config = load_config(args.config)
-    config = follow_config(dataclasses.replace(config, sim=sim_config), args.law,
-                           args.max_omega_deg)
+    config = follow_config(config, args.law, args.max_omega_deg)
     out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
     if out.exists() and not out.is_dir():
         raise InputError(out, "is not a folder")
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
     robot_log = None if args.no_log else DemoLog(
         dataclasses.replace(config.log, output_dir=str(out / "logs"), replay_frames=True),
-        sim_config.camera,
+        config.camera.mount,
         {"source": "vmnav demo (simulator, lock-step)", "goal_key_image": str(goal),
          "routes": ",".join(routes) if routes else "all", "seed": str(sim_config.seed),
          "control_law": config.control.law})

@@ -136,8 +136,8 @@ def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: i
 
 def run_build(args: argparse.Namespace) -> int:
     """Build a path of the memory in ``args.memory`` from ``args.log``; print a summary."""
+    from robot.config import load_config
     from robot.memory.path_from_log import build_path, summary_text
-    from shared.config import load_config
 
     config = load_config(args.config)
     name = args.log[0].stem if args.name is None else args.name

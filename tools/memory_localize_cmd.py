@@ -45,8 +45,8 @@ def run_localize(args: argparse.Namespace) -> int:
     """Print where ``args.image`` is in the memory in ``args.directory``."""
     import time
 
+    from robot.config import load_config
     from robot.memory import Localizer
-    from shared.config import load_config
     from shared.memory import read_memory
 
     config = load_config(args.config)

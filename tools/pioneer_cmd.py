@@ -45,11 +45,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 def run_pioneer(args: argparse.Namespace) -> int:
     """Connect, report, drive, close (see the module docstring)."""
+    from robot.config import load_config
     from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
     from robot.pioneer.shutdown import close_on_sigterm
     from shared.clock import WallClock
-    from shared.config import load_config
 
     config = load_config(args.config).pioneer
     overrides: dict[str, object] = {}

@@ -56,9 +56,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Replay, print the result; the exit status says identical, different or bad input."""
+    from robot.config import load_config
     from robot.logged_missions import check_replay_log, read_mission_starts, read_missions
     from robot.replay import replay
-    from shared.config import load_config
     from shared.logs.series import log_series, series_name
     from shared.memory import read_memory
 

@@ -83,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from robot.camera import VideoCaptureSource
+    from robot.config import load_config
     from robot.field_log import FieldLog
     from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
@@ -91,7 +92,6 @@ def run(args: argparse.Namespace) -> int:
     from robot.vehicle.options import SigningSetup, VehicleFiles
     from robot.vehicle.udp_vehicle import UdpVehicle
     from shared.clock import WallClock
-    from shared.config import load_config
     from shared.key_file import read_key_file
 
     config = load_config(args.config)
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.no_log:  # once camera and robot answered
             log_config = (config.log if args.log is None
                           else dataclasses.replace(config.log, output_dir=str(args.log)))
-            log = last.enter_context(FieldLog(log_config, "robot", config.sim.camera,
+            log = last.enter_context(FieldLog(log_config, "robot", config.camera.mount,
                                               {"source": "vmnav robot", "aria": config.pioneer.url,
                                                "camera": config.camera.source}))
             driver.sip_observers.append(log.sip)

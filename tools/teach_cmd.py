@@ -23,8 +23,8 @@ from shared.errors import InputError
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.memory.junctions import JunctionAttempt
-    from shared.config import VmnavConfig
     from shared.logs.writer import LogStats
     from shared.memory import VisualMemory, VisualPath
     from tools.harness.teach import TaughtRoute
@@ -60,9 +60,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach the route, store the path and print a summary."""
+    from robot.config import load_config
     from robot.field_log import FieldLog
     from robot.memory.junctions import join_path
-    from shared.config import load_config
     from shared.memory import write_memory
     from shared.memory.folder import open_memory
     from sim.world import load_world
@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     teach_log = None if args.log is None else FieldLog(
         dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",
-        sim_config.camera,
+        config.camera.mount,
         {"source": "vmnav teach --sim (lock-step)", "world": world.name, "route": route.name,
          "seed": str(sim_config.seed)})
     try:

@@ -27,8 +27,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from robot.config import FeatureConfig, LocalizeConfig, TeachConfig
 from robot.memory.localize import Localizer
-from shared.config import FeatureConfig, LocalizeConfig, TeachConfig
 from shared.memory import Junction, VisualMemory, VisualPath
 
 

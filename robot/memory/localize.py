@@ -36,11 +36,11 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import FeatureConfig, LocalizeConfig
 from robot.vision.features import Features, GreyImage, detect_harris
 from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import match_zncc
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig, LocalizeConfig
 from shared.memory import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,

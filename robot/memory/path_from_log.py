@@ -42,10 +42,10 @@ from shared.logs.series import log_series, series_name
 from shared.pose import Pose2
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.memory.junctions import JunctionAttempt
     from robot.teach import SelectedKeyImage, TeachFrame
     from shared.camera_model import CameraModel
-    from shared.config import VmnavConfig
     from shared.memory import VisualMemory, VisualPath
 
 

@@ -36,6 +36,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.events import (
     Closed,
     Connected,
@@ -60,7 +61,6 @@ from shared.aria.handshake import RobotIdentity, SyncReply, SyncRequest
 from shared.aria.session import AriaSession
 from shared.aria.sip import Sip, SipFlags, SipType
 from shared.aria.state import OPEN_STATES, ConnState, Role
-from shared.config import PioneerDriverConfig
 from shared.errors import LocalProtocolError
 
 RESET_NOTICE_IDS = (0xFF, 0xFE)

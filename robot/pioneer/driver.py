@@ -30,6 +30,7 @@ from collections import deque
 from collections.abc import Callable
 from types import TracebackType
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.client import PioneerClient
 from robot.pioneer.events import (
     Connected,
@@ -49,7 +50,6 @@ from robot.pioneer.status import LinkCounters, LinkState, PioneerStatus
 from shared.aria.sip import Sip
 from shared.byte_link import ByteLink, LinkClosedError
 from shared.clock import Clock, service_loop
-from shared.config import PioneerDriverConfig
 from shared.errors import IllegalEventError, TransportError
 from shared.interfaces import BaseState
 

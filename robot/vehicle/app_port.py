@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, Protocol
 
+from robot.config import VmnavConfig
 from robot.mission import MissionState
-from shared.config import VmnavConfig
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode

@@ -55,6 +55,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from robot.config import VmnavConfig
 from robot.vehicle.app_port import VehicleApp, VehicleTelemetry
 from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
 from robot.vehicle.ftp_memory import MemoryFileSystem
@@ -71,7 +72,7 @@ from robot.vehicle.telemetry import (
     system_status,
 )
 from robot.vehicle.user_commands import user_handlers
-from shared.config import FtpConfig, VmnavConfig
+from shared.config import FtpConfig
 from shared.errors import InputError
 from shared.mavlink.address import Address, is_for
 from shared.mavlink.commands.intervals import MessageIntervals

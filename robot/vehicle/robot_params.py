@@ -1,4 +1,4 @@
-"""The robot's MAVLink parameters, each bound to a field of :class:`~shared.config.VmnavConfig`.
+"""The robot's MAVLink parameters, each bound to a field of :class:`~robot.config.VmnavConfig`.
 
 The robot builds its :class:`ParamTable` from the config it loaded (TOML values
 become the defaults), applies the parameter file on top, and after every
@@ -19,7 +19,8 @@ import enum
 from dataclasses import dataclass
 from typing import Any
 
-from shared.config import BASE_LOST_ACTIONS, CONTROL_LAWS, GCS_LOST_ACTIONS, VmnavConfig
+from robot.config import BASE_LOST_ACTIONS, CONTROL_LAWS, VmnavConfig
+from shared.config import GCS_LOST_ACTIONS
 from shared.errors import ConfigError
 from shared.mavlink.params.table import ParamSpec, ParamTable
 

@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 import poselib
 
+from robot.config import RelativePoseConfig
 from robot.vision._epipolar_error import (
     EpipolarPairs,
     essentials,
@@ -45,7 +46,6 @@ from robot.vision._epipolar_error import (
 )
 from robot.vision._robust_lm import minimise_huber
 from robot.vision.triangulation import ray_depths_unchecked, skew
-from shared.config import RelativePoseConfig
 from shared.errors import DegenerateGeometryError, check_shape
 
 FloatArray = npt.NDArray[np.float64]

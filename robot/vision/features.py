@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from shared.config import FeatureConfig
+from robot.config import FeatureConfig
 from shared.errors import ShapeError, check_shape
 
 PixelsXY = npt.NDArray[np.float64]

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import MatchConfig, PathStateConfig
 from robot.vision.bearings import LevelBearings, level_bearings
 from robot.vision.features import Features
 from robot.vision.image_errors import ImageErrors, image_errors
@@ -38,7 +39,7 @@ from robot.vision.matching import match_zncc
 from robot.vision.path_state import PathState, state_from_views
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
-from shared.config import CameraMountConfig, MatchConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import check_shape
 from shared.pose import Pose2
 

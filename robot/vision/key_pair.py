@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import PathStateConfig
 from robot.vision.epipolar import EpipolarFit, check_bearings, relative_pose
 from robot.vision.triangulation import triangulate_bearings
 from shared.camera_mount import R_BASE_LEVEL
-from shared.config import CameraMountConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError, ShapeError, check_shape
 from shared.pose import Pose2
 

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import MatchConfig
 from robot.vision.features import Features, PixelsXY
-from shared.config import MatchConfig
 from shared.errors import ShapeError, check_shape
 
 Indices = npt.NDArray[np.intp]

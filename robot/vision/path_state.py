@@ -40,11 +40,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import PathStateConfig
 from robot.vision.epipolar import EpipolarFit, check_bearings, relative_pose
 from robot.vision.key_pair import KeyPairGeometry
 from robot.vision.resection import resect_planar
 from shared.camera_mount import transform_base_level
-from shared.config import CameraMountConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import ShapeError, check_shape
 
 FloatArray = npt.NDArray[np.float64]

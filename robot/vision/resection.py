@@ -29,11 +29,11 @@ from functools import partial
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import PathStateConfig
 from robot.vision._epipolar_error import EpipolarPairs, rotation_y, rotation_y_derivative
 from robot.vision._robust_lm import minimise_huber
 from robot.vision.epipolar import check_bearings
 from robot.vision.triangulation import cross_rows, skew
-from shared.config import PathStateConfig
 from shared.errors import check_shape
 
 FloatArray = npt.NDArray[np.float64]

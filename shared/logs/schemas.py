@@ -248,7 +248,7 @@ MISSION_START = _object("vmnav.MissionStart", "A mission run starts: what replay
     "rng_state": {"type": "object", "description": "the mission's numpy bit generator state "
                   "(numpy.random.Generator.bit_generator.state)"},
     "config": {"type": "object", "description": "the whole configuration "
-               "(dataclasses.asdict of shared.config.VmnavConfig)"},
+               "(dataclasses.asdict of robot.config.VmnavConfig)"},
 })
 
 MAVLINK_RAW = _flat("mavlink.Raw", "One MAVLink frame as it crossed the link", {

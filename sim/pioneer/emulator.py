@@ -70,9 +70,9 @@ from shared.aria import (
     wrap_position,
 )
 from shared.aria.state import OPEN_STATES
-from shared.config import EmulatorConfig
 from shared.errors import ConfigError, LocalProtocolError
 from shared.pose import Pose2
+from sim.config import EmulatorConfig
 from sim.pioneer.motion import MotionController
 from sim.pioneer.p3at import (
     ANGLE_CONV_RAD,

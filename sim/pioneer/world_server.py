@@ -23,8 +23,8 @@ from sim.world import load_world
 if TYPE_CHECKING:
     from shared.byte_link import ByteLink
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig
     from sim.camera_server import CameraServer
+    from sim.config import SimConfig
     from sim.pioneer.links import TcpListener
 
 EMULATOR_SEED_CHILD = 3

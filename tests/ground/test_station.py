@@ -12,10 +12,10 @@ import pytest
 
 from ground.station import GroundError, GroundStation
 from ground.teleop import drive
+from robot.config import VmnavConfig
 from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import ManualClock, WallClock
-from shared.config import VmnavConfig
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.udp_link import UdpLink

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from robot.camera import Frame, FrameStall, VideoCaptureSource
+from robot.config import CameraSourceConfig
 from shared.camera_model import CameraModel
 from shared.clock import ManualClock, WallClock
-from shared.config import CameraSourceConfig
 from shared.errors import InputError, TransportError
 from sim.camera_server import CameraServer
 from tests.sim.camera_stream import SHAPE, eventually, frame_number, numbered_frame, publishing

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from robot.config import ControlConfig
 from robot.control_law import Twist, gains, settling_distance_m, steer
-from shared.config import ControlConfig
 from shared.errors import DegenerateGeometryError
 
 FRAME_RATE_HZ = 15.0

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import EstimatorConfig
 from robot.estimator import Estimator, EstimatorLost
 from shared.clock import ManualClock, ns_from_s
-from shared.config import EstimatorConfig
 
 FRAME_NS = 66_666_667  # 15 frames/s
 CONFIG = EstimatorConfig()

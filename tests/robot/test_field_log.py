@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
+from robot.config import ControlConfig, PioneerDriverConfig, VmnavConfig
 from robot.control_law import Twist
 from robot.field_log import FieldLog, camera_transform
 from robot.follower import FollowStep
@@ -27,13 +28,7 @@ from robot.vision.frame_state import FrameState
 from robot.vision.image_errors import ImageErrors
 from robot.vision.path_state import PathState
 from shared.aria.sip import Sip, SipFlags
-from shared.config import (
-    CameraMountConfig,
-    ControlConfig,
-    LogConfig,
-    PioneerDriverConfig,
-    VmnavConfig,
-)
+from shared.config import CameraMountConfig, LogConfig
 from shared.interfaces import BaseState
 from shared.logs import topics
 from shared.logs.messages import image_from_compressed

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from robot.config import VmnavConfig
 from robot.follower import (
     FollowerConfig,
     RouteFollower,
@@ -20,7 +21,6 @@ from robot.segment_frame import relative_pose
 from robot.vision.frame_state import FrameState
 from robot.vision.image_errors import ImageErrors
 from robot.vision.path_state import PathState
-from shared.config import VmnavConfig
 from shared.interfaces import BaseState
 from tests.shared.memory.builders import loop_memory
 
@@ -91,7 +91,7 @@ def make_follower(memory) -> RouteFollower:
     follower_config = FollowerConfig(
         features=config.features, path_state=config.path_state,
         estimator=config.estimator, switching=config.switching, control=config.control,
-        mount=config.sim.camera)
+        mount=config.camera.mount)
     route = memory.paths[0].keyframe_ids[:3]
     return RouteFollower(memory, list(route), follower_config, np.random.default_rng(0), 0, BASE)
 

@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from robot import mission as m
+from robot.config import MissionConfig
 from robot.mission import (
     FINAL_STATES,
     REASONS,
@@ -27,7 +28,6 @@ from robot.mission import (
     Transition,
 )
 from shared.clock import ns_from_s
-from shared.config import MissionConfig
 from shared.errors import IllegalEventError, VmnavError
 
 CONFIG = MissionConfig(localize_attempts=3, localize_timeout_ns=ns_from_s(10),

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig, MissionConfig, VmnavConfig
 from robot.mission import MissionState
 from robot.mission_run import MissionRun
 from shared.clock import ManualClock
-from shared.config import FeatureConfig, MissionConfig, VmnavConfig
 from shared.errors import UnknownKeyframeError
 from shared.interfaces import BaseState
 from tests.shared.memory.builders import PATCH_LENGTH, loop_memory

@@ -16,26 +16,33 @@ import itertools
 import json
 import math
 import shutil
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from robot import logged_missions
+from robot.config import ControlConfig, VmnavConfig
 from robot.field_log import FieldLog
 from robot.logged_missions import read_missions
 from robot.mission_run import CycleRecord, MissionRun
 from robot.replay import LoggedCycle, MissionStart, ReplayBase, differs, replay
-from shared.config import ControlConfig, LogConfig, SimConfig, VmnavConfig
+from shared.config import LogConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState, MobileBase
+from shared.logs import topics
+from shared.logs.reader import LogMessage
 from shared.logs.series import log_series
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world
+from tests.robot.config.test_config import old_layout
 from tests.tools.short_routes import teach_east_a
 from tools.cli import main
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
@@ -71,7 +78,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     folder = tmp_path_factory.mktemp("replay")
     world_file = teach_east_a(folder, CONFIG)
     world = load_world(world_file)
-    sim_config = SimConfig(world=str(world_file), seed=1)
+    sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=CONFIG.camera.mount)
     memory = read_memory(folder / "memory")
     camera = memory.camera
 
@@ -81,8 +88,8 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     base, _ = lockstep_pioneer(clock, CONFIG.pioneer, np.random.default_rng(7))
     frames = RememberingFrames(SimFrameSource(sim, camera, clock))
     logs = [FieldLog(LogConfig(output_dir=str(folder / "png"), replay_frames=True,
-                               rotate_period_ns=2_000_000_000), "robot", CONFIG.sim.camera, {}),
-            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.sim.camera, {})]
+                               rotate_period_ns=2_000_000_000), "robot", CONFIG.camera.mount, {}),
+            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.camera.mount, {})]
     rng = np.random.default_rng(3)
     records: list[CycleRecord] = []
     for goal in GOALS:
@@ -125,6 +132,28 @@ class TestReplay:
                    for f in report["fields"].values())
         assert report["first_divergence"] is None
 
+    def test_a_log_written_before_the_mount_moved_replays_exactly(
+            self, logged: Logged, monkeypatch: pytest.MonkeyPatch) -> None:
+        # Its mission starts hold the config as the code before the move stored it: the
+        # simulator's tables inside, the camera mount in sim.camera.
+        old = old_layout()
+        assert "sim" in old and "mount" not in old["camera"]
+        real_read = logged_missions.read_messages
+
+        def read_old_layout(file: Path, wanted: Sequence[str]) -> Iterator[LogMessage]:
+            for message in real_read(file, wanted):
+                if message.topic == topics.MISSION_START:
+                    message = dataclasses.replace(message, data={**message.data, "config": old})
+                yield message
+
+        monkeypatch.setattr(logged_missions, "read_messages", read_old_layout)
+        code, out, err = run_cli(str(logged.lossless[0]), "--memory", str(logged.memory),
+                                 "--json")
+        assert (code, err) == (0, "")
+        report = json.loads(out)
+        assert report["identical"] and report["exact"]
+        assert (report["missions"], report["cycles"]) == (2, len(logged.records))
+
     def test_the_log_holds_what_the_mission_did(self, logged: Logged) -> None:
         items = list(itertools.islice(read_missions(log_series(logged.lossless[:1])), 40))
         assert isinstance(items[0], MissionStart) and items[0].goal_id == GOALS[0]
@@ -162,7 +191,7 @@ class TestBadInput:
         assert message in err
 
     def test_a_log_without_missions(self, logged: Logged, tmp_path: Path) -> None:
-        with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.sim.camera,
+        with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.camera.mount,
                       {}) as log:
             log.teach_frame(0, np.zeros((600, 800), np.uint8), (0.0, 0.0, 0.0))
         self.check(*run_cli(str(tmp_path / "teach-0001.mcap"), "--memory", str(logged.memory)),

@@ -19,14 +19,15 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import VmnavConfig
 from robot.mission import MissionState
 from robot.runtime import RobotRuntime
-from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from robot.config import SwitchingConfig
 from robot.switching import (
     SWITCH_REASONS,
     FrameEvidence,
@@ -15,7 +16,6 @@ from robot.switching import (
     SwitchState,
     observe_frame,
 )
-from shared.config import SwitchingConfig
 
 CONFIG = SwitchingConfig()  # 20 px, s >= 0 m, 2 frames
 

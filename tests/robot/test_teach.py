@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from robot.config import FeatureConfig, TeachConfig
 from robot.teach import KeyImageSelector, select_key_images
-from shared.config import FeatureConfig, TeachConfig
 from shared.errors import InputError
 from tests.robot.blob_frames import blob_camera, cell_centre, frames_from_schedule, render
 
@@ -246,7 +246,8 @@ class TestBadFrames:
 
 
 def test_teach_config_is_validated() -> None:
-    from shared.config import VmnavConfig, from_mapping
+    from robot.config import VmnavConfig
+    from shared.config import from_mapping
     from shared.errors import ConfigError
 
     config = from_mapping(VmnavConfig, {"teach": {"min_tracked_points": 12}}, "f.toml")

@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shared.config import BodyConfig, OdometryConfig, SimConfig
 from shared.pose import Pose2
 from sim.body import ramp
+from sim.config import BodyConfig, OdometryConfig, SimConfig
 from sim.simulation import Simulation
 from sim.world import World
 from tests.sim.rooms import box_room

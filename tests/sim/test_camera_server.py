@@ -22,9 +22,9 @@ import numpy.typing as npt
 import pytest
 
 from shared.camera_model import CameraModel
-from shared.config import SimConfig
 from shared.errors import ShapeError, TransportError
 from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
+from sim.config import SimConfig
 from sim.simulation import Simulation
 from tests.sim.camera_stream import eventually, frame_number, numbered_frame
 from tests.sim.rooms import box_room

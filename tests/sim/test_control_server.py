@@ -10,7 +10,7 @@ import urllib.request
 
 import pytest
 
-from shared.config import SimConfig
+from sim.config import SimConfig
 from sim.control_server import ControlHook, ControlServer
 from sim.simulation import Simulation
 from sim.world import load_world

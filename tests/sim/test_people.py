@@ -3,10 +3,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shared.config import PeopleConfig, SimConfig
 from shared.errors import ConfigError
 from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
+from sim.config import PeopleConfig, SimConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.people import SIDESTEP_MARGIN_M
 from sim.simulation import Simulation

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from shared.camera_model import CameraModel
-from shared.config import CameraMountConfig, PeopleConfig, RenderConfig, SimConfig
+from shared.config import CameraMountConfig
 from shared.pose import Pose2
 from sim._geometry import segments_cross
+from sim.config import PeopleConfig, RenderConfig, SimConfig
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
 from sim.world import load_world

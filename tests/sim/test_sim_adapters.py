@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from shared.camera_model import CameraModel
-from shared.config import SimConfig
 from shared.interfaces import FrameSource
+from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation

@@ -3,8 +3,8 @@ from __future__ import annotations
 import pytest
 
 from shared.clock import Clock
-from shared.config import SimConfig
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from tests.sim.rooms import box_room

@@ -6,9 +6,9 @@ import numpy as np
 import pymunk
 import pytest
 
-from shared.config import OdometryConfig, PeopleConfig, SimConfig
 from shared.errors import ConfigError
 from shared.pose import Pose2
+from sim.config import OdometryConfig, PeopleConfig, SimConfig
 from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.world import load_world
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from shared.config import SimConfig
+from sim.config import SimConfig
 from sim.simulation import Simulation
 from tests.sim.rooms import box_room
 

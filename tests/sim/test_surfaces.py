@@ -12,10 +12,11 @@ from hypothesis import strategies as st
 
 from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
-from shared.config import CameraMountConfig, RenderConfig, SimConfig
+from shared.config import CameraMountConfig
 from shared.errors import ShapeError
 from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
+from sim.config import RenderConfig, SimConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
@@ -165,8 +166,8 @@ class TestImage:
         sim.place_robot(pose)
         renderer = FisheyeRenderer.for_simulation(sim, CAMERA)
         frame = renderer.render(sim)
-        T = camera_pose_world(frame.pose_w, config.camera)
-        shader = SurfaceShader(sim.world, CAMERA, rotation_base_cam(config.camera), T[2, 3])
+        T = camera_pose_world(frame.pose_w, config.camera_mount)
+        shader = SurfaceShader(sim.world, CAMERA, rotation_base_cam(config.camera_mount), T[2, 3])
         background = shader.shade(T[:2, 3], frame.pose_w[2])
 
         def harris(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]:

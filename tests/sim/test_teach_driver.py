@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared.camera_model import CameraModel
-from shared.config import SimConfig, TeachDriverConfig
 from sim._geometry import point_segment_distances
+from sim.config import SimConfig, TeachDriverConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.teach_driver import TeachDriver, resample_polyline, smooth_noise

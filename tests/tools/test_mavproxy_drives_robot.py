@@ -12,7 +12,7 @@ import urllib.request
 
 import pytest
 
-from shared.config import VmnavConfig
+from robot.config import VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.memory import read_memory
 from tests.robot.vehicle.mavproxy_console import MavproxyConsole

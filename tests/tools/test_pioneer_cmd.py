@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from shared.clock import WallClock
-from shared.config import SimConfig
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, TcpListener
 from sim.simulation import Simulation
 from sim.world import load_world

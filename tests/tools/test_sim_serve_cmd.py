@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 
 from robot.camera import VideoCaptureSource
+from robot.config import CameraSourceConfig
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
-from shared.config import CameraSourceConfig
 from shared.errors import InputError
 from tests.sim.pioneer.test_server import connect_and_drive, tcp_client
 from tools.cli import main

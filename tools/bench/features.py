@@ -33,9 +33,9 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import FeatureConfig, MatchConfig
 from robot.vision.features import detect_harris
 from robot.vision.matching import match_zncc
-from shared.config import FeatureConfig, MatchConfig
 from sim.synthetic.image_pairs import (
     ImagePair,
     similarity_homography,

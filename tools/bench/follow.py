@@ -25,8 +25,9 @@ from tools.harness.demo import (
 )
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
+    from sim.config import SimConfig
 
 #: Report fields kept per seed (the events stay out of the benchmark's JSON).
 SEED_KEYS = ("reached_goal", "reason", "final_position_error_m", "lateral_rms_m",
@@ -41,7 +42,7 @@ class FollowBenchPlan:
 
     Attributes:
         seeds: the simulation seeds.
-        laws: control laws to compare (``shared.config.CONTROL_LAWS``).
+        laws: control laws to compare (``robot.config.CONTROL_LAWS``).
         max_omega_deg: the turn-rate bound, deg/s.
         routes: routes taught per seed (None: all the world's, see
             :func:`tools.harness.demo.taught_memory`).
@@ -70,7 +71,7 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
         taught = taught_memory(out / f"seed{seed}", plan.routes, config, seeded, camera)
         goal = default_goal(taught) if plan.goal_id is None else plan.goal_id
         for law in plan.laws:
-            law_config = follow_config(replace(config, sim=seeded), law, plan.max_omega_deg)
+            law_config = follow_config(config, law, plan.max_omega_deg)
             started = time.perf_counter()
             run = repeat_in_sim(taught, goal, law_config, seeded, plan.landmark_dropout,
                                 out / f"seed{seed}")
@@ -108,7 +109,7 @@ def aggregate(rows: list[dict[str, object]]) -> dict[str, object]:
 
 def run(args: argparse.Namespace) -> int:
     """Print the route-following benchmark's JSON (``vmnav bench follow``)."""
-    from shared.config import CONTROL_LAWS, load_config
+    from robot.config import CONTROL_LAWS, load_config
     from shared.errors import InputError
     from tools.harness.demo import DEMO_MAX_OMEGA_DEG
     from tools.harness.sim_args import sim_config_from_args

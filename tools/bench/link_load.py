@@ -27,6 +27,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from robot.config import MissionConfig, VmnavConfig
 from robot.mission import (
     Arrived,
     Localized,
@@ -44,7 +45,6 @@ from robot.vehicle.app_port import (
     VehicleTelemetry,
 )
 from shared.clock import NS_PER_S, Clock
-from shared.config import MissionConfig, VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal

@@ -30,12 +30,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from robot.config import VmnavConfig
 from robot.vehicle.app_port import VehicleApp
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import VehicleFiles
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import Clock, WallClock
-from shared.config import VmnavConfig
 
 #: How long a vehicles process may take to start its vehicles, s.
 READY_TIMEOUT_S = 60.0

@@ -37,12 +37,13 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import VmnavConfig
 from robot.memory import Localization, Localizer, keyframe_features
 from shared.camera_model import CameraModel
-from shared.config import SimConfig, VmnavConfig
 from shared.errors import ConfigError
 from shared.memory import VisualMemory
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world
@@ -369,7 +370,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--queries", type=int, default=200, help="queries [default: 200]")
     parser.add_argument("--query-seed", type=int, default=0, help="seed of the query poses")
     args = parser.parse_args(argv)
-    from shared.config import load_config
+    from robot.config import load_config
 
     sim_config, camera = sim_config_from_args(args)
     config = load_config(args.config)

@@ -18,7 +18,7 @@ import numpy as np
 import pymunk
 
 from shared.camera_model import CameraModel
-from shared.config import SimConfig
+from sim.config import SimConfig
 from sim.driver import PurePursuit
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation

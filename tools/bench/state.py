@@ -28,11 +28,11 @@ from typing import Any
 
 import numpy as np
 
+from robot.config import PathStateConfig
 from robot.vision.bearings import level_bearings
 from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.path_state import PathState, state_from_two_views, state_from_views
 from shared.camera_mount import rotation_level_cam
-from shared.config import PathStateConfig
 from shared.pose import Pose2
 from sim.synthetic.corridor_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 

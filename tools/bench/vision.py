@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import PathStateConfig, VmnavConfig
 from robot.segment_frame import relative_pose, wrap_angle
 from robot.teach import SelectedKeyImage
 from robot.vision.features import Features, detect_harris
@@ -60,9 +61,10 @@ from robot.vision.frame_state import (
 )
 from robot.vision.lens_mask import lens_mask
 from shared.camera_model import CameraModel
-from shared.config import CameraMountConfig, PathStateConfig, SimConfig, VmnavConfig
+from shared.config import CameraMountConfig
 from shared.errors import ConfigError, DegenerateGeometryError
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world
@@ -192,9 +194,9 @@ class StateRun:
 class _Segments:
     """Key segments prepared on first use (timed), with or without the teach tracks."""
 
-    def __init__(self, camera: CameraModel, config: VmnavConfig, sim_config: SimConfig,
-                 rng: np.random.Generator, tracks: bool) -> None:
-        self._camera, self._config, self._sim_config = camera, config, sim_config
+    def __init__(self, camera: CameraModel, config: VmnavConfig, rng: np.random.Generator,
+                 tracks: bool) -> None:
+        self._camera, self._config = camera, config
         self._rng, self._tracks = rng, tracks
         self._cache: dict[tuple[str, int], KeySegment | None] = {}
         self.prepare_ms: list[float] = []
@@ -210,7 +212,7 @@ class _Segments:
             try:
                 self._cache[key] = key_segment_from_key_images(
                     _features(next_), _features(previous), next_.record.odom_pose,
-                    previous.record.odom_pose, self._camera, self._sim_config.camera, self._rng,
+                    previous.record.odom_pose, self._camera, self._config.camera.mount, self._rng,
                     self._config.path_state, tracks,
                 )
             except DegenerateGeometryError:
@@ -321,10 +323,9 @@ def run_state_queries(
     mask = lens_mask(camera)
     pose_rng = np.random.default_rng([plan.seed, 1])
     ransac_rng = np.random.default_rng([plan.seed, 2])
-    segments = _Segments(camera, config, sim_config, np.random.default_rng([plan.seed, 3]), True)
-    direct_segments = _Segments(camera, config, sim_config,
-                                np.random.default_rng([plan.seed, 4]), False)
-    mount, state_config = sim_config.camera, config.path_state
+    segments = _Segments(camera, config, np.random.default_rng([plan.seed, 3]), True)
+    direct_segments = _Segments(camera, config, np.random.default_rng([plan.seed, 4]), False)
+    mount, state_config = config.camera.mount, config.path_state
     _warm_up(taught, segments, config, camera, mount, mask, ransac_rng)
     outcomes, redraws = [], 0
     for _ in range(plan.state_queries):
@@ -514,7 +515,7 @@ def run(args: argparse.Namespace) -> int:
     """Print the vision benchmark's JSON (``vmnav bench vision``)."""
     import dataclasses
 
-    from shared.config import load_config
+    from robot.config import load_config
     from shared.errors import InputError
     from tools.bench.cpu import pin_to_one_core
     from tools.harness.sim_args import sim_config_from_args

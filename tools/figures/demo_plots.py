@@ -18,7 +18,7 @@ import cv2
 import matplotlib
 import numpy as np
 
-from shared.config import SimConfig
+from sim.config import SimConfig
 from tools.figures.demo_report import following_errors, plan_references
 from tools.figures.log_plot import plot_image_errors, plot_matches, save_figure
 from tools.harness.demo import CycleSample, RepeatRun, TaughtMemory

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robot.config import ControlConfig
 from robot.control_law import settling_distance_m
 from robot.mission import MissionState
-from shared.config import ControlConfig
 from shared.pose import Pose2
 from tools.harness.demo import START_OFFSET_M, RepeatRun, TaughtMemory
 

@@ -34,11 +34,12 @@ from shared.errors import InputError
 from shared.pose import Pose2
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.field_log import FieldLog
     from robot.mission_run import CycleRecord, MissionResult
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
     from shared.memory import VisualMemory
+    from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.harness.ground_dispatch import DispatchResult

@@ -22,14 +22,9 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+from robot.config import BASE_LOST_ACTIONS, TeleopConfig
 from shared.clock import NS_PER_S
-from shared.config import (
-    BASE_LOST_ACTIONS,
-    GCS_LOST_ACTIONS,
-    AriaLinkConfig,
-    MavlinkConfig,
-    TeleopConfig,
-)
+from shared.config import GCS_LOST_ACTIONS, AriaLinkConfig, MavlinkConfig
 from shared.logs import topics
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from robot.config import PioneerDriverConfig, TeleopConfig
 from robot.pioneer.driver import PioneerDriver
 from robot.pioneer.status import LinkState
 from shared.clock import NS_PER_S, WallClock
-from shared.config import PioneerDriverConfig, TeleopConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.modes import Mode
 from tools.harness.fault_cases import (

@@ -38,7 +38,7 @@ import time
 import urllib.error
 import urllib.request
 from contextlib import ExitStack
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -46,15 +46,17 @@ import numpy as np
 
 from ground.ground_log import GroundLog
 from ground.station import GroundError, GroundStation
+from robot.config import VmnavConfig
 from robot.control_law import settling_distance_m
 from shared.clock import WallClock
-from shared.config import LogConfig, SimConfig, VmnavConfig
+from shared.config import LogConfig
 from shared.errors import InputError, TransportError
 from shared.logs import topics
 from shared.logs.reader import read_messages
 from shared.mavlink.mission.goal import Goal
 from shared.memory import read_memory
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.teach_driver import TeachDriver
 from sim.world import load_world
 from tools.figures.demo_report import SETTLED_M, track_errors, track_metrics
@@ -156,7 +158,8 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         out: the output folder (memory, state, logs, process outputs, report).
         config: the demo's configs (the follow law; teleoperation scaling).
         sim_config: the world and seed.
-        robot_config_file: the config file ``vmnav robot`` runs with (the follow law).
+        robot_config_file: the config file ``vmnav robot`` runs with (the follow law, the
+            camera mount), and ``vmnav sim serve`` too (the camera mount).
         route_name: the route to teach and repeat; None: the world's first.
 
     Raises:
@@ -179,9 +182,9 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
     with ExitStack() as stack:
         processes = Processes(out)
         stack.callback(processes.stop)
-        processes.start("sim", ["sim", "serve", "--world", sim_config.world, "--seed",
-                                str(sim_config.seed), "--aria", "tcp:0", "--video", "http:0",
-                                "--control", "http:0"])
+        processes.start("sim", ["sim", "serve", "--config", str(robot_config_file), "--world",
+                                sim_config.world, "--seed", str(sim_config.seed), "--aria",
+                                "tcp:0", "--video", "http:0", "--control", "http:0"])
         aria = processes.wait_for("sim", r"ARIA on tcp (\S+)").group(1)
         camera = processes.wait_for("sim", r"camera on (\S+/stream\.mjpg)").group(1)
         sim = SimControl(processes.wait_for("sim", r"control on (\S+) ").group(1))
@@ -197,7 +200,7 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
             "--state", str(out / "state"), "--log", str(logs), "--config",
             str(robot_config_file)])
         station.wait_vehicle(START_TIMEOUT_S)
-        taught = teach(station, sim, route.waypoints, config, sim_config.seed, route.name)
+        taught = teach(station, sim, route.waypoints, config, sim_config, route.name)
         memory = read_memory(out / "memory")
         path = next(p for p in memory.paths.values() if p.name == route.name)
         start_key = memory.keyframes[path.keyframe_ids[min(START_KEY_INDEX,
@@ -235,18 +238,19 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
 
 
 def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: VmnavConfig,
-          seed: int, name: str) -> Drive:
-    """Teach ``name`` by teleoperation (module step 1); the true drive.
+          sim_config: SimConfig, name: str) -> Drive:
+    """Teach ``name`` by teleoperation (module step 1, the operator ``sim_config``'s teach
+    driver, seeded from its seed); the true drive.
 
     Raises:
         GroundError: the robot refused teaching, or did not store the path.
     """
-    driver = TeachDriver(waypoints, config.teach_driver,  # the lock-step teacher's draws
-                         np.random.default_rng([seed, DRIVER_STREAM]))
+    driver = TeachDriver(waypoints, sim_config.teach_driver,  # the lock-step teacher's draws
+                         np.random.default_rng([sim_config.seed, DRIVER_STREAM]))
     teleop = config.teleop
     station.teach_start(name)
     times, poses = [], []
-    limit = time.monotonic() + 3 * driver.length_m / config.teach_driver.speed_m_s + 30
+    limit = time.monotonic() + 3 * driver.length_m / sim_config.teach_driver.speed_m_s + 30
     while not driver.done:
         if time.monotonic() > limit:
             raise GroundError(f"teach {name!r}: the operator did not reach the route's end")
@@ -333,6 +337,11 @@ def servo_figures(robot_logs: list[Path]) -> dict[str, Any]:
 
 
 def robot_config_text(config: VmnavConfig) -> str:
-    """The TOML ``vmnav robot`` runs with in the HIL demo: the demo's follow law."""
+    """The TOML ``vmnav robot`` and ``vmnav sim serve`` run with in the HIL demo: the
+    demo's follow law, and the camera mount (where the robot thinks its camera is and the
+    simulator puts it)."""
+    mount = config.camera.mount
     return (f"[control]\nlaw = \"{config.control.law}\"\n"
-            f"max_omega_rad_s = {config.control.max_omega_rad_s!r}\n")
+            f"max_omega_rad_s = {config.control.max_omega_rad_s!r}\n"
+            "[camera.mount]\n"
+            + "".join(f"{f.name} = {getattr(mount, f.name)!r}\n" for f in fields(mount)))

@@ -31,12 +31,13 @@ from pathlib import Path
 
 from ground.fleet import VehicleState
 from ground.station import GroundStation
+from robot.config import VmnavConfig
 from shared.calibration import load_camera
 from shared.clock import NS_PER_S, WallClock
-from shared.config import SimConfig, VmnavConfig
 from shared.mavlink.mission.goal import Goal
 from shared.memory import read_memory
 from sim.camera_server import CameraServer
+from sim.config import SimConfig
 from sim.pioneer import TcpListener
 from sim.pioneer.world_server import pioneer_server
 from sim.simulation import Simulation
@@ -190,7 +191,8 @@ class SimSide:
     """
 
     def __init__(self, world_file: Path, seed: int = 1) -> None:
-        config = SimConfig(world=str(world_file), seed=seed)
+        config = SimConfig(world=str(world_file), seed=seed,  # the robot's default mount
+                           camera_mount=VmnavConfig().camera.mount)
         with ExitStack() as opened:
             listener = opened.enter_context(closing(TcpListener("127.0.0.1", 0)))
             self.camera = opened.enter_context(CameraServer("127.0.0.1", 0))

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.driver import PioneerDriver
 from shared.byte_link import ByteLink, pipe_pair
-from shared.config import PioneerDriverConfig
 from shared.errors import TransportError
 from sim.pioneer.emulator import EmulatedPioneer
 from sim.pioneer.server import PioneerServer

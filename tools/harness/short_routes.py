@@ -11,7 +11,8 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from shared.config import SimConfig, VmnavConfig
+from robot.config import VmnavConfig
+from sim.config import SimConfig
 
 EXTRA_ROUTES = """
 [[routes]]
@@ -47,7 +48,8 @@ def teach_east_a(folder: Path, config: VmnavConfig) -> Path:
     world = load_world(world_file)
     camera = load_camera(None)
     route = find_route(world, "east_a")
-    taught = teach_in_sim(world, route, config, SimConfig(world=str(world_file), seed=1), camera)
+    sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=config.camera.mount)
+    taught = teach_in_sim(world, route, config, sim_config, camera)
     memory = VisualMemory(camera)
     memory.add_path(route.name, [k.record for k in taught.key_images])
     write_memory(folder / "memory", memory)

@@ -5,15 +5,17 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+from robot.config import load_config
 from shared.calibration import load_camera
 from shared.camera_model import CameraModel
-from shared.config import SimConfig, load_config
+from sim.config import SimConfig, load_sim_config
 
 
 def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``--config``, ``--world``, ``--seed``, ``--people`` and ``--camera``."""
     parser.add_argument(
-        "--config", metavar="FILE", help="vmnav TOML config file (its [sim] table is used)"
+        "--config", metavar="FILE",
+        help="vmnav TOML config file (its [sim] table, and the robot's [camera.mount])"
     )
     parser.add_argument(
         "--world", help="built-in world (lab, campus) or a world TOML file [default: lab]"
@@ -30,11 +32,14 @@ def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
 def sim_config_from_args(args: argparse.Namespace) -> tuple[SimConfig, CameraModel]:
     """The simulation config (file, then command-line overrides) and the simulated camera.
 
+    The camera sits at the robot's mount (the file's ``[camera.mount]``), as on the
+    robot the same file configures.
+
     Raises:
         ConfigError: a bad config file or value.
         CalibrationError: a bad camera file.
     """
-    config = load_config(args.config).sim
+    config = load_sim_config(args.config, load_config(args.config).camera.mount)
     overrides: dict[str, object] = {}
     if args.world is not None:
         overrides["world"] = args.world

@@ -21,10 +21,11 @@ from shared.errors import InputError
 from shared.pose import Pose2
 
 if TYPE_CHECKING:
+    from robot.config import VmnavConfig
     from robot.teach import SelectedKeyImage
     from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
-    from shared.config import SimConfig, VmnavConfig
+    from sim.config import SimConfig
     from sim.world import Route, World
 
 #: Mixed with the simulation seed for the teach driver's random wander.
@@ -80,8 +81,9 @@ def teach_in_sim(
     Args:
         world: the world of the route.
         route: the route to drive, from its start pose.
-        config: teach, driver and feature parameters.
-        sim_config: the simulation's config (its seed seeds the driver too).
+        config: teach and feature parameters.
+        sim_config: the simulation's config (the teach driver's too; its seed seeds the
+            driver).
         camera: the simulated camera.
         on_frame: called with each frame's (t_ns, image, odometry pose), e.g.
             :meth:`robot.field_log.FieldLog.teach_frame`.
@@ -100,7 +102,7 @@ def teach_in_sim(
     sim = Simulation(world, sim_config)
     sim.place_robot(route.start_pose())
     renderer = FisheyeRenderer.for_simulation(sim, camera)
-    driver_config = config.teach_driver
+    driver_config = sim_config.teach_driver
     driver = TeachDriver(
         route.waypoints, driver_config, np.random.default_rng([sim_config.seed, DRIVER_STREAM])
     )

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from robot.config import LocalizeConfig
 from robot.memory.junctions import JunctionAttempt, JunctionOutcome, junction_attempts
-from shared.config import LocalizeConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import LocalizeConfig
 from robot.memory import Localizer, keyframe_features, localize
-from shared.config import LocalizeConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
@@ -130,7 +130,8 @@ class TestBadInput:
 
 
 def test_localize_config_is_validated() -> None:
-    from shared.config import VmnavConfig, from_mapping
+    from robot.config import VmnavConfig
+    from shared.config import from_mapping
     from shared.errors import ConfigError
 
     config = from_mapping(VmnavConfig, {"localize": {"candidates": 5}}, "f.toml")

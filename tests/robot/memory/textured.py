@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robot.config import FeatureConfig
 from robot.vision.features import detect_harris
 from robot.vision.lens_mask import lens_mask
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig
 from shared.memory import KeyframeRecord, VisualMemory
 from sim.synthetic.image_pairs import similarity_homography, warped_pair
 from tests.shared.memory.builders import small_camera

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.driver import PioneerDriver
 from shared.aria.commands import ClientCommand, Command
 from shared.aria.config_packet import ConfigPacket
@@ -20,7 +21,7 @@ from shared.aria.sip import Sip, SipFlags, SipIo, wrap_position
 from shared.aria.state import Role
 from shared.byte_link import ByteLink, LinkClosedError, PipeEnd, pipe_pair
 from shared.clock import ManualClock
-from shared.config import AriaLinkConfig, PioneerDriverConfig
+from shared.config import AriaLinkConfig
 
 MS = 1_000_000
 

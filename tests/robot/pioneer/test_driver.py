@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.driver import PioneerDriver
 from robot.pioneer.events import (
     Closed,
@@ -27,7 +28,7 @@ from shared.aria.commands import ClientCommand, Command
 from shared.aria.config_packet import ConfigPacket
 from shared.aria.events import RawPacket
 from shared.aria.handshake import RobotIdentity, SyncRequest
-from shared.config import AriaLinkConfig, PioneerDriverConfig
+from shared.config import AriaLinkConfig
 from shared.errors import LocalProtocolError, TransportError
 from shared.interfaces import MobileBase
 from tests.robot.pioneer.responder import MS, RecordingLink, Responder, Rig

@@ -8,12 +8,12 @@ import socket
 
 import pytest
 
+from robot.config import PioneerDriverConfig
 from robot.pioneer.driver import PioneerDriver
 from robot.pioneer.events import LinkLost
 from robot.pioneer.serial_link import serial_link_factory
 from shared.aria.commands import ClientCommand, Command
 from shared.clock import WallClock
-from shared.config import PioneerDriverConfig
 from tests.robot.pioneer.real_links import FdLink, SocketLink, serve_until
 from tests.robot.pioneer.responder import MS, Responder
 

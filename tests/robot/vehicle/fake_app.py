@@ -13,9 +13,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from robot.config import VmnavConfig
 from robot.mission import MissionState
 from robot.vehicle.app_port import GcsLostAction, VehicleTelemetry
-from shared.config import VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal

@@ -17,11 +17,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from robot.config import VmnavConfig
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import NS_PER_S, Clock, ManualClock
-from shared.config import MavlinkConfig, VmnavConfig
+from shared.config import MavlinkConfig
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp.gcs import FtpClient

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
+from robot.config import VmnavConfig
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import VehicleFiles
 from robot.vehicle.robot_params import ROBOT_PARAMS
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import ManualClock
-from shared.config import VmnavConfig
 from shared.errors import ConfigError
 from shared.mavlink.dialect import mavlink, to_float32
 from shared.mavlink.params.gcs import ParamSetDone, ParamsFetched

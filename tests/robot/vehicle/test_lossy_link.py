@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from robot.config import VmnavConfig
 from robot.vehicle.robot_params import ROBOT_PARAMS
 from shared.clock import ManualClock
-from shared.config import VmnavConfig
 from shared.mavlink.dialect import to_float32
 from shared.mavlink.mission.gcs import DownloadDone, UploadDone
 from shared.mavlink.mission.goal import Goal

@@ -6,8 +6,9 @@ import dataclasses
 
 import pytest
 
+from robot.config import ControlConfig, VmnavConfig
 from robot.vehicle.robot_params import ROBOT_PARAMS, config_with_params, robot_param_table
-from shared.config import ControlConfig, MavlinkConfig, VmnavConfig
+from shared.config import MavlinkConfig
 from shared.errors import ConfigError
 from shared.mavlink.params.gcs import ParamClient
 from shared.mavlink.params.table import NAME_LEN

@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from robot.config import RelativePoseConfig
 from robot.vision._epipolar_error import rotation_y
 from robot.vision.epipolar import epipolar_residuals_rad, relative_pose, rotation_from_rotvec
-from shared.config import RelativePoseConfig
 from shared.errors import DegenerateGeometryError, ShapeError
 
 CONFIG = RelativePoseConfig()

@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig
 from robot.vision.features import Features, detect_harris
-from shared.config import FeatureConfig
 from shared.errors import ShapeError
 from sim.synthetic.image_pairs import texture
 

@@ -12,13 +12,13 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import MatchConfig, PathStateConfig
 from robot.vision.features import Features
 from robot.vision.frame_state import (
     key_correspondences,
     key_segment_from_key_images,
     state_from_frame,
 )
-from shared.config import MatchConfig, PathStateConfig
 from shared.errors import DegenerateGeometryError, ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
 

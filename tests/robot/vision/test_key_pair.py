@@ -8,10 +8,11 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import PathStateConfig
 from robot.vision.bearings import level_bearings
 from robot.vision.key_pair import KeyPairGeometry, camera_baseline_level, key_pair_geometry
 from shared.camera_mount import camera_pose_world, rotation_level_cam
-from shared.config import CameraMountConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError, ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
 

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from robot.config import FeatureConfig, MatchConfig
 from robot.vision.features import Features, detect_harris
 from robot.vision.matching import Matches, match_zncc
-from shared.config import FeatureConfig, MatchConfig
 from shared.errors import ShapeError
 from sim.synthetic.image_pairs import similarity_homography, transform_pixels, warped_pair
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import PathStateConfig
 from robot.vision.bearings import level_bearings
 from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
 from robot.vision.path_state import (
@@ -17,7 +18,7 @@ from robot.vision.path_state import (
     state_from_views,
 )
 from shared.camera_mount import rotation_level_cam
-from shared.config import CameraMountConfig, PathStateConfig
+from shared.config import CameraMountConfig
 from shared.errors import ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneMatches, SceneView, corridor_scene
 from tests.robot.vision.test_key_pair import level_pose_world

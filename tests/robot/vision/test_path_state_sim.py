@@ -11,13 +11,14 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig, PathStateConfig
 from robot.vision.features import Features, detect_harris
 from robot.vision.frame_state import key_segment_from_key_images, state_from_frame
 from robot.vision.lens_mask import lens_mask
 from robot.vision.path_state import PathState
 from shared.camera_model import CameraModel
-from shared.config import FeatureConfig, PathStateConfig, SimConfig
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.synthetic.corridor_scene import compose
@@ -47,7 +48,7 @@ def views() -> _Views:
 
 def _state(views: _Views, previous: Pose2, next_: Pose2, current: Pose2,
            rng: np.random.Generator) -> PathState:
-    mount, config = views.config.camera, PathStateConfig()
+    mount, config = views.config.camera_mount, PathStateConfig()
     f_prev, f_next, f_cur = (views.features(p) for p in (previous, next_, current))
     # Teach odometry: the true poses with a 1 % scale error on the spacing. No teach
     # tracks: the key images are matched directly.

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import PathStateConfig
 from robot.vision._epipolar_error import rotation_y
 from robot.vision.bearings import level_bearings
 from robot.vision.resection import resect_planar
 from shared.camera_mount import rotation_level_cam
-from shared.config import PathStateConfig
 from shared.errors import ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, corridor_scene
 from tests.robot.vision.test_key_pair import level_pose_world, previous_pair

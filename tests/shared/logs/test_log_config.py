@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from shared.config import LogConfig, VmnavConfig, from_mapping
+from robot.config import VmnavConfig
+from shared.config import LogConfig, from_mapping
 from shared.errors import ConfigError
 
 

@@ -6,8 +6,8 @@ import numpy as np
 
 from shared.aria import Command, ConnState, Sip
 from shared.byte_link import pipe_pair
-from shared.config import EmulatorConfig, SimConfig
 from shared.pose import Pose2
+from sim.config import EmulatorConfig, SimConfig
 from sim.pioneer.emulator import EmulatedPioneer
 from sim.pioneer.server import PioneerServer
 from sim.simulation import Simulation

@@ -7,8 +7,8 @@ import math
 import pytest
 
 from shared.aria import Command, SipFlags
-from shared.config import EmulatorConfig
 from shared.pose import Pose2
+from sim.config import EmulatorConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.pioneer.p3at import FRONT_BUMPER_SEGMENTS, SONAR_POSES
 from tests.sim.pioneer.rig import Rig

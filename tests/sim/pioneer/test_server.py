@@ -15,8 +15,8 @@ import pytest
 from shared.aria import Command, ConnState
 from shared.byte_link import LinkClosedError, pipe_pair
 from shared.clock import WallClock
-from shared.config import EmulatorConfig, SimConfig
 from shared.errors import TransportError
+from sim.config import EmulatorConfig, SimConfig
 from sim.pioneer import EmulatedPioneer, PioneerServer, PtyLink, StreamLink, TcpListener
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation

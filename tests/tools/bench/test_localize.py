@@ -11,10 +11,11 @@ import math
 import numpy as np
 import pytest
 
+from robot.config import VmnavConfig
 from robot.memory import Localizer
 from shared.camera_model import CameraModel
-from shared.config import SimConfig, VmnavConfig
 from shared.memory import VisualMemory
+from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world

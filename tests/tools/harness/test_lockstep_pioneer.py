@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from shared.config import PioneerDriverConfig, SimConfig
+from robot.config import PioneerDriverConfig
 from shared.interfaces import MobileBase
 from shared.pose import Pose2
+from sim.config import SimConfig
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world

@@ -1,10 +1,11 @@
-"""PioneerDriverConfig (shared/config.py): defaults, TOML tables, validation."""
+"""PioneerDriverConfig (robot/config/devices.py): defaults, TOML tables, validation."""
 
 from __future__ import annotations
 
 import pytest
 
-from shared.config import AriaLinkConfig, PioneerDriverConfig, VmnavConfig, from_mapping
+from robot.config import PioneerDriverConfig, VmnavConfig
+from shared.config import AriaLinkConfig, from_mapping
 from shared.errors import ConfigError
 
 

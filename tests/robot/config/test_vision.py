@@ -1,10 +1,11 @@
-"""Tests of the vision components of shared/config.py: FeatureConfig and MatchConfig."""
+"""Tests of the vision components of robot/config/vision.py: FeatureConfig and MatchConfig."""
 
 from __future__ import annotations
 
 import pytest
 
-from shared.config import FeatureConfig, MatchConfig, VmnavConfig, from_mapping
+from robot.config import FeatureConfig, MatchConfig, VmnavConfig
+from shared.config import from_mapping
 from shared.errors import ConfigError
 
 

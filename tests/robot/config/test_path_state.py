@@ -1,10 +1,11 @@
-"""Tests of the relative-pose and path-state tables of shared/config.py."""
+"""Tests of the relative-pose and path-state tables of robot/config/vision.py."""
 
 from __future__ import annotations
 
 import pytest
 
-from shared.config import PathStateConfig, RelativePoseConfig, VmnavConfig, from_mapping
+from robot.config import PathStateConfig, RelativePoseConfig, VmnavConfig
+from shared.config import from_mapping
 from shared.errors import ConfigError
 
 

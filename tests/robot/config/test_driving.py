@@ -1,5 +1,5 @@
-"""Tests of the route-following tables of shared/config.py (control, estimator, switching,
-mission)."""
+"""Tests of the route-following tables of robot/config/driving.py (control, estimator,
+switching, mission)."""
 
 from __future__ import annotations
 
@@ -7,14 +7,8 @@ import math
 
 import pytest
 
-from shared.config import (
-    ControlConfig,
-    EstimatorConfig,
-    MissionConfig,
-    SwitchingConfig,
-    VmnavConfig,
-    from_mapping,
-)
+from robot.config import ControlConfig, EstimatorConfig, MissionConfig, SwitchingConfig, VmnavConfig
+from shared.config import from_mapping
 from shared.errors import ConfigError
 
 

@@ -1,10 +1,12 @@
-"""CameraSourceConfig (shared/config.py): defaults, TOML table, validation."""
+"""CameraSourceConfig (robot/config/devices.py): defaults, TOML tables (with the camera
+mount), validation."""
 
 from __future__ import annotations
 
 import pytest
 
-from shared.config import CameraSourceConfig, VmnavConfig, from_mapping
+from robot.config import CameraSourceConfig, VmnavConfig
+from shared.config import CameraMountConfig, from_mapping
 from shared.errors import ConfigError
 
 
@@ -12,6 +14,7 @@ def test_defaults_and_place_in_the_config_file() -> None:
     config = VmnavConfig().camera
     assert config == CameraSourceConfig()
     assert config.source == "0" and config.max_failed_reads >= 1
+    assert config.mount == CameraMountConfig()
 
 
 def test_from_a_toml_table() -> None:
@@ -20,6 +23,14 @@ def test_from_a_toml_table() -> None:
     }}, "vmnav.toml")
     assert config.camera.source == "http://127.0.0.1:8080/stream.mjpg"
     assert config.camera.read_timeout_ns == 2_000_000_000
+    assert config.camera.mount == CameraMountConfig()
+
+
+def test_the_mount_is_the_camera_tables_mount_table() -> None:
+    config = from_mapping(VmnavConfig, {"camera": {"mount": {"pitch_deg": -5, "x_m": 0.25}}},
+                          "vmnav.toml")
+    assert config.camera.mount == CameraMountConfig(x_m=0.25, pitch_deg=-5.0)
+    assert config.camera.source == CameraSourceConfig().source
 
 
 @pytest.mark.parametrize(("table", "message"), [
@@ -29,6 +40,8 @@ def test_from_a_toml_table() -> None:
     ({"max_failed_reads": 0}, "max_failed_reads must be > 0"),
     ({"reconnect_initial_ns": 10, "reconnect_max_ns": 5}, "reconnect_max_ns"),
     ({"source": 0}, "expected a string"),
+    ({"mount": {"height_m": 0}}, "height_m must be > 0"),
+    ({"mount": {"tilt_deg": 5}}, "unknown key 'tilt_deg'"),
 ])
 def test_bad_values_name_the_key(table: dict, message: str) -> None:
     with pytest.raises(ConfigError, match=message) as info:

@@ -1,0 +1,154 @@
+"""The robot application's config: one table per component, loaded from a vmnav TOML file.
+
+The robot's tables sit at the top level of the file; the simulator's table
+(``[sim]``, :data:`shared.config.SIM_TABLE`) is :mod:`sim.config`'s and left alone
+here, so ``vmnav robot --config F`` and ``vmnav demo --config F`` read the same file::
+
+    [control]
+    speed_m_s = 0.25
+
+    [camera]
+    source = "http://robot.local:8080/stream.mjpg"
+
+    [camera.mount]
+    pitch_deg = -5.0
+
+The camera mount belongs to the robot (``[camera.mount]``); files and field logs
+written before it left the simulator's table had it in ``[sim.camera]``: a file
+that still does is refused (:func:`load_config`), a logged config is read either way
+(:func:`config_from_log`).
+
+The component configs live by theme in :mod:`robot.config.vision`,
+:mod:`robot.config.driving` and :mod:`robot.config.devices`; import them from here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from robot.config.devices import CameraSourceConfig, PioneerDriverConfig
+from robot.config.driving import (
+    BASE_LOST_ACTIONS,
+    CONTROL_LAWS,
+    POLE_DOMAINS,
+    ControlConfig,
+    EstimatorConfig,
+    MissionConfig,
+    SwitchingConfig,
+    TeleopConfig,
+)
+from robot.config.vision import (
+    RELATIVE_POSE_MODELS,
+    FeatureConfig,
+    LocalizeConfig,
+    MatchConfig,
+    PathStateConfig,
+    RelativePoseConfig,
+    TeachConfig,
+)
+from shared.config import SIM_TABLE, LogConfig, MavlinkConfig, from_mapping, load_toml
+from shared.errors import ConfigError
+
+__all__ = [
+    "BASE_LOST_ACTIONS",
+    "CONTROL_LAWS",
+    "POLE_DOMAINS",
+    "RELATIVE_POSE_MODELS",
+    "CameraSourceConfig",
+    "ControlConfig",
+    "EstimatorConfig",
+    "FeatureConfig",
+    "LocalizeConfig",
+    "MatchConfig",
+    "MissionConfig",
+    "PathStateConfig",
+    "PioneerDriverConfig",
+    "RelativePoseConfig",
+    "SwitchingConfig",
+    "TeachConfig",
+    "TeleopConfig",
+    "VmnavConfig",
+    "config_from_log",
+    "load_config",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class VmnavConfig:
+    """The robot application's config: one table per component (the file's top level)."""
+
+    features: FeatureConfig = field(default_factory=FeatureConfig)
+    matching: MatchConfig = field(default_factory=MatchConfig)
+    path_state: PathStateConfig = field(default_factory=PathStateConfig)
+    teach: TeachConfig = field(default_factory=TeachConfig)
+    localize: LocalizeConfig = field(default_factory=LocalizeConfig)
+    control: ControlConfig = field(default_factory=ControlConfig)
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    switching: SwitchingConfig = field(default_factory=SwitchingConfig)
+    mission: MissionConfig = field(default_factory=MissionConfig)
+    pioneer: PioneerDriverConfig = field(default_factory=PioneerDriverConfig)
+    camera: CameraSourceConfig = field(default_factory=CameraSourceConfig)
+    mavlink: MavlinkConfig = field(default_factory=MavlinkConfig)
+    log: LogConfig = field(default_factory=LogConfig)
+    teleop: TeleopConfig = field(default_factory=TeleopConfig)
+
+
+#: Tables of the layout before the simulator's tables left the robot's config: the old
+#: dotted key, where the table lives now, and why.
+MOVED_TABLES: tuple[tuple[str, str, str], ...] = (
+    (f"{SIM_TABLE}.camera", "camera.mount",
+     "the camera mount is the robot's; a simulation places its camera there too"),
+    ("teach_driver", f"{SIM_TABLE}.teach_driver", "the scripted teach driver is the simulator's"),
+)
+
+
+def load_config(path: str | Path | None) -> VmnavConfig:
+    """Load the robot's tables of a vmnav TOML config file; ``None`` gives the defaults.
+
+    Raises:
+        ConfigError: naming the file, table and key at fault; a table of
+            :data:`MOVED_TABLES` names where it lives now.
+    """
+    if path is None:
+        return VmnavConfig()
+    data = load_toml(path)
+    for old, new, why in MOVED_TABLES:
+        if _lookup(data, old) is not None:
+            raise ConfigError(path, f"{old}: moved to [{new}] ({why})")
+    return from_mapping(VmnavConfig, {k: v for k, v in data.items() if k != SIM_TABLE},
+                        str(path))
+
+
+def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> VmnavConfig:
+    """The config a field log stored (``dataclasses.asdict`` of :class:`VmnavConfig`).
+
+    A log written before the simulator's tables left the robot's config holds them
+    too (``sim``, ``teach_driver``) and the camera mount in ``sim.camera``: the mount
+    becomes ``camera.mount`` and the simulator's tables, which the robot never used,
+    are dropped, so such a log replays as it ran.
+
+    Raises:
+        ConfigError: a key unknown in both layouts, a bad value (at ``key_path``).
+    """
+    if SIM_TABLE in data:
+        old = dict(data)
+        sim = old.pop(SIM_TABLE)
+        old.pop("teach_driver", None)
+        camera = old.get("camera", {})
+        if isinstance(sim, Mapping) and "camera" in sim and isinstance(camera, Mapping):
+            old["camera"] = {**camera, "mount": sim["camera"]}
+        data = old
+    return from_mapping(VmnavConfig, data, source, key_path)
+
+
+def _lookup(data: Mapping[str, Any], dotted: str) -> Any:
+    """The value at dotted key ``dotted`` of nested tables, or None."""
+    value: Any = data
+    for key in dotted.split("."):
+        if not isinstance(value, Mapping) or key not in value:
+            return None
+        value = value[key]
+    return value

@@ -1,0 +1,192 @@
+"""The robot's driving configs: the control law, the estimator, key image switching, the
+mission's give-up policy and driving by hand.
+
+Tables ``[control]``, ``[estimator]``, ``[switching]``, ``[mission]`` and ``[teleop]``
+of a vmnav config file (:mod:`robot.config`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from shared.config import require
+
+#: Control laws of :class:`ControlConfig`: "paper" (Courbon et al. 2008, eq. 2) and
+#: "paper+ff" (eq. 2 plus a feed-forward of the teach path's curvature).
+CONTROL_LAWS = ("paper", "paper+ff")
+
+#: Domains of :attr:`ControlConfig.double_pole`: "distance" (1/m, the chained form's own
+#: variable) or "time" (1/s, converted to 1/m by dividing by the speed).
+POLE_DOMAINS = ("distance", "time")
+
+
+@dataclass(frozen=True, slots=True)
+class ControlConfig:
+    """The path-following law (Courbon et al. 2008, sec. III-C and IV; DESIGN.md sec. 5.6).
+
+    Gains put a double pole at g (1/m) on the lateral error's response to the
+    distance travelled: Kp = g^2, Kd = 2 g. The paper says only "a double pole
+    located at value 0.3". Read in the distance domain (0.3 1/m) it takes 10.8 m to
+    bring a 0.3 m offset under 5 cm (reference visual-navigation.md sec. 1.2), while
+    the paper's own run (280 key images over about 500 s at 0.2 m/s, so one every
+    ~0.36 m) is said to regulate the errors "to zero for each key view". We read it
+    as a time-domain pole, 0.3 1/s = 1.5 1/m at 0.2 m/s (2.3 m to 5 cm); set
+    ``pole_domain = "distance"`` for the other reading.
+    """
+
+    law: str = "paper"
+    """One of ``CONTROL_LAWS``: the paper's eq. (2), or eq. (2) plus curvature feed-forward."""
+    speed_m_s: float = 0.2
+    """Forward speed V, m/s (paper: 200 mm/s)."""
+    max_omega_rad_s: float = math.radians(10.0)
+    """Bound on |omega|, rad/s (paper: 10 deg/s). With V it bounds the turn radius from
+    below at V / max_omega (1.15 m at the defaults)."""
+    double_pole: float = 0.3
+    """The closed loop's double pole, in 1/m or 1/s as ``pole_domain`` says (paper: 0.3)."""
+    pole_domain: str = "time"
+    """One of ``POLE_DOMAINS``: the unit of ``double_pole``."""
+
+    def __post_init__(self) -> None:
+        require(self.law in CONTROL_LAWS,
+                f"law must be one of {', '.join(CONTROL_LAWS)}, got {self.law!r}")
+        require(self.pole_domain in POLE_DOMAINS,
+                f"pole_domain must be one of {', '.join(POLE_DOMAINS)}, got {self.pole_domain!r}")
+        for name in ("speed_m_s", "max_omega_rad_s", "double_pole"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+
+    @property
+    def pole_1_m(self) -> float:
+        """The double pole g in the distance domain, 1/m."""
+        if self.pole_domain == "distance":
+            return self.double_pole
+        return self.double_pole / self.speed_m_s
+
+
+@dataclass(frozen=True, slots=True)
+class EstimatorConfig:
+    """The Kalman filter over (s, y, theta) (``robot.estimator``): odometry predicts, vision
+    updates.
+
+    Measurement noise defaults come from the three-view simulation of reference
+    visual-navigation.md sec. 1.2 (median |dy| about 1 cm, p90 about 3 cm; median
+    |dtheta| 0.5 to 0.8 degrees, p90 up to 2.4 degrees).
+    """
+
+    sigma_y_m: float = 0.02
+    """Std of the vision estimate of y, m."""
+    sigma_theta_rad: float = math.radians(1.5)
+    """Std of the vision estimate of theta, rad."""
+    sigma_s_m: float = 0.05
+    """Std of the vision estimate of s (along-track), m."""
+    process_var_position_m2_per_m: float = 1e-4
+    """Growth of var(s) and var(y) per metre driven, m^2/m (wheel slip, unmodelled motion)."""
+    process_var_theta_rad2_per_m: float = 1e-4
+    """Growth of var(theta) per metre driven, rad^2/m (uneven wheels, ground)."""
+    rotation_scale_sigma: float = 0.03
+    """Std of the odometry's rotation error as a fraction of the turn measured (skid
+    steering slips in turns; the simulator draws 3 %)."""
+    gate_chi2: float | None = 16.3
+    """A vision estimate (s, y, theta) whose squared Mahalanobis distance to the prediction
+    exceeds this is rejected (16.3 = chi-square, 3 degrees of freedom, p = 0.999); None
+    accepts all (code only: TOML cannot write None)."""
+    init_min_points: int = 10
+    """A vision estimate initialises the filter (ungated: at a start, after a junction
+    crossing or LOST) only with at least this many triangulated key-pair points behind it;
+    three points once gave y = 1.05 m for a robot on the path."""
+    lost_timeout_ns: int = 2_000_000_000
+    """No accepted vision estimate for this long means LOST, ns (30 frames at 15 Hz, 0.4 m
+    of odometry alone at 0.2 m/s)."""
+
+    def __post_init__(self) -> None:
+        for name in ("sigma_y_m", "sigma_theta_rad", "sigma_s_m", "lost_timeout_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        for name in ("process_var_position_m2_per_m", "process_var_theta_rad2_per_m",
+                     "rotation_scale_sigma"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(self.gate_chi2 is None or self.gate_chi2 > 0,
+                f"gate_chi2 must be > 0 or None, got {self.gate_chi2}")
+        require(self.init_min_points >= 0,
+                f"init_min_points must be >= 0, got {self.init_min_points}")
+
+
+@dataclass(frozen=True, slots=True)
+class SwitchingConfig:
+    """When the next key image counts as reached (Courbon et al. 2008, sec. IV; reference
+    visual-navigation.md sec. 1.3)."""
+
+    err_image_max_px: float = 20.0
+    """Reached when errImageMax is below this, px (paper: 20 px)."""
+    image_error_within_m: float = 0.25
+    """...and, when the frame has an along-track estimate s, the robot is at most this far
+    before the key image, m (a large value is the paper's rule). Far landmarks (the ``campus``
+    courtyard's facades) keep errImageMax under 20 px up to 0.75 m before a key image:
+    the switch came early and the next key image, turned 15 deg, looked 30 cm off."""
+    pass_margin_m: float = 0.0
+    """Reached when the along-track coordinate s (relative to the key image, negative
+    before it) is at least this, m."""
+    hold_frames: int = 2
+    """A rule must hold on this many consecutive frames with evidence before it switches
+    (hysteresis against a single noisy frame)."""
+
+    def __post_init__(self) -> None:
+        require(self.err_image_max_px > 0,
+                f"err_image_max_px must be > 0, got {self.err_image_max_px}")
+        require(self.image_error_within_m > 0,
+                f"image_error_within_m must be > 0, got {self.image_error_within_m}")
+        require(self.pass_margin_m >= 0, f"pass_margin_m must be >= 0, got {self.pass_margin_m}")
+        require(self.hold_frames >= 1, f"hold_frames must be >= 1, got {self.hold_frames}")
+
+
+
+#: What a mission run does when the base stops reporting (a cut ARIA cable, a Pioneer
+#: that went quiet; :attr:`MissionConfig.base_lost_action`). The robot stops either way
+#: (and the Pioneer's own watchdog stops it 2 s after the last packet it got): "hold"
+#: ends the run and waits in HOLD for the operator, "continue" pauses the run and goes
+#: on when the base reports again.
+BASE_LOST_ACTIONS = ("hold", "continue")
+
+
+@dataclass(frozen=True, slots=True)
+class MissionConfig:
+    """Give-up policy of the mission state machine (``robot.mission``)."""
+
+    localize_timeout_ns: int = 30_000_000_000
+    """LOCALIZING for this long without success fails the mission, ns (paper: one
+    localization took 6.5 s)."""
+    localize_attempts: int = 5
+    """This many failed localizations in a row fail the mission."""
+    relocalize_timeout_ns: int = 20_000_000_000
+    """LOST for this long without relocalizing fails the mission, ns."""
+    relocalize_attempts: int = 10
+    """This many failed relocalizations in one LOST episode fail the mission."""
+    base_lost_action: str = "continue"
+    """One of ``BASE_LOST_ACTIONS``: what a mission run does when the base stops reporting."""
+
+    def __post_init__(self) -> None:
+        for name in ("localize_timeout_ns", "localize_attempts", "relocalize_timeout_ns",
+                     "relocalize_attempts"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        require(self.base_lost_action in BASE_LOST_ACTIONS,
+                f"base_lost_action must be one of {', '.join(BASE_LOST_ACTIONS)}, "
+                f"got {self.base_lost_action!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class TeleopConfig:
+    """Driving by hand over the link (MANUAL_CONTROL in MANUAL mode, ``robot.runtime``)."""
+
+    max_speed_m_s: float = 0.4
+    """Forward speed at full stick (x = +-1000), m/s."""
+    max_omega_rad_s: float = 0.7853981633974483
+    """Turn rate at full stick (r = +-1000), rad/s (45 deg/s)."""
+    deadman_ns: int = 500_000_000
+    """No MANUAL_CONTROL for this long stops the robot, ns (ground stations send 10-50 Hz;
+    QGroundControl's joystick sends at least every 50 ms while held)."""
+    frame_timeout_ns: int = 500_000_000
+    """No camera frame for this long stops the base until frames return, ns."""
+
+    def __post_init__(self) -> None:
+        for name in ("max_speed_m_s", "max_omega_rad_s", "deadman_ns", "frame_timeout_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+

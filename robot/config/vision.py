@@ -1,0 +1,305 @@
+"""The robot's vision configs: Harris features, ZNCC matching, key image selection,
+relative pose, the path state and localization in the memory.
+
+Tables ``[features]``, ``[matching]``, ``[teach]``, ``[path_state]`` and ``[localize]``
+of a vmnav config file (:mod:`robot.config`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from shared.config import require
+
+
+@dataclass(frozen=True, slots=True)
+class FeatureConfig:
+    """Harris corners and their ZNCC patch descriptors (Courbon et al. 2008, sec. III-A).
+
+    Defaults follow OpenCV's Harris (``k`` = 0.04, 3x3 block, 3x3 Sobel) and the
+    reference benchmark (300 corners, 11x11 patches).
+    """
+
+    max_corners: int = 300
+    """Keep at most this many corners, strongest Harris response first."""
+    quality_level: float = 0.01
+    """Reject corners whose response is below this fraction of the frame's strongest, in (0, 1)."""
+    min_distance_px: float = 8.0
+    """Minimum Euclidean distance between two corners, px (greedy, strongest first)."""
+    block_size_px: int = 3
+    """Side of the window summing the gradient products of the Harris matrix, px (odd)."""
+    harris_k: float = 0.04
+    """Harris & Stephens' k in det(M) - k trace(M)^2 (dimensionless)."""
+    patch_size_px: int = 11
+    """Side P of the square ZNCC patch, px (odd, >= 3); a descriptor has P*P values."""
+    subpixel_half_window_px: int = 3
+    """Half side of the cv2.cornerSubPix window, px; 0 keeps integer corner positions."""
+
+    def __post_init__(self) -> None:
+        require(self.max_corners >= 1, f"max_corners must be >= 1, got {self.max_corners}")
+        require(
+            0 < self.quality_level < 1, f"quality_level must be in (0, 1), got {self.quality_level}"
+        )
+        require(
+            self.min_distance_px >= 0, f"min_distance_px must be >= 0, got {self.min_distance_px}"
+        )
+        require(
+            self.block_size_px >= 3 and self.block_size_px % 2 == 1,
+            f"block_size_px must be odd and >= 3, got {self.block_size_px}",
+        )
+        require(0 < self.harris_k < 0.25, f"harris_k must be in (0, 0.25), got {self.harris_k}")
+        require(
+            self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
+            f"patch_size_px must be odd and >= 3, got {self.patch_size_px}",
+        )
+        require(
+            self.subpixel_half_window_px >= 0,
+            f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}",
+        )
+
+
+
+@dataclass(frozen=True, slots=True)
+class MatchConfig:
+    """ZNCC matching in a search window with the unicity (mutual best) constraint.
+
+    The paper gives no numbers; the defaults are the reference benchmark's window
+    and a threshold measured on synthetic pairs (``robot/vision/bench_features.py``).
+    """
+
+    search_radius_px: float | None = 40.0
+    """Candidates satisfy |dx| <= r and |dy| <= r, px; None searches the whole image
+    (code only: TOML cannot write None, so a file can only set a finite radius)."""
+    min_zncc: float = 0.8
+    """Reject matches whose ZNCC score is below this, in [-1, 1]."""
+    max_distance_ratio: float | None = None
+    """Lowe's ratio test on patch distances sqrt(2 - 2 ZNCC), in (0, 1]; None = off."""
+
+    def __post_init__(self) -> None:
+        require(
+            self.search_radius_px is None or self.search_radius_px > 0,
+            f"search_radius_px must be > 0 or None, got {self.search_radius_px}",
+        )
+        require(-1 <= self.min_zncc <= 1, f"min_zncc must be in [-1, 1], got {self.min_zncc}")
+        require(
+            self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
+            f"max_distance_ratio must be in (0, 1] or None, got {self.max_distance_ratio}",
+        )
+
+
+
+def _tracking_match_config() -> MatchConfig:
+    return MatchConfig(search_radius_px=20.0, min_zncc=0.7)
+
+
+@dataclass(frozen=True, slots=True)
+class TeachConfig:
+    """Key image selection (Courbon et al. 2008, sec. II-C) and joining new paths to a memory.
+
+    The default M was chosen in the ``lab`` world at the teach driver's default speed:
+    it gives about two key images per metre on straight corridors (the measured
+    spacing is printed by ``vmnav teach``).
+    """
+
+    min_tracked_points: int = 50
+    """M: a key image shares at least this many points tracked from the previous one."""
+    min_tracked_fraction: float = 0.35
+    """In (0, 1]. A key image with few corners needs only this fraction of them tracked
+    (the threshold is min(M, ceil(fraction * corners))): in a sparse scene a fixed M
+    would force a key image at every frame. It must stay well below the share of
+    the live points a single frame matches, 0.46-0.77 in the ``lab`` and ``campus``
+    worlds: at 0.5 the ``campus`` corridor got key images 2 cm apart, too close for a
+    key pair (see :mod:`robot.teach`, rule 3)."""
+    max_turn_deg: float = 15.0
+    """A key image is at most this far turned (odometric yaw) from the previous one, deg:
+    the repeat matches the next key image in a window of ``PathStateConfig.matching``'s
+    radius (120 px; a yaw of 1 deg moves the image centre by about 4 px), so a long
+    gap in a turn leaves nothing to match (the ``campus`` U-turn had a 50 deg gap)."""
+    max_missed_frames: int = 2
+    """A tracked point survives this many consecutive frames without a match (detector blinks)."""
+    tracking: MatchConfig = field(default_factory=_tracking_match_config)
+    """Frame-to-frame matching of the tracked points (small window, mutual best)."""
+    junction_min_matches: int = 40
+    """A path's end joins a key image of another path with at least this many matches
+    (two unrelated views share up to about 25 chance matches without a search window)."""
+    min_path_length_m: float = 0.2
+    """A path taught over the link must span at least this much odometry, m; a shorter
+    drive (a teach started and stopped in place) is refused instead of stored."""
+
+    def __post_init__(self) -> None:
+        require(self.min_path_length_m >= 0,
+                f"min_path_length_m must be >= 0, got {self.min_path_length_m}")
+        require(
+            self.min_tracked_points >= 1,
+            f"min_tracked_points must be >= 1, got {self.min_tracked_points}",
+        )
+        require(
+            self.max_missed_frames >= 0,
+            f"max_missed_frames must be >= 0, got {self.max_missed_frames}",
+        )
+        require(0 < self.max_turn_deg <= 180,
+                f"max_turn_deg must be in (0, 180], got {self.max_turn_deg}")
+        require(
+            self.junction_min_matches >= 1,
+            f"junction_min_matches must be >= 1, got {self.junction_min_matches}",
+        )
+
+
+
+#: Models of :class:`RelativePoseConfig`: "planar" (upright planar 2-point), "general"
+#: (5-point), "auto" (planar, and 5-point as well when the planar fit looks poor).
+RELATIVE_POSE_MODELS = ("planar", "general", "auto")
+
+
+@dataclass(frozen=True, slots=True)
+class RelativePoseConfig:
+    """Robust relative pose from unit bearings (reference visual-navigation.md, sec. 4.4).
+
+    RANSAC over minimal solvers (PoseLib's upright planar 2-point, or 5-point),
+    scored by the angular Sampson error on the sphere, then refined on the inliers.
+    Thresholds are angles: 1 px is about 5.7 mrad on the default 185 degree lens.
+    """
+
+    model: str = "auto"
+    """One of ``RELATIVE_POSE_MODELS``; the planar model needs level bearings (y vertical)."""
+    inlier_threshold_rad: float = 0.012
+    """A correspondence is an inlier when its angular Sampson error is below this, rad."""
+    huber_scale_rad: float = 0.006
+    """Residuals beyond this are down-weighted (Huber loss) in the refinement, rad."""
+    confidence: float = 0.999
+    """RANSAC stops when an all-inlier sample was drawn with this probability."""
+    max_iterations: int = 256
+    """Most minimal samples drawn for the planar model."""
+    max_iterations_general: int = 1024
+    """Most minimal samples drawn for the general (5-point) model."""
+    min_inliers: int = 8
+    """A fit with fewer inliers is not ok (the planar model has 2 degrees of freedom)."""
+    min_planar_inlier_ratio: float = 0.5
+    """Model "auto": below this planar inlier ratio the 5-point model is tried too."""
+    refine_passes: int = 2
+    """Refine on the inliers and re-select them this many times (0: the best RANSAC
+    hypothesis, with its inliers)."""
+
+    def __post_init__(self) -> None:
+        require(
+            self.model in RELATIVE_POSE_MODELS,
+            f"model must be one of {', '.join(RELATIVE_POSE_MODELS)}, got {self.model!r}",
+        )
+        require(
+            0 < self.inlier_threshold_rad < 0.5,
+            f"inlier_threshold_rad must be in (0, 0.5), got {self.inlier_threshold_rad}",
+        )
+        require(
+            0 < self.huber_scale_rad <= self.inlier_threshold_rad,
+            f"huber_scale_rad must be in (0, inlier_threshold_rad], got {self.huber_scale_rad}",
+        )
+        require(0 < self.confidence < 1, f"confidence must be in (0, 1), got {self.confidence}")
+        require(self.max_iterations >= 1, f"max_iterations must be >= 1, got {self.max_iterations}")
+        require(
+            self.max_iterations_general >= 1,
+            f"max_iterations_general must be >= 1, got {self.max_iterations_general}",
+        )
+        require(self.min_inliers >= 5, f"min_inliers must be >= 5, got {self.min_inliers}")
+        require(
+            0 <= self.min_planar_inlier_ratio <= 1,
+            f"min_planar_inlier_ratio must be in [0, 1], got {self.min_planar_inlier_ratio}",
+        )
+        require(self.refine_passes >= 0, f"refine_passes must be >= 0, got {self.refine_passes}")
+
+
+
+def _state_match_config() -> MatchConfig:
+    return MatchConfig(search_radius_px=120.0)
+
+
+@dataclass(frozen=True, slots=True)
+class PathStateConfig:
+    """Lateral and angular error from the current view and two key images (DESIGN.md sec. 5.5)."""
+
+    relative_pose: RelativePoseConfig = field(default_factory=RelativePoseConfig)
+    """Relative pose of two key images, and of the two-view state (refined)."""
+    pose_before_resection: RelativePoseConfig = field(
+        default_factory=lambda: RelativePoseConfig(refine_passes=1))
+    """Relative pose of the current view and the next key image in the three-view state:
+    the planar resection refines it further, so one refinement pass suffices."""
+    min_parallax_deg: float = 2.0
+    """Triangulated key-pair points need at least this angle between their two rays, degrees."""
+    max_point_distance_m: float = 30.0
+    """Triangulated points farther than this from the next key image are dropped, m."""
+    point_threshold_rad: float = 0.02
+    """A 3D point is an inlier of the current pose when it reprojects within this angle, rad."""
+    min_points: int = 3
+    """The three-view state needs at least this many inlier key-pair points in the current
+    view (the epipolar matches fix yaw and direction; the points fix the scale, one degree
+    of freedom, so 3 leave two for redundancy; measured on simulator frames)."""
+    max_odometry_disagreement_deg: float = 15.0
+    """A key pair is refused when the visual baseline direction and the teach odometry's
+    differ by more than this, degrees."""
+    matching: MatchConfig = field(default_factory=_state_match_config)
+    """Matching of the current view with the next key image, and of two key images
+    (``robot.vision.frame_state``): a window wide enough for a robot 0.5 m and 20 degrees
+    off the key image's view (on 234 such views in ``lab``, with the key pairs matched
+    directly, a +-40 px window left 26 % without a state, +-120 px 3 %)."""
+
+    def __post_init__(self) -> None:
+        require(
+            0 <= self.min_parallax_deg < 90,
+            f"min_parallax_deg must be in [0, 90), got {self.min_parallax_deg}",
+        )
+        require(
+            self.max_point_distance_m > 0,
+            f"max_point_distance_m must be > 0, got {self.max_point_distance_m}",
+        )
+        require(
+            0 < self.point_threshold_rad < 0.5,
+            f"point_threshold_rad must be in (0, 0.5), got {self.point_threshold_rad}",
+        )
+        require(self.min_points >= 2, f"min_points must be >= 2, got {self.min_points}")
+        require(
+            0 < self.max_odometry_disagreement_deg <= 180,
+            f"max_odometry_disagreement_deg must be in (0, 180], got "
+            f"{self.max_odometry_disagreement_deg}",
+        )
+
+
+
+def _localize_match_config() -> MatchConfig:
+    return MatchConfig(search_radius_px=None, min_zncc=0.8)
+
+
+@dataclass(frozen=True, slots=True)
+class LocalizeConfig:
+    """Localization of an image in the visual memory (Courbon et al. 2008, sec. II-D).
+
+    A global prefilter ranks every key image by the similarity of patch-normalised
+    thumbnails (Milford and Wyeth's SeqSLAM / QVPR teach-and-repeat normalisation),
+    then the paper's rule (most Harris + ZNCC matches) picks among the best
+    ``candidates``. Defaults measured on the ``lab`` world (``tools/localize_bench.py``).
+    """
+
+    candidates: int = 20
+    """Key images verified by full matching, the prefilter's best first."""
+    min_matches: int = 25
+    """The winner is a localization (``ok``) with at least this many matches (two unrelated
+    views share up to about 25 chance matches without a search window)."""
+    matching: MatchConfig = field(default_factory=_localize_match_config)
+    """Full matching of the query against a candidate (no window: the view may have turned)."""
+    prefilter_rows_fraction: float = 0.6
+    """Thumbnail rows used from the top, fraction in (0, 1]: the floor below the horizon is
+    near, bare and changes most with a lateral offset."""
+    prefilter_window_px: int = 9
+    """Side of the window of the thumbnail's patch normalisation, thumbnail px (odd)."""
+    prefilter_max_shift_px: int = 6
+    """The query thumbnail is compared shifted sideways by up to this, thumbnail px
+    (a turn of the robot shifts the view sideways; 6 px of 80 is about 14 degrees)."""
+
+    def __post_init__(self) -> None:
+        require(self.candidates >= 1, f"candidates must be >= 1, got {self.candidates}")
+        require(self.min_matches >= 1, f"min_matches must be >= 1, got {self.min_matches}")
+        require(0 < self.prefilter_rows_fraction <= 1,
+                f"prefilter_rows_fraction must be in (0, 1], got {self.prefilter_rows_fraction}")
+        require(self.prefilter_window_px >= 3 and self.prefilter_window_px % 2 == 1,
+                f"prefilter_window_px must be odd and >= 3, got {self.prefilter_window_px}")
+        require(self.prefilter_max_shift_px >= 0,
+                f"prefilter_max_shift_px must be >= 0, got {self.prefilter_max_shift_px}")
+
