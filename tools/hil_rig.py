@@ -44,8 +44,9 @@ from tools.sim_args import load_camera
 from tools.sim_serve import pioneer_server
 from tools.vmnav_process import VmnavProcess
 
-#: How long ``vmnav robot`` may take to answer the ground station, s.
-ROBOT_START_S = 30.0
+#: How long ``vmnav robot`` may take to start, and then to answer the ground station, s
+#: (about 3 s on an idle machine; a starved one takes many times that to import and load).
+ROBOT_START_S = 120.0
 #: What ``vmnav robot`` prints once its memory is loaded and its links serve (its MAVLink
 #: thread runs, so a HEARTBEAT may come before it).
 ROBOT_STARTED = re.compile(r"^vmnav robot: .*; memory .*: \d+ paths, \d+ key images$", re.M)
@@ -55,6 +56,9 @@ STOP_GRACE_S = 15.0
 STILL_M_S = 0.01
 STILL_RAD_S = 0.02
 _POLL_NS = 20_000_000
+#: The simulation not advancing for this long means its loop hangs, s (it lags the wall
+#: clock on a loaded machine, but keeps moving).
+SIM_STUCK_S = 10.0
 
 
 class FaultCaseError(AssertionError):
@@ -308,10 +312,19 @@ class Hil:
                f"{what}: not within {timeout_s:g} s")
 
     def wait_sim(self, until_ns: int) -> None:
-        """Service the station until the simulation reaches ``until_ns``."""
-        self.run_until(lambda: self.sim.now_ns >= until_ns,
-                       (until_ns - self.sim.now_ns) / NS_PER_S + 5.0,
-                       f"simulation time {until_ns / NS_PER_S:.1f} s")
+        """Service the station until the simulation reaches ``until_ns``, however long that
+        takes on the wall clock while the simulation advances.
+
+        Raises:
+            FaultCaseError: the simulation did not advance for :data:`SIM_STUCK_S`.
+        """
+        def advanced(since_ns: int) -> bool:
+            return self.sim.now_ns > since_ns
+
+        while (now_ns := self.sim.now_ns) < until_ns:
+            self.run_until(lambda since_ns=now_ns: advanced(since_ns), SIM_STUCK_S,
+                           f"simulation time {until_ns / NS_PER_S:.1f} s (stuck at "
+                           f"{now_ns / NS_PER_S:.1f} s)")
 
     @property
     def vehicle(self) -> VehicleState:
