@@ -16,6 +16,7 @@ from robot.mission import MissionState
 from robot.mission_run import CycleRecord
 from shared.interfaces import BaseState
 from shared.logs.reader import log_info
+from shared.memory import read_memory
 from tools.cli import main
 from tools.figures.demo_report import following_errors, plan_references, track_errors
 from tools.harness.demo import CycleSample
@@ -27,7 +28,7 @@ REPORT_KEYS = ("reached_goal", "final_position_error_m", "lateral_rms_m", "later
 
 
 def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
-    code, out, _ = short_demo
+    code, out, cpu_s = short_demo
     report = json.loads((out / "report.json").read_text())
     assert code == 0
     assert all(key in report for key in REPORT_KEYS)
@@ -36,7 +37,13 @@ def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
     assert report["final_position_error_m"] < 0.15
     assert report["lateral_rms_m"] < 0.05 and report["lateral_max_m"] < 0.10
     assert report["lost_events"] == 0
-    assert report["sim_time_s"] > report["wall_time_s"]  # faster than real time
+    # Faster than real time, given a core: the whole demo costs less CPU time than the
+    # time it simulates (the teach at least from its first key image to its last). On the
+    # wall clock (the report's wall_time_s) that holds only while no other process loads
+    # the machine.
+    keyframes = read_memory(out / "memory").keyframes.values()
+    taught_s = (max(k.t_ns for k in keyframes) - min(k.t_ns for k in keyframes)) / 1e9
+    assert cpu_s < taught_s + report["sim_time_s"]
     assert [e["reason"] for e in report["events"] if e["kind"] == "transition"] == [
         "start", "localized", "arrived"]
 

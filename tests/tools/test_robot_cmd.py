@@ -8,6 +8,7 @@ the robot's memory; SIGTERM then stops the robot cleanly.
 
 from __future__ import annotations
 
+import math
 import signal
 import socket
 import subprocess
@@ -40,6 +41,17 @@ def sim_serve(tmp_path):
         process.wait(10)
 
 
+#: Driven by teleoperation while teaching, m.
+DRIVE_M = 0.75
+
+
+def odometry_xy(station: GroundStation) -> tuple[float, float]:
+    """The robot's odometry position in its last ODOMETRY, (x_m, y_m) in LOCAL_FRD."""
+    assert station.vehicle is not None
+    odometry = station.vehicle.telemetry["ODOMETRY"]
+    return odometry.x, odometry.y
+
+
 def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     aria, camera = sim_serve
     clock = WallClock()
@@ -53,8 +65,17 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
         try:
             station.wait_vehicle(30.0)
             assert station.vehicle is not None and station.vehicle.mode is Mode.HOLD
+            assert station.run_until(lambda: "ODOMETRY" in station.vehicle.telemetry,
+                                     10_000_000_000)
+            start_xy = odometry_xy(station)
             station.teach_start("corridor_east")
-            for _ in range(40):  # 4 s at 0.2 m/s (half stick), MANUAL_CONTROL at 10 Hz
+            # Until the robot's odometry says it went DRIVE_M (about 4 s at 0.2 m/s, half
+            # stick, MANUAL_CONTROL at 10 Hz), not for a fixed time: how far that drives
+            # depends on the load (the dead-man stops the robot when a MANUAL_CONTROL comes
+            # late; the simulator falls behind the wall clock). 60 s: only a hang.
+            limit_ns = clock.now_ns() + 60_000_000_000
+            while math.dist(odometry_xy(station), start_xy) < DRIVE_M:
+                assert clock.now_ns() < limit_ns, f"drove {odometry_xy(station)} from {start_xy}"
                 station.send_manual_control(0.5, 0.0)
                 station.run_until(lambda: False, 100_000_000)
             station.teach_stop()

@@ -190,17 +190,18 @@ def bad_frames(taught: Taught, folder: Path) -> None:
     goal = taught.keyframe_ids[4]
     with open_hil(taught, folder) as hil:
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
-        bad_ns = hil.sim.now_ns
+        bad_ns, since = hil.sim.now_ns, len(hil.notices())
         hil.sim.camera.corrupt(BAD_FRAMES)
-        hil.run_until(lambda: hil.notice("camera back") is not None, 15.0,
+        hil.run_until(lambda: hil.notice("camera back", since) is not None, 15.0,
                       "the robot's 'camera back'")
         expect(hil.sim.camera.stats().corrupted == BAD_FRAMES,
                f"{hil.sim.camera.stats().corrupted} of {BAD_FRAMES} bad frames sent")
         bad_length_ns = BAD_FRAMES * hil.sim.sim.config.frame_period_ns
+        hil.wait_sim(bad_ns + bad_length_ns)
         moving = hil.sim.truth.still(bad_ns + TeleopConfig().frame_timeout_ns + HOLD_AFTER_NS,
                                      bad_ns + bad_length_ns)
         expect(moving is None, f"the base did not hold without good frames: {moving}")
-        expect(hil.notice("camera stalled: stopped") is not None,
+        expect(hil.notice("camera stalled: stopped", since) is not None,
                f"no 'camera stalled' notice: {hil.notices()}")
         hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
         expect(hil.robot.process.poll() is None, f"vmnav robot ended: {hil.robot.last_line()}")

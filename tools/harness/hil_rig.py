@@ -45,14 +45,21 @@ from sim.world import load_world
 from tools.harness.short_routes import teach_east_a
 from tools.harness.vmnav_process import VmnavProcess
 
-#: How long ``vmnav robot`` may take to answer the ground station, s.
-ROBOT_START_S = 30.0
+#: How long ``vmnav robot`` may take to start, and then to answer the ground station, s
+#: (about 3 s on an idle machine; a starved one takes many times that to import and load).
+ROBOT_START_S = 120.0
+#: What ``vmnav robot`` prints once its memory is loaded and its links serve (its MAVLink
+#: thread runs, so a HEARTBEAT may come before it).
+ROBOT_STARTED = re.compile(r"^vmnav robot: .*; memory .*: \d+ paths, \d+ key images$", re.M)
 #: SIGTERM, then SIGKILL after this long, s.
 STOP_GRACE_S = 15.0
 #: Below these the robot's body counts as standing still: m/s, rad/s.
 STILL_M_S = 0.01
 STILL_RAD_S = 0.02
 _POLL_NS = 20_000_000
+#: The simulation not advancing for this long means its loop hangs, s (it lags the wall
+#: clock on a loaded machine, but keeps moving).
+SIM_STUCK_S = 10.0
 
 
 class FaultCaseError(AssertionError):
@@ -262,24 +269,38 @@ class Hil:
     def restart_robot(self, out_name: str) -> None:
         """Start ``vmnav robot`` again (after the last one ended) with output in
         ``folder/out_name``, and wait until it answers (:meth:`wait_robot`)."""
-        since_ns = self.station.clock.now_ns()
         self.robot = start_robot(self.sim, self.station, self.folder, out_name)
-        self.wait_robot(since_ns)
+        self.wait_robot()
 
-    def wait_robot(self, since_ns: int) -> None:
-        """Wait for a HEARTBEAT of the robot newer than ``since_ns`` (station clock) and aim
-        the station at it.
+    def wait_robot(self) -> None:
+        """Wait until the robot prints its start line (:data:`ROBOT_STARTED`), then for a
+        HEARTBEAT received after that, and aim the station at the robot.
+
+        Ordered so that neither can come from an earlier robot: the station is serviced
+        while the robot starts, so a packet a killed robot left in the socket is read (and
+        stamped) before the wait for the HEARTBEAT begins. Each wait ends early when the
+        robot ends.
 
         Raises:
-            FaultCaseError: none within :data:`ROBOT_START_S`, or the robot ended first (with
-                its last line of output).
+            FaultCaseError: no start line or no HEARTBEAT within :data:`ROBOT_START_S` each,
+                or the robot ended first (with its last line of output).
         """
+        def ended() -> bool:
+            return self.robot.process.poll() is not None
+
+        def started() -> bool:
+            return ROBOT_STARTED.search(self.robot.output()) is not None
+
+        limit_ns = round(ROBOT_START_S * NS_PER_S)
+        self.station.run_until(lambda: started() or ended(), limit_ns)
+        expect(started(), f"vmnav robot did not start: {self.robot.last_line()}")
+        since_ns = self.station.clock.now_ns()
+
         def answered() -> bool:
             return any(v.last_heartbeat_ns >= since_ns
                        for v in self.station.fleet.vehicles.values())
 
-        self.station.run_until(lambda: answered() or self.robot.process.poll() is not None,
-                               round(ROBOT_START_S * NS_PER_S))
+        self.station.run_until(lambda: answered() or ended(), limit_ns)
         expect(answered(), f"vmnav robot did not answer: {self.robot.last_line()}")
         self.station.wait_vehicle(1.0)
 
@@ -293,10 +314,19 @@ class Hil:
                f"{what}: not within {timeout_s:g} s")
 
     def wait_sim(self, until_ns: int) -> None:
-        """Service the station until the simulation reaches ``until_ns``."""
-        self.run_until(lambda: self.sim.now_ns >= until_ns,
-                       (until_ns - self.sim.now_ns) / NS_PER_S + 5.0,
-                       f"simulation time {until_ns / NS_PER_S:.1f} s")
+        """Service the station until the simulation reaches ``until_ns``, however long that
+        takes on the wall clock while the simulation advances.
+
+        Raises:
+            FaultCaseError: the simulation did not advance for :data:`SIM_STUCK_S`.
+        """
+        def advanced(since_ns: int) -> bool:
+            return self.sim.now_ns > since_ns
+
+        while (now_ns := self.sim.now_ns) < until_ns:
+            self.run_until(lambda since_ns=now_ns: advanced(since_ns), SIM_STUCK_S,
+                           f"simulation time {until_ns / NS_PER_S:.1f} s (stuck at "
+                           f"{now_ns / NS_PER_S:.1f} s)")
 
     @property
     def vehicle(self) -> VehicleState:
@@ -310,9 +340,15 @@ class Hil:
         """The robot's STATUSTEXT notices so far."""
         return list(self.vehicle.notices)
 
-    def notice(self, pattern: str) -> re.Match[str] | None:
-        """The first of the robot's notices matching the regular expression ``pattern``."""
-        return next((m for n in self.notices() if (m := re.search(pattern, n))), None)
+    def notice(self, pattern: str, since: int = 0) -> re.Match[str] | None:
+        """The first of the robot's notices from number ``since`` on (0: the first) that
+        matches the regular expression ``pattern``.
+
+        ``since=len(hil.notices())`` taken when a fault is injected looks only at what the
+        robot said after it: a loaded machine can make the robot report a stall or a lost
+        link of its own before the fault, and that notice does not answer for the fault.
+        """
+        return next((m for n in self.notices()[since:] if (m := re.search(pattern, n))), None)
 
     def start_goal(self, goal: int, drive_m: float) -> None:
         """Upload a one-goal mission to key image ``goal``, start it, and wait until the robot
@@ -351,9 +387,8 @@ def open_hil(taught: Taught, folder: Path) -> Iterator[Hil]:
     with ExitStack() as stack:
         sim = stack.enter_context(SimSide(taught.world_file))
         station = stack.enter_context(GroundStation.open("udpin:127.0.0.1:0", WallClock()))
-        since_ns = station.clock.now_ns()
         robot = start_robot(sim, station, folder, "robot.out")
         hil = Hil(sim, station, robot, folder)
         stack.callback(lambda: hil.robot.stop())
-        hil.wait_robot(since_ns)
+        hil.wait_robot()
         yield hil
