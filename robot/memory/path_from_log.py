@@ -22,7 +22,8 @@ default camera if DIR holds none), joined to its other paths by
 :func:`robot.memory.junctions.join_path`, and :func:`shared.memory.write_memory` stores it
 (manifest last, so an interrupted write leaves the memory as it was). Bad input (not
 MCAP, no frames, no odometry, a frame of the wrong size) is found before anything is
-written.
+written, and so is a folder that :func:`shared.memory.open_or_create` refuses (files
+without a manifest, a memory of another camera than ``--camera``'s).
 """
 
 from __future__ import annotations
