@@ -34,7 +34,6 @@ if TYPE_CHECKING:
     from robot.camera import VideoCaptureSource
     from robot.runtime import RobotRuntime
     from shared.clock import Clock
-    from shared.memory import VisualMemory
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -91,8 +90,10 @@ def run(args: argparse.Namespace) -> int:
     from robot.vehicle.endpoint import VehicleEndpoint
     from robot.vehicle.options import SigningSetup, VehicleFiles
     from robot.vehicle.udp_vehicle import UdpVehicle
+    from shared.calibration import read_camera
     from shared.clock import WallClock
     from shared.key_file import read_key_file
+    from shared.memory import open_or_create
 
     config = load_config(args.config)
     config = dataclasses.replace(
@@ -105,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
                                                        else {"system_id": args.system})))
     if args.duration is not None and not args.duration > 0:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
-    memory = open_robot_memory(args.memory, args.calibration)
+    memory = open_or_create(args.memory, None if args.calibration is None
+                            else read_camera(args.calibration))
     signing = None
     clock = WallClock()
     if args.key is not None:
@@ -172,25 +174,3 @@ def serve(camera: VideoCaptureSource, runtime: RobotRuntime, clock: Clock,
             runtime.step(*frame)
     return "the time given ran out"
 
-
-def open_robot_memory(directory: Path, calibration: Path | None) -> VisualMemory:
-    """The memory in ``directory`` (a writable folder), or a new empty one for
-    ``calibration``'s camera (default: the simulator's) when ``directory`` is missing or
-    holds no file.
-
-    Raises:
-        InputError: ``directory`` is not a writable folder, or a calibration is given for
-            a stored memory taught with another camera.
-        MemoryFormatError: the stored memory does not load, or ``directory`` holds files
-            but no manifest.
-    """
-    from shared.calibration import read_camera
-    from shared.camera_model import CameraModel
-    from shared.memory import read_memory
-    from shared.memory.folder import open_memory
-    from shared.memory.store import MANIFEST_NAME
-
-    if calibration is None and (directory / MANIFEST_NAME).exists():
-        return read_memory(directory)
-    return open_memory(directory, CameraModel.default() if calibration is None
-                       else read_camera(calibration))

@@ -63,8 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.config import load_config
     from robot.field_log import FieldLog
     from robot.memory.junctions import join_path
-    from shared.memory import write_memory
-    from shared.memory.folder import open_memory
+    from shared.memory import open_or_create, write_memory
     from sim.world import load_world
     from tools.harness.teach import find_route, teach_in_sim
 
@@ -74,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     world = load_world(sim_config.world)
     route = find_route(world, args.route)
-    memory = open_memory(args.memory, camera)
+    memory = open_or_create(args.memory, camera)
     started = time.perf_counter()
     teach_log = None if args.log is None else FieldLog(
         dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",

@@ -22,7 +22,8 @@ default camera if DIR holds none), joined to its other paths by
 :func:`robot.memory.junctions.join_path`, and :func:`shared.memory.write_memory` stores it
 (manifest last, so an interrupted write leaves the memory as it was). Bad input (not
 MCAP, no frames, no odometry, a frame of the wrong size) is found before anything is
-written.
+written, and so is a folder that :func:`shared.memory.open_or_create` refuses (files
+without a manifest, a memory of another camera than ``--camera``'s).
 """
 
 from __future__ import annotations
@@ -194,33 +195,6 @@ class LogFrames:
                 yield t_ns, image, pose
 
 
-def open_memory_for(directory: Path, camera_file: str | None) -> VisualMemory:
-    """The memory in ``directory`` to add to, or a new, empty one (nothing is written).
-
-    Args:
-        directory: the memory's folder.
-        camera_file: calibration JSON; for a new memory its camera (the default camera
-            when None), for an existing one it must be the memory's camera.
-
-    Raises:
-        InputError: ``directory`` is a file, or ``camera_file`` is not the memory's camera.
-        MemoryFormatError: the memory in ``directory`` does not load.
-        CalibrationError: a bad camera file.
-    """
-    from shared.calibration import camera_to_dict, load_camera
-    from shared.memory import VisualMemory, read_memory
-
-    if directory.exists() and not directory.is_dir():
-        raise InputError(directory, "is not a folder")
-    if not (directory / "manifest.json").exists():
-        return VisualMemory(load_camera(camera_file))
-    memory = read_memory(directory)
-    if camera_file is not None and (camera_to_dict(load_camera(camera_file))
-                                    != camera_to_dict(memory.camera)):
-        raise InputError(camera_file, f"is not the camera of the memory in {directory}")
-    return memory
-
-
 def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: str | None,
                config: VmnavConfig) -> tuple[BuiltPath, VisualMemory]:
     """Select key images from the teach drive in ``logs`` and add them to the memory.
@@ -229,23 +203,28 @@ def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: st
         logs: the teach log: one MCAP file, several, or the first of a rotated series.
         directory: the memory's folder (created if needed).
         name: the new path's name.
-        camera_file: see :func:`open_memory_for`.
+        camera_file: calibration JSON; a new memory gets its camera, a stored one must
+            have it. None: a stored memory's own camera, the default camera for a new one.
         config: feature, teach, localization parameters.
 
     Returns:
         What was built, and the memory as written.
 
     Raises:
-        InputError: bad input (see the module docstring); the memory is not written.
+        InputError: bad input (see the module docstring), or a folder that
+            :func:`shared.memory.open_or_create` refuses; the memory is not written.
+        MemoryFormatError: see :func:`shared.memory.open_or_create`.
+        CalibrationError: a bad camera file.
     """
     from robot.memory.junctions import join_path
     from robot.teach import select_key_images
-    from shared.memory import write_memory
+    from shared.calibration import read_camera
+    from shared.memory import open_or_create, write_memory
 
     files = log_series(logs)
     check_log_topics(files)
     odometry = read_odometry(files)
-    memory = open_memory_for(directory, camera_file)
+    memory = open_or_create(directory, None if camera_file is None else read_camera(camera_file))
     frames = LogFrames(files, memory.camera, odometry)
     key_images = select_key_images(frames, memory.camera, config.features, config.teach)
     if not key_images:

@@ -2,12 +2,14 @@
 
 Courbon et al. (ICARCV 2008, sec. II): :mod:`.keyframe` holds the records,
 :mod:`.graph` the multigraph with route planning and the connectivity check,
-:mod:`.store` the directory format, :mod:`.folder` opening a folder to add paths to,
+:mod:`.store` the directory format, :mod:`.folder` opening or creating a memory to add
+paths to (:func:`open_or_create`, for every command that writes one),
 :mod:`.summary` what ``vmnav memory info`` shows.
 """
 
 from __future__ import annotations
 
+from shared.memory.folder import open_or_create
 from shared.memory.graph import ConnectivityReport, Edge, EdgeKind, VisualMemory
 from shared.memory.keyframe import (
     THUMBNAIL_HEIGHT_PX,
@@ -34,6 +36,7 @@ __all__ = [
     "VisualPath",
     "add_path_to_disk",
     "memory_summary",
+    "open_or_create",
     "read_memory",
     "summary_text",
     "thumbnail_from_image",

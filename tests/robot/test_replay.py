@@ -76,7 +76,7 @@ class RememberingFrames:
 @pytest.fixture(scope="module")
 def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     folder = tmp_path_factory.mktemp("replay")
-    world_file = teach_east_a(folder, CONFIG)
+    world_file, _ = teach_east_a(folder, CONFIG)
     world = load_world(world_file)
     sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=CONFIG.camera.mount)
     memory = read_memory(folder / "memory")

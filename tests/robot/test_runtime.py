@@ -43,7 +43,7 @@ CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 def taught(tmp_path_factory) -> tuple[Path, Path]:
     """(world file, memory folder) with ``east_a`` taught (seed 1)."""
     folder = tmp_path_factory.mktemp("runtime")
-    world_file = teach_east_a(folder, CONFIG)
+    world_file, _ = teach_east_a(folder, CONFIG)
     return world_file, folder / "memory"
 
 

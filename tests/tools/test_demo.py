@@ -3,6 +3,7 @@ bad input, and the error measure against the taught path."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -14,9 +15,12 @@ from pymavlink import mavutil
 
 from robot.mission import MissionState
 from robot.mission_run import CycleRecord
+from shared.calibration import write_camera
+from shared.camera_model import CameraModel
 from shared.interfaces import BaseState
 from shared.logs.reader import log_info
 from shared.memory import read_memory
+from tests.shared.memory.builders import folder_bytes, memory_without_manifest
 from tools.cli import main
 from tools.figures.demo_report import following_errors, plan_references, track_errors
 from tools.harness.demo import CycleSample
@@ -89,6 +93,32 @@ def test_a_memory_taught_otherwise_is_refused_before_teaching(short_demo, capsys
     code = main(["demo", "--routes", "corridor", "--seed", "7", "--out", str(out), "--no-video"])
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1 and "taught with another world, seed" in err
+
+
+def test_a_memory_of_another_camera_is_refused_and_kept(short_demo, tmp_path, capsys) -> None:
+    _, out, _ = short_demo
+    camera = tmp_path / "camera.json"
+    write_camera(camera, dataclasses.replace(CameraModel.default(), fov_deg=180.0))
+    before = folder_bytes(out)
+    code = main(["demo", "--routes", "corridor", "--camera", str(camera), "--out", str(out),
+                 "--no-video"])
+    err = capsys.readouterr().err
+    assert code == 1 and err == (f"vmnav demo: error: {out / 'memory'}: holds a memory taught "
+                                 "with another world, seed, routes or camera (or without "
+                                 "teach.json): remove it or choose another --out\n")
+    assert folder_bytes(out) == before
+
+
+def test_files_without_a_manifest_are_not_taught_over(tmp_path, capsys, rng) -> None:
+    memory = tmp_path / "out" / "memory"
+    before = memory_without_manifest(memory, rng)
+    code = main(["demo", "--routes", "corridor", "--out", str(tmp_path / "out"), "--no-video"])
+    err = capsys.readouterr().err
+    assert code == 1 and err == (f"vmnav demo: error: memory {memory}: manifest.json missing but "
+                                 "the folder holds 21 files; restore it or point --memory to an "
+                                 "empty folder\n")
+    assert folder_bytes(memory) == before
+    assert [p.name for p in memory.parent.iterdir()] == ["memory"]  # no teach.json either
 
 
 @pytest.mark.parametrize(("args", "message"), [

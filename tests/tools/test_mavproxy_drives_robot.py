@@ -32,7 +32,7 @@ def free_udp_port() -> int:
 
 
 def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(tmp_path) -> None:
-    world = teach_east_a(tmp_path, CONFIG)
+    world, _ = teach_east_a(tmp_path, CONFIG)
     goal = read_memory(tmp_path / "memory").paths[0].keyframe_ids[-1]
     (tmp_path / "robot.toml").write_text(
         f'[control]\nlaw = "{DEMO_LAW}"\nmax_omega_rad_s = {CONFIG.control.max_omega_rad_s!r}\n')

@@ -18,6 +18,7 @@ from shared.logs import topics
 from shared.logs.messages import FrameTransform
 from shared.logs.writer import LogWriter
 from shared.memory import read_memory
+from tests.shared.memory.builders import folder_bytes, memory_without_manifest
 from tests.tools.short_routes import write_short_routes_world
 from tests.tools.test_teach_cmd import run
 
@@ -204,6 +205,21 @@ class TestBadInput:
 
         camera = tmp_path / "camera.json"
         write_camera(camera, dataclasses.replace(CameraModel.default(), fov_deg=180.0))
-        code, _, err = run(["memory", "build", str(built.log), "--memory", str(built.taught),
-                            "--camera", str(camera)])
-        assert code == 1 and f"{camera}: is not the camera of the memory in" in err
+        before = folder_bytes(built.taught)
+        code, out, err = run(["memory", "build", str(built.log), "--memory", str(built.taught),
+                              "--camera", str(camera)])
+        assert (code, out) == (1, "")
+        assert err == (f"vmnav memory: error: {built.taught}: holds a memory taught with another "
+                       "camera than the one given\n")
+        assert folder_bytes(built.taught) == before
+
+    def test_files_without_a_manifest_are_not_built_over(
+        self, built: Built, tmp_path: Path, rng: np.random.Generator
+    ) -> None:
+        memory = tmp_path / "mem"
+        before = memory_without_manifest(memory, rng)
+        code, out, err = run(["memory", "build", str(built.log), "--memory", str(memory)])
+        assert (code, out) == (1, "")
+        assert err == (f"vmnav memory: error: memory {memory}: manifest.json missing but the "
+                       "folder holds 21 files; restore it or point --memory to an empty folder\n")
+        assert folder_bytes(memory) == before

@@ -17,15 +17,14 @@ import time
 import pytest
 
 from ground.station import GroundStation
+from shared.calibration import write_camera
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
-from shared.errors import MemoryFormatError
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory, write_memory
-from tests.shared.memory.builders import loop_memory
+from tests.shared.memory.builders import folder_bytes, loop_memory, memory_without_manifest
 from tests.tools.processes import VMNAV, start, wait_for
-from tools.robot_cmd import open_robot_memory
 
 
 @pytest.fixture
@@ -127,45 +126,34 @@ def run_robot(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[
                           timeout=timeout_s)
 
 
-def test_a_memory_folder_without_its_manifest_is_one_line_at_start(tmp_path) -> None:
+def test_a_memory_folder_without_its_manifest_is_one_line_at_start(tmp_path, rng) -> None:
     memory = tmp_path / "memory"
-    (memory / "images").mkdir(parents=True)
-    (memory / "images" / "0.png").write_bytes(b"key image")
-    (memory / "thumbnails").mkdir()
-    (memory / "thumbnails" / "0.png").write_bytes(b"thumbnail")
+    before = memory_without_manifest(memory, rng)
     # Refused before the Pioneer or the camera is opened (neither exists here).
     result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
                        "--memory", str(memory), "--log", str(tmp_path / "logs"))
     assert result.returncode == 1, result.stderr
     assert result.stderr.strip().splitlines() == [
-        f"vmnav robot: error: memory {memory}: manifest.json missing but the folder holds 2 "
+        f"vmnav robot: error: memory {memory}: manifest.json missing but the folder holds 21 "
         "files; restore it or point --memory to an empty folder"]
-    assert sorted(p.relative_to(memory).as_posix() for p in memory.rglob("*")) == [
-        "images", "images/0.png", "thumbnails", "thumbnails/0.png"]
+    assert folder_bytes(memory) == before
     assert not (tmp_path / "logs").exists()
 
 
-class TestOpenRobotMemory:
-    def test_files_without_a_manifest_are_refused(self, tmp_path, rng) -> None:
-        write_memory(tmp_path / "memory", loop_memory(rng))
-        (tmp_path / "memory" / "manifest.json").unlink()
-        with pytest.raises(MemoryFormatError, match=r"memory .*memory: manifest.json missing but "
-                                                    r"the folder holds 21 files; restore it"):
-            open_robot_memory(tmp_path / "memory", None)
-
-    def test_an_empty_or_missing_folder_starts_an_empty_memory(self, tmp_path) -> None:
-        (tmp_path / "empty" / "images").mkdir(parents=True)
-        for folder in (tmp_path / "empty", tmp_path / "new"):
-            memory = open_robot_memory(folder, None)
-            assert (memory.keyframes, memory.paths) == ({}, {})
-            assert memory.camera.width == CameraModel.default().width
-        assert (tmp_path / "new").is_dir()
-
-    def test_a_stored_memory_is_read(self, tmp_path, rng) -> None:
-        stored = loop_memory(rng)
-        write_memory(tmp_path / "memory", stored)
-        memory = open_robot_memory(tmp_path / "memory", None)
-        assert memory.keyframes.keys() == stored.keyframes.keys()
+def test_a_calibration_of_another_camera_than_the_memorys_is_one_line_at_start(
+        tmp_path, rng) -> None:
+    memory = tmp_path / "memory"
+    write_memory(memory, loop_memory(rng))  # a small camera
+    before = folder_bytes(memory)
+    calibration = tmp_path / "camera.json"
+    write_camera(calibration, CameraModel.default())
+    result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
+                       "--memory", str(memory), "--calibration", str(calibration), "--no-log")
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        f"vmnav robot: error: {memory}: holds a memory taught with another camera than the "
+        "one given"]
+    assert folder_bytes(memory) == before
 
 
 def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) -> None:

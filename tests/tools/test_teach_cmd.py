@@ -8,9 +8,11 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from shared.memory import read_memory
+from shared.memory import read_memory, write_memory
+from tests.shared.memory.builders import folder_bytes, loop_memory, memory_without_manifest
 from tests.tools.short_routes import write_short_routes_world
 from tools.cli import main
 
@@ -123,10 +125,23 @@ class TestBadInput:
         code, _, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
         assert code == 1 and "manifest.json" in err
 
-    def test_files_without_a_manifest_are_not_taught_over(self, tmp_path: Path) -> None:
-        (tmp_path / "images").mkdir()
-        (tmp_path / "images" / "0.png").write_bytes(b"a key image whose manifest was lost")
-        code, _, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
-        assert code == 1 and err.count("\n") == 1
-        assert "manifest.json missing but the folder holds 1 files" in err
-        assert sorted(p.name for p in tmp_path.rglob("*")) == ["0.png", "images"]
+    def test_files_without_a_manifest_are_not_taught_over(
+        self, tmp_path: Path, rng: np.random.Generator
+    ) -> None:
+        before = memory_without_manifest(tmp_path, rng)
+        code, out, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
+        assert (code, out) == (1, "")
+        assert err == (f"vmnav teach: error: memory {tmp_path}: manifest.json missing but the "
+                       "folder holds 21 files; restore it or point --memory to an empty folder\n")
+        assert folder_bytes(tmp_path) == before
+
+    def test_a_memory_of_another_camera_is_not_added_to(
+        self, tmp_path: Path, rng: np.random.Generator
+    ) -> None:
+        write_memory(tmp_path, loop_memory(rng))  # a small camera, not the simulated one
+        before = folder_bytes(tmp_path)
+        code, out, err = run(["teach", "--sim", "--route", "corridor", "--memory", str(tmp_path)])
+        assert (code, out) == (1, "")
+        assert err == (f"vmnav teach: error: {tmp_path}: holds a memory taught with another "
+                       "camera than the one given\n")
+        assert folder_bytes(tmp_path) == before

@@ -4,7 +4,8 @@ Measured here because it needs both the simulator (teaching, rendering queries a
 known poses) and the robot's code (key image selection, localization):
 
 * **Top-1 rate** (issue 3: >= 97 %). Routes of a world are taught as in ``vmnav
-  teach``, keeping each key image's true pose. Query poses are drawn along the
+  teach``, keeping each key image's true pose (:func:`tools.harness.teach.teach_memory`,
+  the paths not joined). Query poses are drawn along the
   taught paths (uniform in distance along the polyline through the key images'
   true poses), shifted sideways by up to ``max_offset_m`` and turned by up to
   ``max_yaw_deg``, and rendered. A localization is right when it returns the
@@ -47,27 +48,12 @@ from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world
-from tools.harness.teach import TaughtRoute, find_route, teach_in_sim
+from tools.harness.teach import TaughtMemory, teach_memory
 
 #: Key images heading more than this away from a query are never its "nearest".
 _MAX_HEADING_GAP_RAD = math.radians(45.0)
 #: Query poses tried per query before giving up (a pose may overlap a wall).
 _PLACEMENT_TRIES = 100
-
-
-@dataclass(frozen=True, eq=False)
-class TaughtMemory:
-    """A memory taught in the simulator, with the truth that the memory does not keep.
-
-    Attributes:
-        memory: the visual memory (one path per route, no junctions).
-        true_poses: true robot pose of each key image, by id.
-        routes: what each route's teaching gave.
-    """
-
-    memory: VisualMemory
-    true_poses: dict[int, Pose2]
-    routes: tuple[TaughtRoute, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,29 +73,6 @@ class QueryOutcome:
     result: Localization
     correct: bool
     time_ms: float
-
-
-def teach_memory(
-    world: World,
-    route_names: Sequence[str],
-    config: VmnavConfig,
-    sim_config: SimConfig,
-    camera: CameraModel,
-) -> TaughtMemory:
-    """Teach each route (as ``vmnav teach`` does) into one memory, keeping the truth.
-
-    Raises:
-        InputError: an unknown route, or a drive that does not reach its end.
-    """
-    memory = VisualMemory(camera)
-    true_poses: dict[int, Pose2] = {}
-    routes = []
-    for name in route_names:
-        taught = teach_in_sim(world, find_route(world, name), config, sim_config, camera)
-        path = memory.add_path(name, [k.record for k in taught.key_images])
-        true_poses.update(zip(path.keyframe_ids, taught.true_poses, strict=True))
-        routes.append(taught)
-    return TaughtMemory(memory, true_poses, tuple(routes))
 
 
 def sample_query_pose(
@@ -314,7 +277,7 @@ def bench_localization(
     """Teach, then measure the top-1 rate and the times (see the module docstring)."""
     world = load_world(sim_config.world)
     names = list(route_names) if route_names else [r.name for r in world.routes]
-    taught = teach_memory(world, names, config, sim_config, camera)
+    taught = teach_memory(world, names, config, sim_config, camera, join=False)
     return {
         "world": world.name,
         "routes": names,

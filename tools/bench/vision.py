@@ -1,7 +1,7 @@
 """``vmnav bench vision``: the vision figures of issue 3, measured on the simulator.
 
 The routes of a world are taught as ``vmnav teach`` does
-(:func:`tools.bench.localize.teach_memory`: the human-like teach driver, key
+(:func:`tools.harness.teach.teach_memory`: the human-like teach driver, key
 image selection from the frames and the wheel odometry), keeping each key
 image's true pose, which the memory itself does not know. Then:
 
@@ -68,14 +68,9 @@ from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import World, load_world
-from tools.bench.localize import (
-    TaughtMemory,
-    key_images_per_metre,
-    measure_localization,
-    teach_memory,
-)
+from tools.bench.localize import key_images_per_metre, measure_localization
 from tools.bench.sim import versions
-from tools.harness.teach import TaughtRoute
+from tools.harness.teach import TaughtMemory, TaughtRoute, teach_memory
 
 #: Issue 3's targets: figure -> (comparison, bound), beside the figures in the JSON.
 TARGETS: dict[str, tuple[str, float]] = {
@@ -249,7 +244,7 @@ def bench_vision(
     """
     world = load_world(sim_config.world)
     names = list(plan.routes) if plan.routes else [r.name for r in world.routes]
-    taught = teach_memory(world, names, config, sim_config, camera)
+    taught = teach_memory(world, names, config, sim_config, camera, join=False)
     run = run_state_queries(taught, world, config, sim_config, camera, plan)
     localization = measure_localization(taught, world, config, sim_config, camera,
                                         plan.localize_queries, plan.seed, plan.exhaustive_queries)

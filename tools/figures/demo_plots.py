@@ -21,7 +21,8 @@ import numpy as np
 from sim.config import SimConfig
 from tools.figures.demo_report import following_errors, plan_references
 from tools.figures.log_plot import plot_image_errors, plot_matches, save_figure
-from tools.harness.demo import CycleSample, RepeatRun, TaughtMemory
+from tools.harness.demo import CycleSample, RepeatRun
+from tools.harness.teach import TaughtMemory
 
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame

@@ -1,7 +1,7 @@
 """What ``vmnav demo`` measures: errors against the taught path on ground truth, and the report.
 
 The taught trajectory is the polyline through the true poses of the route's key
-images (:attr:`tools.harness.demo.TaughtMemory.true_poses`). The lateral error of a repeat
+images (:attr:`tools.harness.teach.TaughtMemory.true_poses`). The lateral error of a repeat
 sample is its signed distance to that polyline (left positive), the heading error
 its yaw minus the polyline's yaw interpolated at the closest point. The closest
 segment is searched a few segments ahead of the previous one (progress is
@@ -23,7 +23,8 @@ from robot.config import ControlConfig
 from robot.control_law import settling_distance_m
 from robot.mission import MissionState
 from shared.pose import Pose2
-from tools.harness.demo import START_OFFSET_M, RepeatRun, TaughtMemory
+from tools.harness.demo import START_OFFSET_M, RepeatRun
+from tools.harness.teach import TaughtMemory
 
 FloatArray = npt.NDArray[np.float64]
 

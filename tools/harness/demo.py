@@ -3,11 +3,11 @@
 It couples the simulator and the robot application, so it lives in the harness (tools/harness/):
 
 1. **Teach** (:func:`taught_memory`): the routes of the world are driven by the
-   scripted teach driver and stored into one visual memory in ``OUT/memory``
-   (:func:`tools.harness.teach.teach_in_sim`, :func:`robot.memory.junctions.join_path`); the
-   true poses of the key images go to ``OUT/teach.json`` for the evaluation. A
-   memory already there, taught in the same world with the same seed, routes and
-   camera, is reused; a memory there taught otherwise is an error (never overwritten).
+   scripted teach driver and stored, joined, into one visual memory in ``OUT/memory``
+   (:func:`tools.harness.teach.teach_memory`); the true poses of the key images go to
+   ``OUT/teach.json`` for the evaluation. A memory already there, taught in the same
+   world with the same seed, routes and camera, is reused; a memory there taught
+   otherwise is an error (never overwritten).
 2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation (optionally with people
    and with a fraction of the landmarks removed), the robot placed off the taught
    path: :class:`robot.runtime.RobotRuntime` on :class:`sim.sim_camera.SimFrameSource`,
@@ -21,13 +21,12 @@ It couples the simulator and the robot application, so it lives in the harness (
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ground.station import GroundError
 from shared.errors import InputError
@@ -38,11 +37,11 @@ if TYPE_CHECKING:
     from robot.field_log import FieldLog
     from robot.mission_run import CycleRecord, MissionResult
     from shared.camera_model import CameraModel
-    from shared.memory import VisualMemory
     from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.harness.ground_dispatch import DispatchResult
+    from tools.harness.teach import TaughtMemory
 
 #: Start offset from the taught path: left of it, m, and turned, degrees (issue 4).
 START_OFFSET_M = 0.3
@@ -68,23 +67,6 @@ _OUTCOME_GRACE_S = 5.0
 #: speed, plus ``_EXTRA_S``.
 _TIME_MARGIN = 3.0
 _EXTRA_S = 30.0
-
-
-@dataclass(frozen=True, eq=False)
-class TaughtMemory:
-    """The demo's memory and the truth about it.
-
-    Attributes:
-        memory: the visual memory.
-        true_poses: true robot pose (x_m, y_m, yaw_rad) of every key image, world frame.
-        path_ids: the path id of each route taught, in teaching order.
-        reused: the memory was loaded from disk instead of taught.
-    """
-
-    memory: VisualMemory
-    true_poses: dict[int, Pose2]
-    path_ids: tuple[int, ...]
-    reused: bool
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,7 +96,8 @@ class RepeatRun:
 
 def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig,
                   sim_config: SimConfig, camera: CameraModel) -> TaughtMemory:
-    """Teach ``routes`` into ``out/memory`` (or reuse the memory taught there before).
+    """Teach ``routes``, joined, into ``out/memory`` (or reuse the memory taught there
+    before: :func:`tools.harness.teach.teach_memory` with ``folder=out``).
 
     Args:
         out: the output folder.
@@ -126,46 +109,17 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
         camera: the simulated camera.
 
     Raises:
-        InputError: an unknown route, or a route the teach driver could not finish.
+        InputError: an unknown route, a route the teach driver could not finish, or a
+            memory in ``out/memory`` taught otherwise.
+        MemoryFormatError: ``out/memory`` holds files but no manifest, or a memory that
+            does not load.
     """
-    from robot.memory.junctions import join_path
-    from shared.calibration import camera_to_dict
-    from shared.memory import VisualMemory, read_memory, write_memory
     from sim.world import load_world
-    from tools.harness.teach import find_route, teach_in_sim
+    from tools.harness.teach import teach_memory
 
-    world = load_world(sim_config.world)
-    wanted = list(world.routes) if routes is None else [find_route(world, n) for n in routes]
-    if not wanted:
-        raise InputError(f"world {world.name!r}", "has no routes to teach")
-    truth_file, directory = out / "teach.json", out / "memory"
-    key = {"world": sim_config.world, "seed": sim_config.seed, "routes": [r.name for r in wanted],
-           "camera": camera_to_dict(camera)}
-    if (directory / "manifest.json").exists():
-        stored = _read_truth(truth_file)
-        if stored is None or stored.get("key") != key:
-            raise InputError(directory, "holds a memory taught with another world, seed, routes "
-                                        "or camera (or without teach.json): remove it or choose "
-                                        "another --out")
-        return TaughtMemory(
-            memory=read_memory(directory),
-            true_poses={int(k): Pose2(*v) for k, v in stored["true_poses"].items()},
-            path_ids=tuple(stored["path_ids"]), reused=True)
     teach_config = replace(sim_config, people=replace(sim_config.people, count=0))
-    memory = VisualMemory(camera)
-    true_poses: dict[int, Pose2] = {}
-    path_ids: list[int] = []
-    for route in wanted:
-        taught = teach_in_sim(world, route, config, teach_config, camera)
-        path = memory.add_path(route.name, [k.record for k in taught.key_images])
-        join_path(memory, path, config.features, config.localize, config.teach)
-        true_poses.update(zip(path.keyframe_ids, taught.true_poses, strict=True))
-        path_ids.append(path.id)
-    write_memory(directory, memory)
-    truth_file.write_text(json.dumps({"key": key, "path_ids": path_ids,
-                                      "true_poses": {str(k): v for k, v in true_poses.items()}}))
-    return TaughtMemory(memory=memory, true_poses=true_poses, path_ids=tuple(path_ids),
-                        reused=False)
+    return teach_memory(load_world(sim_config.world), routes, config, teach_config, camera,
+                        join=True, folder=out)
 
 
 def follow_config(config: VmnavConfig, law: str, max_omega_deg: float) -> VmnavConfig:
@@ -179,15 +133,6 @@ def follow_config(config: VmnavConfig, law: str, max_omega_deg: float) -> VmnavC
         raise InputError("--max-omega-deg", f"must be > 0, got {max_omega_deg}")
     control = replace(config.control, law=law, max_omega_rad_s=math.radians(max_omega_deg))
     return replace(config, control=control)
-
-
-def _read_truth(path: Path) -> dict[str, Any] | None:
-    """The stored ``teach.json``, or None when it is missing or not a JSON object."""
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 def default_goal(taught: TaughtMemory) -> int:

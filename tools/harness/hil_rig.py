@@ -35,14 +35,13 @@ from robot.config import VmnavConfig
 from shared.calibration import load_camera
 from shared.clock import NS_PER_S, WallClock
 from shared.mavlink.mission.goal import Goal
-from shared.memory import read_memory
 from sim.camera_server import CameraServer
 from sim.config import SimConfig
 from sim.pioneer import TcpListener
 from sim.pioneer.world_server import pioneer_server
 from sim.simulation import Simulation
-from sim.world import load_world
 from tools.harness.short_routes import teach_east_a
+from tools.harness.teach import TaughtMemory
 from tools.harness.vmnav_process import VmnavProcess
 
 #: How long ``vmnav robot`` may take to start, and then to answer the ground station, s
@@ -92,31 +91,30 @@ class Taught:
     Attributes:
         world_file: the world TOML (the lab plus the short routes).
         memory_dir: the taught memory; cases work on copies.
-        keyframe_ids: the path's key images in order.
-        goal_xy: key image id -> where it was taken, world frame (x_m, y_m).
+        taught: the memory (one path) and the true poses of its key images.
     """
 
     world_file: Path
     memory_dir: Path
-    keyframe_ids: tuple[int, ...]
-    goal_xy: dict[int, tuple[float, float]]
+    taught: TaughtMemory
+
+    @property
+    def keyframe_ids(self) -> tuple[int, ...]:
+        """The path's key images in order."""
+        (path_id,) = self.taught.path_ids
+        return tuple(self.taught.memory.paths[path_id].keyframe_ids)
+
+    @property
+    def goal_xy(self) -> dict[int, tuple[float, float]]:
+        """Key image id -> where it was taken, world frame (x_m, y_m), from the true poses."""
+        return {key: (pose.x_m, pose.y_m) for key, pose in self.taught.true_poses.items()}
 
 
 def teach(folder: Path) -> Taught:
-    """Teach ``east_a`` into ``folder/memory`` (about 4 s; ``folder`` is made if missing);
-    the world's start is the route's."""
+    """Teach ``east_a`` into ``folder/memory`` (about 4 s; ``folder`` is made if missing)."""
     folder.mkdir(parents=True, exist_ok=True)
-    world_file = teach_east_a(folder, VmnavConfig())
-    memory = read_memory(folder / "memory")
-    (path,) = memory.paths.values()
-    start = load_world(world_file).start
-    yaw = start.yaw_rad
-    goal_xy = {}
-    for key in path.keyframe_ids:
-        x, y, _ = memory.keyframes[key].odom_pose  # the teach odometry began at the start
-        goal_xy[key] = (start.x_m + x * math.cos(yaw) - y * math.sin(yaw),
-                        start.y_m + x * math.sin(yaw) + y * math.cos(yaw))
-    return Taught(world_file, folder / "memory", tuple(path.keyframe_ids), goal_xy)
+    world_file, taught = teach_east_a(folder, VmnavConfig())
+    return Taught(world_file, folder / "memory", taught)
 
 
 class TruthRecorder:

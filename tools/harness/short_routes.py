@@ -10,9 +10,13 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robot.config import VmnavConfig
 from sim.config import SimConfig
+
+if TYPE_CHECKING:
+    from tools.harness.teach import TaughtMemory
 
 EXTRA_ROUTES = """
 [[routes]]
@@ -33,24 +37,21 @@ def write_short_routes_world(folder: Path) -> Path:
     return path
 
 
-def teach_east_a(folder: Path, config: VmnavConfig) -> Path:
-    """Teach ``east_a`` in lock-step (seed 1, the default camera) into ``folder/memory``.
+def teach_east_a(folder: Path, config: VmnavConfig) -> tuple[Path, TaughtMemory]:
+    """Teach ``east_a`` in lock-step (seed 1, the default camera) into ``folder/memory``
+    (:func:`tools.harness.teach.teach_memory`, its truth in ``folder/teach.json``).
 
     Returns:
-        The world file written to ``folder`` (:func:`write_short_routes_world`).
+        The world file written to ``folder`` (:func:`write_short_routes_world`), and the
+        memory with the true poses of its key images.
     """
-    from shared.calibration import load_camera
-    from shared.memory import VisualMemory, write_memory
+    from shared.camera_model import CameraModel
     from sim.world import load_world
-    from tools.harness.teach import find_route, teach_in_sim
+    from tools.harness.teach import teach_memory
 
     world_file = write_short_routes_world(folder)
-    world = load_world(world_file)
-    camera = load_camera(None)
-    route = find_route(world, "east_a")
-    sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=config.camera.mount)
-    taught = teach_in_sim(world, route, config, sim_config, camera)
-    memory = VisualMemory(camera)
-    memory.add_path(route.name, [k.record for k in taught.key_images])
-    write_memory(folder / "memory", memory)
-    return world_file
+    taught = teach_memory(load_world(world_file), ["east_a"], config,
+                          SimConfig(world=str(world_file), seed=1,
+                                    camera_mount=config.camera.mount), CameraModel.default(),
+                          join=False, folder=folder)
+    return world_file, taught

@@ -1,21 +1,28 @@
-"""Teach a route of a simulated world in lock-step, keeping the true poses.
+"""Teach routes of a simulated world in lock-step, keeping the true poses.
 
 The loop couples the simulator and the robot's code, so it lives in the harness (robot/
 never imports sim/, sim/ never imports robot/):
 
-1. :func:`sim.teach_recording.record_drive` drives the simulated robot along the
-   route with the scripted human-like :class:`sim.teach_driver.TeachDriver`, in
-   lock-step, one rendered frame per camera period;
-2. each frame's image and the body's wheel odometry (not the truth) go to
-   :class:`robot.teach.KeyImageSelector`;
-3. the caller adds the key images to a memory as a new path (``vmnav teach --sim``).
+1. :func:`teach_in_sim` drives one route: :func:`sim.teach_recording.record_drive`
+   moves the simulated robot along it with the scripted human-like
+   :class:`sim.teach_driver.TeachDriver`, in lock-step, one rendered frame per camera
+   period; each frame's image and the body's wheel odometry (not the truth) go to
+   :class:`robot.teach.KeyImageSelector`. ``vmnav teach --sim`` adds the key images to a
+   memory as a new path.
+2. :func:`teach_memory` teaches several routes into one memory, one path each, and keeps
+   the true pose of every key image (:class:`TaughtMemory`), for everything that
+   measures against the truth: ``vmnav demo``, the benchmarks, the fault cases' rig. It
+   can join the paths as ``vmnav teach`` does, and store the memory in a folder with a
+   record of what was taught, to be reused when asked again for the same.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import json
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from shared.errors import InputError
 from shared.pose import Pose2
@@ -25,9 +32,12 @@ if TYPE_CHECKING:
     from robot.teach import SelectedKeyImage
     from robot.vision.features import GreyImage
     from shared.camera_model import CameraModel
+    from shared.memory import VisualMemory
     from sim.config import SimConfig
     from sim.world import Route, World
 
+#: The truth of a memory stored by :func:`teach_memory`, beside its ``memory`` folder.
+TRUTH_NAME = "teach.json"
 #: Mixed with the simulation seed for the teach driver's random wander.
 DRIVER_STREAM = 0x54454143
 #: A drive may take this many times its length at the minimum cruise speed before it is abandoned.
@@ -53,6 +63,25 @@ class TaughtRoute:
     true_poses: tuple[Pose2, ...]
     frames: int
     sim_time_s: float
+
+
+@dataclass(frozen=True, eq=False)
+class TaughtMemory:
+    """Routes taught into one memory, with the truth that the memory does not keep.
+
+    Attributes:
+        memory: the visual memory, one path per route.
+        true_poses: true robot pose of every key image by id, world frame (evaluation only).
+        path_ids: the path id of each route, in teaching order.
+        routes: what each route's drive gave, in teaching order; empty when reused.
+        reused: the memory was read from a folder taught before instead of taught.
+    """
+
+    memory: VisualMemory
+    true_poses: dict[int, Pose2]
+    path_ids: tuple[int, ...]
+    routes: tuple[TaughtRoute, ...]
+    reused: bool
 
 
 def find_route(world: World, name: str) -> Route:
@@ -131,3 +160,117 @@ def teach_in_sim(
         frames=frames,
         sim_time_s=sim.now_ns / 1e9,
     )
+
+
+def teach_memory(
+    world: World,
+    route_names: Sequence[str] | None,
+    config: VmnavConfig,
+    sim_config: SimConfig,
+    camera: CameraModel,
+    *,
+    join: bool,
+    folder: Path | None = None,
+) -> TaughtMemory:
+    """Teach routes of ``world`` (:func:`teach_in_sim`, each from its start pose) into one
+    memory, one path per route, keeping the true pose of every key image.
+
+    Args:
+        world: the world of the routes (``sim_config.world`` loaded).
+        route_names: route names in teaching order; None: all the world's routes in the
+            order its file lists them.
+        config: teach, driver, feature and localization parameters.
+        sim_config: the simulation's config while teaching (world name, seed, people).
+        camera: the simulated camera.
+        join: join each new path to the ones taught before it where its ends are
+            localized (:func:`robot.memory.junctions.join_path`, as ``vmnav teach``).
+        folder: None: keep the memory in memory only. Else store it in ``folder/memory``
+            and the truth in ``folder/teach.json`` under a key (world, seed, route
+            names, camera, and ``"joined": false`` when not joined). A memory already
+            there with the same key is read instead of taught; a memory there taught
+            otherwise (or without ``teach.json``) is an error, never overwritten; a
+            folder :func:`shared.memory.open_or_create` refuses is refused before driving.
+
+    Raises:
+        InputError: an unknown route, a world without routes, a drive that does not reach
+            its end, or ``folder`` holding a memory taught otherwise.
+        MemoryFormatError: ``folder/memory`` holds files but no manifest, or a memory
+            that does not load.
+    """
+    from robot.memory.junctions import join_path
+    from shared.memory import VisualMemory, open_or_create, write_memory
+
+    routes = (list(world.routes) if route_names is None
+              else [find_route(world, name) for name in route_names])
+    if not routes:
+        raise InputError(f"world {world.name!r}", "has no routes to teach")
+    memory = VisualMemory(camera)
+    if folder is not None:
+        key = _truth_key(sim_config, [r.name for r in routes], camera, join)
+        stored = _stored_truth(folder, key)
+        memory = open_or_create(folder / "memory", camera)
+        if stored is not None:
+            return TaughtMemory(
+                memory=memory,
+                true_poses={int(k): Pose2(*v) for k, v in stored["true_poses"].items()},
+                path_ids=tuple(stored["path_ids"]), routes=(), reused=True)
+    true_poses: dict[int, Pose2] = {}
+    path_ids: list[int] = []
+    taught_routes: list[TaughtRoute] = []
+    for route in routes:
+        taught = teach_in_sim(world, route, config, sim_config, camera)
+        path = memory.add_path(route.name, [k.record for k in taught.key_images])
+        if join:
+            join_path(memory, path, config.features, config.localize, config.teach)
+        true_poses.update(zip(path.keyframe_ids, taught.true_poses, strict=True))
+        path_ids.append(path.id)
+        taught_routes.append(taught)
+    if folder is not None:
+        write_memory(folder / "memory", memory)
+        (folder / TRUTH_NAME).write_text(json.dumps(
+            {"key": key, "path_ids": path_ids,
+             "true_poses": {str(k): v for k, v in true_poses.items()}}))
+    return TaughtMemory(memory=memory, true_poses=true_poses, path_ids=tuple(path_ids),
+                        routes=tuple(taught_routes), reused=False)
+
+
+def _truth_key(sim_config: SimConfig, route_names: list[str], camera: CameraModel,
+               join: bool) -> dict[str, Any]:
+    """What a memory stored by :func:`teach_memory` was taught from (``teach.json``'s key)."""
+    from shared.calibration import camera_to_dict
+
+    key: dict[str, Any] = {"world": sim_config.world, "seed": sim_config.seed,
+                           "routes": route_names, "camera": camera_to_dict(camera)}
+    if not join:  # absent when joined, so that folders taught before the flag still match
+        key["joined"] = False
+    return key
+
+
+def _stored_truth(folder: Path, key: dict[str, Any]) -> dict[str, Any] | None:
+    """``folder/teach.json`` when ``folder/memory`` holds a memory taught for ``key``; None
+    when it holds no memory.
+
+    Raises:
+        InputError: ``folder/memory`` holds a memory taught otherwise, or without
+            ``teach.json``.
+    """
+    from shared.memory.store import MANIFEST_NAME
+
+    directory = folder / "memory"
+    if not (directory / MANIFEST_NAME).exists():
+        return None
+    stored = _read_truth(folder / TRUTH_NAME)
+    if stored is None or stored.get("key") != key:
+        raise InputError(directory, "holds a memory taught with another world, seed, routes "
+                                    "or camera (or without teach.json): remove it or choose "
+                                    "another --out")
+    return stored
+
+
+def _read_truth(path: Path) -> dict[str, Any] | None:
+    """The stored ``teach.json``, or None when it is missing or not a JSON object."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None

@@ -5,11 +5,12 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
 from shared.camera_model import CameraModel
-from shared.memory import Junction, KeyframeRecord, VisualMemory
+from shared.memory import Junction, KeyframeRecord, VisualMemory, write_memory
 
 #: Descriptor length of the synthetic key images (5x5 patches).
 PATCH_LENGTH = 25
@@ -80,3 +81,18 @@ def loop_memory(rng: np.random.Generator, camera: CameraModel | None = None) -> 
     memory.add_junction(Junction(from_id=3, to_id=4, matches=80))
     memory.add_junction(Junction(from_id=6, to_id=0, matches=75))
     return memory
+
+
+def folder_bytes(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder``, at any depth, by path relative to it: its bytes (to show
+    that a command changed none)."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def memory_without_manifest(folder: Path, rng: np.random.Generator) -> dict[str, bytes]:
+    """Store :func:`loop_memory` in ``folder``, then delete its ``manifest.json`` (a memory a
+    user damaged); returns the files left (:func:`folder_bytes`: 21 key image files)."""
+    write_memory(folder, loop_memory(rng))
+    (folder / "manifest.json").unlink()
+    return folder_bytes(folder)

@@ -22,16 +22,15 @@ from sim.world import World, load_world
 from tests.shared.memory.builders import make_records, small_camera
 from tests.tools.short_routes import write_short_routes_world
 from tools.bench.localize import (
-    TaughtMemory,
     acceptable_answers,
     accepted_answers,
     nearest_keyframe,
     rate_summary,
     run_queries,
     sample_query_pose,
-    teach_memory,
     timing_summary,
 )
+from tools.harness.teach import TaughtMemory, teach_memory
 
 CONFIG = VmnavConfig()
 
@@ -43,7 +42,8 @@ def world(tmp_path_factory: pytest.TempPathFactory) -> World:
 
 @pytest.fixture(scope="module")
 def taught(world: World) -> TaughtMemory:
-    return teach_memory(world, ["east_a"], CONFIG, SimConfig(), CameraModel.default())
+    return teach_memory(world, ["east_a"], CONFIG, SimConfig(), CameraModel.default(),
+                        join=False)
 
 
 def test_random_views_near_the_path_find_the_nearest_key_image(
@@ -95,7 +95,7 @@ def test_where_paths_overlap_the_other_paths_key_image_at_the_place_is_right(
     for name, xs, y, yaw in paths:
         path = memory.add_path(name, make_records(rng, memory.camera, [0.5] * (len(xs) - 1)))
         true_poses.update({i: (x, y, yaw) for i, x in zip(path.keyframe_ids, xs, strict=True)})
-    taught = TaughtMemory(memory, true_poses, ())
+    taught = TaughtMemory(memory, true_poses, tuple(memory.paths), (), reused=False)
     a, b = memory.paths[0].keyframe_ids, memory.paths[1].keyframe_ids
     # Nearest A1 (2 cm); its neighbours A0, A2 are up to 0.52 m away, so B0 (0.42 m) and
     # B1 (8 cm) are as good; B2 (0.58 m), C (backwards) and D (3 m) are not.
