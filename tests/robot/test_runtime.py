@@ -34,6 +34,9 @@ from tests.tools.short_routes import teach_east_a
 from tools.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.lockstep_pioneer import lockstep_pioneer
 
+#: Every test here drives the simulator in lock-step on the taught route: seconds each.
+pytestmark = pytest.mark.slow
+
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 
 

@@ -52,6 +52,7 @@ def odometry_xy(station: GroundStation) -> tuple[float, float]:
     return odometry.x, odometry.y
 
 
+@pytest.mark.slow
 def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     aria, camera = sim_serve
     clock = WallClock()
@@ -112,6 +113,7 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     assert f"SIPs (the last {gap_ms:.1f} ms before)" in closed.data["message"], closed.data
 
 
+@pytest.mark.slow
 def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
     aria, _ = sim_serve
     result = subprocess.run(
@@ -127,6 +129,7 @@ def run_robot(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[
                           timeout=timeout_s)
 
 
+@pytest.mark.slow
 def test_a_memory_folder_without_its_manifest_is_one_line_at_start(tmp_path) -> None:
     memory = tmp_path / "memory"
     (memory / "images").mkdir(parents=True)
@@ -168,6 +171,7 @@ class TestOpenRobotMemory:
         assert memory.keyframes.keys() == stored.keyframes.keys()
 
 
+@pytest.mark.slow
 def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) -> None:
     aria, camera = sim_serve
     memory = ["--memory", str(tmp_path / "memory"), "--no-log"]

@@ -158,6 +158,7 @@ class TestServe:
         assert count >= 1 and abs(count - 15 * simulated_s) <= 1  # 1: the rounding to 0.1 s
 
 
+@pytest.mark.slow
 def test_a_robot_reads_the_served_camera_then_sigterm_stops_cleanly() -> None:
     """Issue 8: the simulator in one process, the camera read as a network camera in another."""
     serve = subprocess.Popen(
