@@ -117,6 +117,7 @@ def run_cli(*argv: str) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+@pytest.mark.slow
 class TestReplay:
     def test_a_lossless_log_replays_exactly(self, logged: Logged) -> None:
         assert len(logged.lossless) > 2  # a rotated series, given by its first file
@@ -190,6 +191,7 @@ class TestBadInput:
         assert err.startswith("vmnav replay: error: ") and err.count("\n") == 1
         assert message in err
 
+    @pytest.mark.slow
     def test_a_log_without_missions(self, logged: Logged, tmp_path: Path) -> None:
         with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.camera.mount,
                       {}) as log:
@@ -197,6 +199,7 @@ class TestBadInput:
         self.check(*run_cli(str(tmp_path / "teach-0001.mcap"), "--memory", str(logged.memory)),
                    "teach-0001.mcap: no mission start (no messages on /mission/start)")
 
+    @pytest.mark.slow
     def test_a_memory_without_the_goal(self, logged: Logged, tmp_path: Path) -> None:
         memory = read_memory(logged.memory)
         smaller = VisualMemory(memory.camera)
@@ -207,10 +210,12 @@ class TestBadInput:
         self.check(*run_cli(str(logged.lossless[0]), "--memory", str(tmp_path / "memory")),
                    f"{tmp_path / 'memory'}: has no key image 2, the goal of the mission")
 
+    @pytest.mark.slow
     def test_a_missing_memory(self, logged: Logged, tmp_path: Path) -> None:
         self.check(*run_cli(str(logged.lossless[0]), "--memory", str(tmp_path / "none")),
                    str(tmp_path / "none"))
 
+    @pytest.mark.slow
     def test_a_truncated_file(self, logged: Logged, tmp_path: Path) -> None:
         cut = tmp_path / "robot-0001.mcap"
         data = logged.lossless[0].read_bytes()
@@ -218,11 +223,13 @@ class TestBadInput:
         self.check(*run_cli(str(cut), "--memory", str(logged.memory)),
                    f"`vmnav log recover {cut}`")
 
+    @pytest.mark.slow
     def test_not_an_mcap_file(self, logged: Logged, tmp_path: Path) -> None:
         bad = tmp_path / "robot.mcap"
         bad.write_text("not a log")
         self.check(*run_cli(str(bad), "--memory", str(logged.memory)), "not an MCAP file")
 
+    @pytest.mark.slow
     def test_a_gap_in_the_series(self, logged: Logged, tmp_path: Path) -> None:
         for file in logged.lossless[:3]:
             shutil.copy(file, tmp_path)
@@ -268,6 +275,7 @@ class TestCore:
         assert differs(None, float("nan"), 0.0) == (False, None)
         assert differs("following", "arrived", 1.0) == (True, None)
 
+    @pytest.mark.slow
     def test_cycles_without_a_frame_or_before_a_start_are_skipped(self, logged: Logged) -> None:
         memory = read_memory(logged.memory)
         state = ConstantBase().state()

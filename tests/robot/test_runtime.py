@@ -36,6 +36,9 @@ from tests.tools.short_routes import teach_east_a
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
+#: Every test here drives the simulator in lock-step on the taught route: seconds each.
+pytestmark = pytest.mark.slow
+
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 
 

@@ -34,6 +34,7 @@ def calibrate(images: Path | str, output: Path, *extra: str) -> int:
     return main([*args, *extra])
 
 
+@pytest.mark.slow
 def test_recovers_the_camera(
     views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -61,6 +62,7 @@ def test_recovers_the_camera(
     assert beyond_90.sum() > 1000 and err[beyond_90].max() < 1.0
 
 
+@pytest.mark.slow
 def test_writes_the_result_of_the_run(views: Path, tmp_path: Path) -> None:
     # Output to another name, with another FOV; the file says where it came from.
     output = tmp_path / "other.json"
@@ -95,6 +97,7 @@ class TestBadInput:
         code = calibrate(tmp_path, tmp_path / "c.json")
         assert_fails(code, capsys, f"{tmp_path}: no images (.png, .jpg, .jpeg, .bmp)")
 
+    @pytest.mark.slow
     def test_corrupt_image(
         self, views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
@@ -103,6 +106,7 @@ class TestBadInput:
         code = calibrate(tmp_path, tmp_path / "c.json")
         assert_fails(code, capsys, f"{tmp_path / 'b.jpg'}: cannot read the image")
 
+    @pytest.mark.slow
     def test_images_of_different_sizes(
         self, views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
@@ -127,6 +131,7 @@ class TestBadInput:
             ("--fov", "400", "--fov: must be in (0, 360) degrees"),
         ],
     )
+    @pytest.mark.slow
     def test_bad_option(
         self,
         views: Path,
@@ -149,6 +154,7 @@ class TestBadInput:
         assert_fails(code, capsys, fragment)
         assert not (tmp_path / "c.json").exists()
 
+    @pytest.mark.slow
     def test_too_few_boards(
         self, views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
@@ -160,6 +166,7 @@ class TestBadInput:
             code, capsys, f"{tmp_path}: the board was found in 2 image(s); need at least 3"
         )
 
+    @pytest.mark.slow
     def test_wrong_pattern_finds_no_board(
         self, views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
@@ -177,6 +184,7 @@ class TestBadInput:
         )
         assert_fails(code, capsys, f"{views}: the board was found in 0 image(s)")
 
+    @pytest.mark.slow
     def test_unwritable_output(
         self, views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:

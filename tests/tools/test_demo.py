@@ -31,6 +31,7 @@ REPORT_KEYS = ("reached_goal", "final_position_error_m", "lateral_rms_m", "later
                "lost_events", "events")
 
 
+@pytest.mark.slow
 def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
     code, out, cpu_s = short_demo
     report = json.loads((out / "report.json").read_text())
@@ -52,6 +53,7 @@ def test_the_robot_arrives_close_to_the_taught_path(short_demo) -> None:
         "start", "localized", "arrived"]
 
 
+@pytest.mark.slow
 def test_the_goal_went_through_the_ground_station_over_udp(short_demo) -> None:
     _, out, _ = short_demo
     dispatch = json.loads((out / "report.json").read_text())["dispatch"]
@@ -71,6 +73,7 @@ def test_the_goal_went_through_the_ground_station_over_udp(short_demo) -> None:
     assert "/mavlink/in/VISUAL_SERVO_STATUS" in {t.topic for t in info.topics}
 
 
+@pytest.mark.slow
 def test_it_writes_the_plots(short_demo) -> None:
     _, out, _ = short_demo
     for name in ("topdown.png", "errors_vs_distance.png", "image_errors.png", "matches.png"):
@@ -78,6 +81,7 @@ def test_it_writes_the_plots(short_demo) -> None:
     assert not (out / "demo.mp4").exists()
 
 
+@pytest.mark.slow
 def test_a_goal_not_in_memory_is_one_line_and_reuses_the_memory(short_demo, capsys) -> None:
     _, out, _ = short_demo
     started = time.perf_counter()
@@ -88,6 +92,7 @@ def test_a_goal_not_in_memory_is_one_line_and_reuses_the_memory(short_demo, caps
     assert err.count("\n") == 1 and "key image 999 is not in the memory" in err
 
 
+@pytest.mark.slow
 def test_a_memory_taught_otherwise_is_refused_before_teaching(short_demo, capsys) -> None:
     _, out, _ = short_demo
     code = main(["demo", "--routes", "corridor", "--seed", "7", "--out", str(out), "--no-video"])

@@ -31,6 +31,7 @@ def free_udp_port() -> int:
         return probe.getsockname()[1]
 
 
+@pytest.mark.slow
 def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(tmp_path) -> None:
     world, _ = teach_east_a(tmp_path, CONFIG)
     goal = read_memory(tmp_path / "memory").paths[0].keyframe_ids[-1]

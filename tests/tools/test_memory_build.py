@@ -54,6 +54,7 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Built:
                  memory, build)
 
 
+@pytest.mark.slow
 class TestBuild:
     def test_teach_records_its_log(self, built: Built) -> None:
         code, out, err = built.teach

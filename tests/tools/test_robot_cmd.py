@@ -51,6 +51,7 @@ def odometry_xy(station: GroundStation) -> tuple[float, float]:
     return odometry.x, odometry.y
 
 
+@pytest.mark.slow
 def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     aria, camera = sim_serve
     clock = WallClock()
@@ -111,6 +112,7 @@ def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
     assert f"SIPs (the last {gap_ms:.1f} ms before)" in closed.data["message"], closed.data
 
 
+@pytest.mark.slow
 def test_a_missing_camera_is_one_line_at_start(sim_serve, tmp_path) -> None:
     aria, _ = sim_serve
     result = subprocess.run(
@@ -126,6 +128,7 @@ def run_robot(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[
                           timeout=timeout_s)
 
 
+@pytest.mark.slow
 def test_a_memory_folder_without_its_manifest_is_one_line_at_start(tmp_path, rng) -> None:
     memory = tmp_path / "memory"
     before = memory_without_manifest(memory, rng)
@@ -156,6 +159,7 @@ def test_a_calibration_of_another_camera_than_the_memorys_is_one_line_at_start(
     assert folder_bytes(memory) == before
 
 
+@pytest.mark.slow
 def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) -> None:
     aria, camera = sim_serve
     memory = ["--memory", str(tmp_path / "memory"), "--no-log"]

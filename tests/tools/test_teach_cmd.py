@@ -41,6 +41,7 @@ def taught(tmp_path_factory: pytest.TempPathFactory) -> Taught:
     return Taught(world, memory, run([*teach, "east_a"]), run([*teach, "east_b"]))
 
 
+@pytest.mark.slow
 class TestTeach:
     def test_the_first_route_makes_a_new_memory(self, taught: Taught) -> None:
         code, out, err = taught.first

@@ -20,11 +20,13 @@ def taught(tmp_path_factory):
     return teach(tmp_path_factory.mktemp("taught"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_fault_case(name, taught, tmp_path) -> None:
     run_case(name, taught, tmp_path / name)
 
 
+@pytest.mark.slow
 def test_bench_counts_the_runs_of_each_case(tmp_path, capsys) -> None:
     code = main(["bench", "faults", "--cases", "garbage_aria_server", "--repeat", "2",
                  "--out", str(tmp_path)])

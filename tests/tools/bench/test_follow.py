@@ -11,6 +11,7 @@ from tools.bench.follow import aggregate
 from tools.cli import main
 
 
+@pytest.mark.slow
 def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
     _, out, _ = short_demo
     code = main(["bench", "follow", "--seeds", "1", "--routes", "corridor", "--goal", "12",

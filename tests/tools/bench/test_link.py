@@ -39,6 +39,7 @@ def result() -> dict:
     return json.loads(out.getvalue())
 
 
+@pytest.mark.slow
 def test_dispatch_times_are_there_and_ordered(result: dict) -> None:
     assert result["benchmark"] == "link" and result["dispatches"] == 10
     p50, p95, top = (result[f"dispatch_ack_ms_{k}"] for k in ("p50", "p95", "max"))
@@ -46,6 +47,7 @@ def test_dispatch_times_are_there_and_ordered(result: dict) -> None:
     assert 0 < p50 <= p95 <= top < 1000
 
 
+@pytest.mark.slow
 def test_the_ground_tracks_every_vehicle_and_measures_its_cpu(result: dict) -> None:
     cpu = result["ground_cpu_fraction_2_vehicles"]
     assert math.isfinite(cpu) and 0 < cpu < 2
@@ -61,6 +63,7 @@ def test_the_ground_tracks_every_vehicle_and_measures_its_cpu(result: dict) -> N
     assert sum(result["messages_by_type"].values()) == result["messages_received"]
 
 
+@pytest.mark.slow
 def test_targets_sit_beside_the_figures(result: dict) -> None:
     assert result["targets"] == {"dispatch_ack_ms_p95": "< 50",
                                  "ground_cpu_fraction_20_vehicles": "< 0.3"}
@@ -90,6 +93,7 @@ def broken_factory(context: AppContext) -> LinkLoadApp:
     raise ValueError(f"no app for vehicle {context.system_id}")
 
 
+@pytest.mark.slow
 def test_a_vehicles_process_that_fails_is_an_error_not_a_hang(
         capfd: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(RuntimeError, match=r"vehicles process \d+ exited with code 1"), \

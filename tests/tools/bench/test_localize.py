@@ -46,6 +46,7 @@ def taught(world: World) -> TaughtMemory:
                         join=False)
 
 
+@pytest.mark.slow
 def test_random_views_near_the_path_find_the_nearest_key_image(
     world: World, taught: TaughtMemory
 ) -> None:
@@ -59,6 +60,7 @@ def test_random_views_near_the_path_find_the_nearest_key_image(
     assert all(o.result.ok for o in outcomes)
 
 
+@pytest.mark.slow
 class TestGroundTruth:
     def test_query_poses_stay_within_the_offsets(self, taught: TaughtMemory) -> None:
         rng = np.random.default_rng(0)
@@ -102,6 +104,7 @@ def test_where_paths_overlap_the_other_paths_key_image_at_the_place_is_right(
     assert acceptable_answers(taught, (0.52, 0.0, 0.0)) == {a[0], a[1], a[2], b[0], b[1]}
 
 
+@pytest.mark.slow
 def test_timing_summary_has_the_benchmark_keys(taught: TaughtMemory, world: World) -> None:
     sim = Simulation(world, SimConfig())
     image = FisheyeRenderer.for_simulation(sim, CameraModel.default()).render(sim).image

@@ -43,6 +43,7 @@ def ran(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str, Path]:
     return code, text.getvalue(), out
 
 
+@pytest.mark.slow
 def test_a_failed_benchmark_is_reported_and_the_others_still_run(
         ran: tuple[int, str, Path]) -> None:
     code, stdout, out = ran

@@ -35,6 +35,7 @@ def result(tmp_path_factory: pytest.TempPathFactory) -> dict:
     return json.loads(out.getvalue())
 
 
+@pytest.mark.slow
 def test_the_issue_keys_are_there_and_sane(result: dict) -> None:
     assert result["benchmark"] == "vision" and result["routes"] == ["east_a"]
     assert result["image_size"] == [800, 600]
@@ -54,6 +55,7 @@ def test_the_issue_keys_are_there_and_sane(result: dict) -> None:
     assert result["teach_tracks_per_key_image_median"] > 0
 
 
+@pytest.mark.slow
 def test_failures_are_counted_not_dropped(result: dict) -> None:
     assert 0 <= result["key_pair_not_ok"] <= result["state_not_ok"] <= result["state_queries"]
     split = result["state_by_key_spacing"].values()
@@ -68,6 +70,7 @@ def test_failures_are_counted_not_dropped(result: dict) -> None:
     assert tracked["correspondences_min"] >= result["teach_tracks_per_key_image_median"] / 2
 
 
+@pytest.mark.slow
 def test_targets_sit_beside_the_figures(result: dict) -> None:
     assert set(result["targets"]) == set(result["targets_met"]) == set(TARGETS)
     assert result["targets"]["frame_fps_median"] == ">= 50"

@@ -63,6 +63,7 @@ def test_the_log_is_complete_with_foxglove_schemas(demo_log: Path) -> None:
     assert counts[topics.MISSION_START] == 1
 
 
+@pytest.mark.slow
 def test_the_demo_log_replays_exactly(short_demo, demo_log: Path) -> None:
     _, out, _ = short_demo
     stdout, stderr = io.StringIO(), io.StringIO()

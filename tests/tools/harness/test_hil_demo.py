@@ -12,6 +12,7 @@ from tests.tools.short_routes import write_short_routes_world
 from tools.cli import main
 
 
+@pytest.mark.slow
 def test_teach_by_teleoperation_then_repeat_over_real_transports(tmp_path, capsys) -> None:
     world = write_short_routes_world(tmp_path)
     out = tmp_path / "hil"
