@@ -19,7 +19,7 @@ from robot.config import CameraSourceConfig
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
 from shared.errors import InputError
-from tests.sim.pioneer.test_server import connect_and_drive, tcp_client
+from tests.sim.pioneer.test_server import PATIENCE_S, connect_and_drive, tcp_client
 from tools.cli import main
 from tools.sim_serve_cmd import PtySpec, TcpSpec, parse_aria_spec, parse_video_spec
 
@@ -86,22 +86,28 @@ class TestServe:
         failures: list[BaseException] = []
 
         def client() -> None:
+            give_up = time.monotonic() + PATIENCE_S
             try:
-                for _ in range(200):  # until the server listens (it builds the world first)
+                while True:  # until the server listens (it builds the world first)
                     try:
                         host = tcp_client(port)
                         break
                     except ConnectionRefusedError:
+                        if time.monotonic() > give_up:
+                            raise
                         time.sleep(0.02)
                 connect_and_drive(host)
                 host.link.close()
+                os.kill(os.getpid(), signal.SIGTERM)  # as a user stops it: the server's handler
             except BaseException as e:  # reported to the test's thread
                 failures.append(e)
 
         thread = threading.Thread(target=client)
         thread.start()
-        code, out, _ = run(["sim", "serve", "--duration", "2.5", "--aria", f"tcp:{port}"], capsys)
-        thread.join(timeout=5.0)
+        # The server stops on the client's SIGTERM; --duration only bounds a hang.
+        code, out, _ = run(["sim", "serve", "--duration", str(3 * PATIENCE_S),
+                            "--aria", f"tcp:{port}"], capsys)
+        thread.join(timeout=PATIENCE_S)
         assert not thread.is_alive() and failures == []
         assert code == 0
         sips = int(re.search(r"(\d+) SIPs", out).group(1))  # type: ignore[union-attr]
