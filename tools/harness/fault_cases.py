@@ -171,8 +171,12 @@ def gcs_silent_hold(taught: Taught, folder: Path) -> None:
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
         silence_ns, since = go_silent(hil, SILENCE_S)
         timeout_ns = MavlinkConfig().gcs_timeout_ns
+        # Nominally 0.4 m at 0.2 m/s. The robot times the GCS timeout on its wall clock and
+        # the simulation lags the wall on a loaded machine, so fewer simulated metres fit
+        # before the hold: what is checked is that it drove on (a robot that stopped at
+        # the silence's start coasts a few cm), not how far.
         driven = hil.sim.truth.travelled_m(silence_ns, silence_ns + timeout_ns - NS_PER_S)
-        expect(driven > 0.3, f"the robot drove only {driven:.2f} m before the GCS timeout")
+        expect(driven > 0.15, f"the robot drove only {driven:.2f} m before the GCS timeout")
         moving = hil.sim.truth.still(silence_ns + timeout_ns + BRAKE_NS,
                                      silence_ns + round(SILENCE_S * NS_PER_S))
         expect(moving is None, f"the robot did not hold after the GCS timeout: {moving}")
