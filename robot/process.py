@@ -72,7 +72,7 @@ HOLD_POLL_NS = 2_000_000
 
 CAMERA_ENDED = "the camera ended"
 TIME_UP = "the time given ran out"
-STOPPED = "its supervisor stopped it"
+STOPPED = "its caller stopped it"
 
 
 class TimedFrameSource(Protocol):
