@@ -20,7 +20,7 @@ import numpy.typing as npt
 from robot.config import VmnavConfig
 from robot.memory.localize import Localizer
 from robot.mission import MissionState
-from robot.mission_run import CycleRecord, MissionResult, MissionRun
+from robot.mission_run import CycleRecord, MissionResult, MissionRun, start_run
 from robot.runtime_log import RuntimeLog
 from robot.vehicle.app_port import ServoTelemetry, VehicleTelemetry
 from shared.interfaces import MobileBase
@@ -92,11 +92,10 @@ class GoalRuns:
         assert goals is not None
         goal = goals.goals[goals.index].key_image_id
         rng = np.random.default_rng(self._rng.integers(2**63))  # the run's alone: replayable
-        run = MissionRun(memory, config, self._base, rng, localizer=localizer,
-                         stopwatch=self._stopwatch)
         if self._log is not None:
             self._log.mission_started(t_ns, goal, rng.bit_generator.state, config)
-        run.start(goal, t_ns)
+        run = start_run(memory, config, self._base, rng, goal, t_ns, localizer=localizer,
+                        stopwatch=self._stopwatch)
         self._run, self._events_seen, self.servo = run, 0, None
         self.count += 1
         self._forward_events(run)

@@ -327,3 +327,31 @@ class MissionRun:
             f"{transition.source.name} -> {transition.target.name}: {transition.detail}"))
         if Command.STOP in transition.commands:
             self._base.stop()
+
+
+def start_run(memory: VisualMemory, config: VmnavConfig, base: MobileBase,
+              rng: np.random.Generator, goal_id: int, t_ns: int, *,
+              localizer: Localizer | None = None,
+              stopwatch: Callable[[], int] = time.perf_counter_ns) -> MissionRun:
+    """A mission run to ``goal_id`` started at ``t_ns``, built the one way both the robot
+    (:class:`robot.goal_runs.GoalRuns`) and replay (:func:`robot.replay.replay`, from the
+    logged config and generator state) build it, so a replayed run is the logged one.
+
+    Args:
+        memory: the visual memory.
+        config: the run's settings (what the field log records with its start).
+        base: the mobile base.
+        rng: the run's own generator (RANSAC samples); its state before this call is
+            what the field log records.
+        goal_id: the goal key image.
+        t_ns: the start time, ns.
+        localizer: over ``memory`` with ``config``'s features and localize settings (the
+            robot keeps one per memory); None builds it.
+        stopwatch: wall-time counter for the cycles' ``compute_ns``, ns.
+
+    Raises:
+        UnknownKeyframeError: ``goal_id`` is not in the memory.
+    """
+    run = MissionRun(memory, config, base, rng, localizer=localizer, stopwatch=stopwatch)
+    run.start(goal_id, t_ns)
+    return run

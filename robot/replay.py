@@ -7,8 +7,9 @@ Pure: logged data in (:mod:`robot.logged_missions` reads it from a field log), a
 Theory of operation. A mission run is a function of the memory, its config, its
 random generator's state, its start (goal, time) and, per cycle, of the frame's time,
 the frame and the base's state: all of which :class:`robot.field_log.FieldLog` logs.
-:func:`replay` rebuilds the run at each :class:`MissionStart` (the logged config
-unless one is given, a generator in the logged state) on a :class:`ReplayBase` that
+:func:`replay` rebuilds the run at each :class:`MissionStart` with
+:func:`robot.mission_run.start_run`, as the robot's runtime built it (the logged config
+unless one is given, a generator in the logged state), on a :class:`ReplayBase` that
 reports each cycle's logged :class:`~shared.interfaces.BaseState` and records the
 commands, feeds it the logged frames, and compares each cycle's :data:`FIELDS`:
 
@@ -27,6 +28,12 @@ cycle without its logged values is fed but not compared. The replay goes on afte
 difference: the base's states come from the log, not from the replayed commands.
 Only lossless (PNG) frames reproduce the estimates exactly; JPEG frames are counted
 as approximate.
+
+Replay reruns the mission runs alone, not the robot process (:mod:`robot.process`):
+the rest of the process (modes, teaching, the ground link, the worker) reacts to
+requests and timings of a link and threads that a log cannot give back, while a
+mission run depends only on the logged inputs above. So the two share how a mission
+run is built and started, not the process.
 """
 
 from __future__ import annotations
@@ -41,7 +48,7 @@ import numpy.typing as npt
 
 from robot.config import VmnavConfig
 from robot.field_log import servo_state
-from robot.mission_run import CycleRecord, MissionRun
+from robot.mission_run import CycleRecord, MissionRun, start_run
 from shared.errors import InputError
 from shared.interfaces import BaseState
 from shared.memory import VisualMemory
@@ -308,9 +315,8 @@ def replay(items: Iterable[MissionStart | LoggedCycle], memory: VisualMemory, *,
                                  f"mission started at {item.t_ns / 1e9:.3f} s: replay needs "
                                  f"the memory the robot used")
             base = ReplayBase()
-            run = MissionRun(memory, item.config if config is None else config, base,
-                             generator_from_state(item.rng_state))
-            run.start(item.goal_id, item.t_ns)
+            run = start_run(memory, item.config if config is None else config, base,
+                            generator_from_state(item.rng_state), item.goal_id, item.t_ns)
             missions, in_mission = missions + 1, 0
             continue
         if run is None or item.base is None or item.image is None:

@@ -51,3 +51,8 @@ class SimFrameSource:
         self._next_ns = frame.t_ns + self._sim.config.frame_period_ns
         self.last = frame
         return frame.t_ns, frame.image
+
+    def read_within(self, timeout_ns: int) -> tuple[int, npt.NDArray[np.uint8]]:
+        """:meth:`read`: the simulated camera never stalls, so ``timeout_ns`` never runs
+        out (the robot process's frame source, ``robot.process.TimedFrameSource``)."""
+        return self.read()

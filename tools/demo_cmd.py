@@ -22,12 +22,10 @@ from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig
-    from shared.logs.writer import LogStats
     from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
     from tools.harness.demo import CycleSample
-    from tools.harness.ground_dispatch import DispatchResult
 
 OnCycle = Callable[["Simulation", "RenderedFrame", "CycleSample"], None]
 
@@ -74,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     """Teach (or reuse), repeat, write the outputs and print the summary."""
     from robot.config import load_config
     from tools.figures.demo_plots import VideoWriter, write_plots
-    from tools.figures.demo_report import build_report, summary_text
+    from tools.figures.demo_report import build_report, dispatch_text, log_text, summary_text
     from tools.harness.demo import (
         default_goal,
         follow_config,
@@ -148,56 +146,15 @@ def run(args: argparse.Namespace) -> int:
 def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
                  route: str | None) -> int:
     """``vmnav demo --hil``: run it, write ``report.json``, print the summary."""
-    from tools.figures.demo_report import cm_text, fixed_text
+    from tools.figures.demo_report import hil_summary_text
     from tools.harness.hil_demo import robot_config_text, run_hil
 
     robot_config = out / "robot.toml"
     robot_config.write_text(robot_config_text(config))
     report = run_hil(out, config, sim_config, robot_config, route)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    reached = "reached" if report["reached_goal"] else "did NOT reach"
-    print(f"hil: taught {report['route']!r} by teleoperation over MAVLink "
-          f"({report['key_images_taught']} key images, {report['teach_sim_time_s']:.0f} s); "
-          f"the robot {reached} the goal key image {report['goal_key_image']} "
-          f"in {report['repeat_sim_time_s']:.0f} s")
-    print(f"  after {report['settling_distance_m']:.2f} m settling: lateral RMS "
-          f"{cm_text(report['lateral_rms_m'])} cm, max {cm_text(report['lateral_max_m'])} cm; "
-          f"heading RMS {fixed_text(report['heading_rms_deg'], 2)} deg; final position error "
-          f"{cm_text(report['final_position_error_m'])} cm")
-    print(f"  {report['key_images_reached']} key images reached, {report['mean_matches']} "
-          f"matches per frame on average, {report['lost_events']} LOST events; servo loop "
-          f"{fixed_text(report['loop_ms_p50'], 1)} ms median, "
-          f"{fixed_text(report['loop_ms_p95'], 1)} ms p95 (robot log)")
-    print(f"  mission upload to MISSION_ACK {report['mission_upload_ms']:.0f} ms; "
-          f"{report['wall_time_s']:.0f} s wall; processes exited {report['exit_codes']}")
-    print(f"wrote {out / 'report.json'}; logs in {out / 'logs'}, process outputs {out}/*.out")
+    print(hil_summary_text(report, out))
     return 0 if report["reached_goal"] else 1
-
-
-def dispatch_text(dispatch: DispatchResult, goal: int) -> str:
-    """What the ground station did and saw, and where its log went (one or two lines)."""
-    if dispatch.upload_ms is None:
-        return f"ground station: goal not dispatched ({dispatch.error})"
-    outcome = {True: "reached (MISSION_ITEM_REACHED)", False: "stopped short of it",
-               None: f"no outcome seen ({dispatch.error or 'the demo ended first'})"}
-    lines = [f"ground station: goal key image {goal} uploaded over UDP (MISSION_ACK after "
-             f"{dispatch.upload_ms:.0f} ms), mission started; {outcome[dispatch.reached]}"]
-    if dispatch.log_files:
-        lines.append("ground log " + ", ".join(str(p) for p in dispatch.log_files))
-    return "\n".join(lines)
-
-
-def log_text(stats: LogStats | None) -> str:
-    """Where the robot log went and what it holds, one line (``stats`` None: no cycle)."""
-    if stats is None:
-        return "log: none written (no cycle ran)"
-    files = ", ".join(str(p) for p in stats.files) or "no file"
-    problems = [f"{n} {what}" for n, what in ((stats.dropped, "dropped (writer behind)"),
-                                              (stats.lost, "lost")) if n]
-    if stats.last_error:
-        problems.append(stats.last_error)
-    return (f"log {files}: {stats.written} messages"
-            + (f" ({'; '.join(problems)})" if problems else ""))
 
 
 def _chain(consumers: list[OnCycle]) -> OnCycle | None:

@@ -11,12 +11,12 @@ It wires the parts the field runs, each on its own thread, around one loop:
   ``udpout:HOST:14550`` calls one);
 * the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``.
 
-The loop (:func:`serve`) hands each frame to the runtime and, when no frame comes
-within ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled (the base stops).
-Parameters set from the ground and goal photos live in ``--state DIR``. Ctrl-C and
-SIGTERM stop the base, send the Pioneer its CLOSE, and close the link and the camera;
-the field log records all that (ending with how the Pioneer link ended) and is finished
-last.
+:class:`robot.process.RobotProcess` assembles them and runs the loop: it hands each
+frame to the runtime and, when no frame comes within ``TeleopConfig.frame_timeout_ns``,
+tells it the camera stalled (the base stops). Parameters set from the ground and goal
+photos live in ``--state DIR``. Ctrl-C and SIGTERM stop the base, send the Pioneer its
+CLOSE, and close the link and the camera; the field log records all that (ending with
+how the Pioneer link ended) and is finished last.
 """
 
 from __future__ import annotations
@@ -26,14 +26,8 @@ import contextlib
 import dataclasses
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from shared.errors import InputError, TransportError
-
-if TYPE_CHECKING:
-    from robot.camera import VideoCaptureSource
-    from robot.runtime import RobotRuntime
-    from shared.clock import Clock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -78,7 +72,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 
 def run(args: argparse.Namespace) -> int:
-    """Open every part (a clear error for the first that fails), serve, close."""
+    """Open every part (a clear error for the first that fails), run the robot process."""
     import numpy as np
 
     from robot.camera import VideoCaptureSource
@@ -86,10 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from robot.field_log import FieldLog
     from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
-    from robot.runtime import RobotRuntime
-    from robot.vehicle.endpoint import VehicleEndpoint
+    from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
-    from robot.vehicle.udp_vehicle import UdpVehicle
     from shared.calibration import read_camera
     from shared.clock import WallClock
     from shared.key_file import read_key_file
@@ -112,13 +104,12 @@ def run(args: argparse.Namespace) -> int:
     clock = WallClock()
     if args.key is not None:
         signing = SigningSetup(read_key_file(args.key), time.time_ns() - clock.now_ns())
-    # The field log goes on `last`, which unwinds after `stack`: it still records while
-    # the runtime stops the base and the driver sends the Pioneer its CLOSE, then says
-    # how the link ended, and is finished after everything else (normal end, Ctrl-C,
-    # SIGTERM, or an error).
-    with contextlib.ExitStack() as last, contextlib.ExitStack() as stack:
-        camera = stack.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
-        driver = stack.enter_context(PioneerDriver.from_config(config.pioneer, clock))
+    # The process closes what `owned` holds after the runtime stopped the base, then has
+    # the field log record how the Pioneer link ended, and finishes the log last
+    # (robot.process, rule 4).
+    with contextlib.ExitStack() as owned:
+        camera = owned.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
+        driver = owned.enter_context(PioneerDriver.from_config(config.pioneer, clock))
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
             raise TransportError(config.pioneer.url, why_not_connected(driver))
@@ -126,51 +117,29 @@ def run(args: argparse.Namespace) -> int:
         if not args.no_log:  # once camera and robot answered
             log_config = (config.log if args.log is None
                           else dataclasses.replace(config.log, output_dir=str(args.log)))
-            log = last.enter_context(FieldLog(log_config, "robot", config.camera.mount,
-                                              {"source": "vmnav robot", "aria": config.pioneer.url,
-                                               "camera": config.camera.source}))
+            log = FieldLog(log_config, "robot", config.camera.mount,
+                           {"source": "vmnav robot", "aria": config.pioneer.url,
+                            "camera": config.camera.source})
             driver.sip_observers.append(log.sip)
-            last.callback(lambda: log.pioneer_closed(clock.now_ns(), driver.status(),
-                                                     driver.counters()))
-        runtime = RobotRuntime(memory, args.memory, config, driver, clock,
-                               np.random.default_rng(), log=log)
-        stack.callback(runtime.close)
+
+        def pioneer_closed(log: FieldLog) -> None:
+            log.pioneer_closed(clock.now_ns(), driver.status(), driver.counters())
+
         files = VehicleFiles(args.memory, args.state / "upload", args.state / "params.parm")
-        endpoint = VehicleEndpoint(runtime, config, files, signing=signing)
-        vehicle = stack.enter_context(UdpVehicle.open(args.mavlink, endpoint, clock))
-        if log is not None:
-            vehicle.packet_taps.append(lambda way, data, t_ns: log.mavlink(t_ns, way, data))
-        vehicle.start_thread()
-        identity = driver.status().identity
-        width, height = camera.size_wh
-        print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
-              f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
-              f"MAVLink system {config.mavlink.system_id} on {args.mavlink}"
-              f"{' (signed)' if signing else ''}; memory {args.memory}: "
-              f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
-        end_ns = (None if args.duration is None
-                  else clock.now_ns() + round(args.duration * 1e9))
-        ended = serve(camera, runtime, clock, config.teleop.frame_timeout_ns, end_ns)
+        parts = RobotParts(memory, driver, camera, clock, config, files, np.random.default_rng(),
+                           log=log, signing=signing)
+        with RobotProcess(parts, args.mavlink, owned=owned.pop_all(),
+                          log_end=pioneer_closed) as process:
+            identity = driver.status().identity
+            width, height = camera.size_wh
+            print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
+                  f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
+                  f"MAVLink system {config.mavlink.system_id} on {args.mavlink}"
+                  f"{' (signed)' if signing else ''}; memory {args.memory}: "
+                  f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
+            ended = process.run(end_ns=None if args.duration is None
+                                else clock.now_ns() + round(args.duration * 1e9))
     print(f"vmnav robot: {ended}; base stopped, links closed", flush=True)
     return 0
 
-
-def serve(camera: VideoCaptureSource, runtime: RobotRuntime, clock: Clock,
-          frame_timeout_ns: int, end_ns: int | None) -> str:
-    """Hand frames to the runtime until the camera ends or ``end_ns`` (module docstring).
-
-    Returns:
-        Why it stopped, for the last line.
-    """
-    from robot.camera import FrameStall
-
-    while end_ns is None or clock.now_ns() < end_ns:
-        frame = camera.read_within(frame_timeout_ns)
-        if frame is None:
-            return "the camera ended"
-        if isinstance(frame, FrameStall):
-            runtime.stall(frame.t_ns)
-        else:
-            runtime.step(*frame)
-    return "the time given ran out"
 

@@ -1,4 +1,5 @@
-"""What ``vmnav demo`` measures: errors against the taught path on ground truth, and the report.
+"""What ``vmnav demo`` measures: errors against the taught path on ground truth, the report and
+the lines it prints.
 
 The taught trajectory is the polyline through the true poses of the route's key
 images (:attr:`tools.harness.teach.TaughtMemory.true_poses`). The lateral error of a repeat
@@ -15,6 +16,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +28,10 @@ from robot.mission import MissionState
 from shared.pose import Pose2
 from tools.harness.demo import START_OFFSET_M, RepeatRun
 from tools.harness.teach import TaughtMemory
+
+if TYPE_CHECKING:
+    from shared.logs.writer import LogStats
+    from tools.harness.ground_dispatch import DispatchResult
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -203,6 +210,53 @@ def summary_text(report: dict[str, object]) -> str:
                  f"{fixed_text(report['loop_ms_p95'], 1)} ms p95; "
                  f"{report['lost_events']} LOST events")
     return "\n".join(lines)
+
+
+def hil_summary_text(report: dict[str, object], out: Path) -> str:
+    """The summary ``vmnav demo --hil`` prints about its ``report`` written into ``out``."""
+    reached = "reached" if report["reached_goal"] else "did NOT reach"
+    return "\n".join([
+        f"hil: taught {report['route']!r} by teleoperation over MAVLink "
+        f"({report['key_images_taught']} key images, {report['teach_sim_time_s']:.0f} s); "
+        f"the robot {reached} the goal key image {report['goal_key_image']} "
+        f"in {report['repeat_sim_time_s']:.0f} s",
+        f"  after {report['settling_distance_m']:.2f} m settling: lateral RMS "
+        f"{cm_text(report['lateral_rms_m'])} cm, max {cm_text(report['lateral_max_m'])} cm; "
+        f"heading RMS {fixed_text(report['heading_rms_deg'], 2)} deg; final position error "
+        f"{cm_text(report['final_position_error_m'])} cm",
+        f"  {report['key_images_reached']} key images reached, {report['mean_matches']} "
+        f"matches per frame on average, {report['lost_events']} LOST events; servo loop "
+        f"{fixed_text(report['loop_ms_p50'], 1)} ms median, "
+        f"{fixed_text(report['loop_ms_p95'], 1)} ms p95 (robot log)",
+        f"  mission upload to MISSION_ACK {report['mission_upload_ms']:.0f} ms; "
+        f"{report['wall_time_s']:.0f} s wall; processes exited {report['exit_codes']}",
+        f"wrote {out / 'report.json'}; logs in {out / 'logs'}, process outputs {out}/*.out"])
+
+
+def dispatch_text(dispatch: DispatchResult, goal: int) -> str:
+    """What the ground station did and saw, and where its log went (one or two lines)."""
+    if dispatch.upload_ms is None:
+        return f"ground station: goal not dispatched ({dispatch.error})"
+    outcome = {True: "reached (MISSION_ITEM_REACHED)", False: "stopped short of it",
+               None: f"no outcome seen ({dispatch.error or 'the demo ended first'})"}
+    lines = [f"ground station: goal key image {goal} uploaded over UDP (MISSION_ACK after "
+             f"{dispatch.upload_ms:.0f} ms), mission started; {outcome[dispatch.reached]}"]
+    if dispatch.log_files:
+        lines.append("ground log " + ", ".join(str(p) for p in dispatch.log_files))
+    return "\n".join(lines)
+
+
+def log_text(stats: LogStats | None) -> str:
+    """Where the robot log went and what it holds, one line (``stats`` None: no cycle)."""
+    if stats is None:
+        return "log: none written (no cycle ran)"
+    files = ", ".join(str(p) for p in stats.files) or "no file"
+    problems = [f"{n} {what}" for n, what in ((stats.dropped, "dropped (writer behind)"),
+                                              (stats.lost, "lost")) if n]
+    if stats.last_error:
+        problems.append(stats.last_error)
+    return (f"log {files}: {stats.written} messages"
+            + (f" ({'; '.join(problems)})" if problems else ""))
 
 
 def cm_text(value: object) -> str:

@@ -10,19 +10,19 @@ It couples the simulator and the robot application, so it lives in the harness (
    otherwise is an error (never overwritten).
 2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation (optionally with people
    and with a fraction of the landmarks removed), the robot placed off the taught
-   path: :class:`robot.runtime.RobotRuntime` on :class:`sim.sim_camera.SimFrameSource`,
-   the ARIA driver of the emulated Pioneer (:func:`tools.harness.lockstep_pioneer.lockstep_pioneer`)
-   and :class:`sim.sim_clock.SimClock`, as a MAVLink vehicle on loopback UDP. A ground
-   station (:class:`tools.harness.ground_dispatch.GroundDispatch`) sends the goal, a key image on
-   another path, as a one-item mission and starts it (AUTO); the robot localizes, plans
-   and follows until it stops in HOLD. Each mission cycle is recorded with the ground
-   truth.
+   path: the robot process (:class:`robot.process.RobotProcess`, as on the robot) on
+   :class:`sim.sim_camera.SimFrameSource`, the ARIA driver of the emulated Pioneer
+   (:func:`tools.harness.lockstep_pioneer.lockstep_pioneer`) and
+   :class:`sim.sim_clock.SimClock`, as a MAVLink vehicle on loopback UDP. A ground
+   station (:class:`tools.harness.ground_dispatch.GroundDispatch`) sends the goal, a key
+   image on another path, as a one-item mission and starts it (AUTO), while the
+   simulation's clock is held; the robot localizes, plans and follows until it stops in
+   HOLD. Each mission cycle is recorded with the ground truth.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,9 +36,13 @@ if TYPE_CHECKING:
     from robot.config import VmnavConfig
     from robot.field_log import FieldLog
     from robot.mission_run import CycleRecord, MissionResult
+    from robot.process import AfterStep
+    from robot.runtime import RobotRuntime
     from shared.camera_model import CameraModel
+    from shared.clock import Clock
     from sim.config import SimConfig
     from sim.renderer import RenderedFrame
+    from sim.sim_camera import SimFrameSource
     from sim.simulation import Simulation
     from tools.harness.ground_dispatch import DispatchResult
     from tools.harness.teach import TaughtMemory
@@ -169,7 +173,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
             ``out/vehicle`` (parameters start from ``config`` on every run).
         on_cycle: called after each mission cycle with the simulation and the frame (video).
         robot_log: the robot's field log (missions, cycles, events, notes, its MAVLink
-            traffic stamped on the simulation clock); None: no robot log.
+            traffic stamped on the simulation clock), finished when the repeat ends;
+            None: no robot log.
         ground_log: the ground station's log folder; None: no ground log.
 
     Raises:
@@ -179,12 +184,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     """
     import numpy as np
 
-    from robot.runtime import RobotRuntime
-    from robot.vehicle.endpoint import VehicleEndpoint
+    from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import VehicleFiles
-    from robot.vehicle.udp_vehicle import UdpVehicle
     from shared.clock import WallClock
-    from shared.mavlink.modes import Mode
     from sim.landmark_dropout import drop_landmarks
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
@@ -205,51 +207,78 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    runtime = RobotRuntime(memory, out / "memory", config, base, clock, rng, log=robot_log,
-                           lockstep=True)
     files = VehicleFiles(out / "memory", out / "vehicle" / "upload",
                          out / "vehicle" / "params.parm")
     files.param_file.unlink(missing_ok=True)
-    endpoint = VehicleEndpoint(runtime, config, files)
     taught_m = sum(memory.keyframes[p.keyframe_ids[-1]].distance_m
                    for p in memory.paths.values())
     limit_ns = round((_TIME_MARGIN * taught_m / config.control.speed_m_s + _EXTRA_S) * 1e9)
-    samples: list[CycleSample] = []
-    with UdpVehicle.open("udpin:127.0.0.1:0", endpoint, WallClock()) as vehicle:
-        if robot_log is not None:
-            log = robot_log
-            vehicle.packet_taps.append(lambda way, data, _: log.mavlink(clock.now_ns(), way, data))
-        vehicle.start_thread()
-        ground = GroundDispatch(f"udpout:127.0.0.1:{vehicle.link.local_port}", goal_id,
+    wall = WallClock()
+    parts = RobotParts(memory, base, frames, clock, config, files, rng, log=robot_log,
+                       lockstep=True)
+    with RobotProcess(parts, "udpin:127.0.0.1:0", link_clock=wall) as robot:
+        ground = GroundDispatch(f"udpout:127.0.0.1:{robot.vehicle.link.local_port}", goal_id,
                                 _DISPATCH_TIMEOUT_S + limit_ns / 1e9, ground_log)
         ground.start()
-        wait_until = time.monotonic() + _DISPATCH_TIMEOUT_S
-        started_ns: int | None = None
-        deadline_ns = clock.now_ns()
-        while True:
-            record = runtime.step(*frames.read())
-            if record is not None:
-                sample = CycleSample(record=record, pose_w=sim.body.pose_w)
-                samples.append(sample)
-                if on_cycle is not None and frames.last is not None:
-                    on_cycle(sim, frames.last, sample)
-            mode = runtime.telemetry().mode
-            if started_ns is None:
-                if mode is Mode.AUTO:
-                    started_ns = clock.now_ns()
-                elif time.monotonic() > wait_until:
-                    break
-            elif mode is Mode.HOLD:
-                break
-            elif clock.now_ns() - started_ns > limit_ns:
-                runtime.set_mode(Mode.HOLD)  # the operator's abort at the time limit
-            deadline_ns += sim_config.frame_period_ns
-            clock.sleep_until_ns(deadline_ns)
+        watch = _RepeatWatch(robot.runtime, sim, frames, wall, limit_ns, on_cycle)
+        robot.run(period_ns=sim_config.frame_period_ns, on_step=watch.on_step)
         dispatch = ground.finish(_OUTCOME_GRACE_S)
-    runtime.close()
-    result = runtime.last_result
+    result = robot.runtime.last_result
     if result is None:
         raise GroundError(dispatch.error or f"the ground station dispatched no goal in "
                                             f"{_DISPATCH_TIMEOUT_S:.0f} s")
-    return RepeatRun(result=result, start_pose=start, goal_id=goal_id, samples=tuple(samples),
-                     sim_time_s=sim.now_ns / 1e9, dispatch=dispatch)
+    return RepeatRun(result=result, start_pose=start, goal_id=goal_id,
+                     samples=tuple(watch.samples), sim_time_s=sim.now_ns / 1e9,
+                     dispatch=dispatch)
+
+
+class _RepeatWatch:
+    """The repeat's ``on_step`` (:class:`robot.process.RobotProcess`): each mission cycle
+    with its ground truth, and the operator's stop conditions.
+
+    Until the ground station has started the mission (AUTO), the simulation's clock is
+    held (:attr:`~robot.process.AfterStep.HOLD_CLOCK`): the mission starts on the same
+    frame however fast the ground station answers, and every run gives the same figures.
+    The repeat ends when the robot is back in HOLD, or when the ground station has not
+    started the mission within :data:`_DISPATCH_TIMEOUT_S` (wall time); the operator
+    aborts the mission (HOLD) after ``limit_ns`` of simulated time.
+    """
+
+    def __init__(self, runtime: RobotRuntime, sim: Simulation, frames: SimFrameSource,
+                 wall: Clock, limit_ns: int,
+                 on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None
+                 ) -> None:
+        self._runtime = runtime
+        self._sim = sim
+        self._frames = frames
+        self._wall = wall
+        self._limit_ns = limit_ns
+        self._on_cycle = on_cycle
+        self._wait_until_ns = wall.now_ns() + round(_DISPATCH_TIMEOUT_S * 1e9)
+        self._started_ns: int | None = None
+        self.samples: list[CycleSample] = []
+
+    def on_step(self, record: CycleRecord | None) -> AfterStep:
+        """Record the cycle (``record``: None when no mission run drove); what the loop
+        does next."""
+        from robot.process import AfterStep
+        from shared.mavlink.modes import Mode
+
+        if record is not None:
+            sample = CycleSample(record=record, pose_w=self._sim.body.pose_w)
+            self.samples.append(sample)
+            if self._on_cycle is not None and self._frames.last is not None:
+                self._on_cycle(self._sim, self._frames.last, sample)
+        mode = self._runtime.telemetry().mode
+        if self._started_ns is None:
+            if mode is Mode.AUTO:
+                self._started_ns = self._sim.now_ns
+                return AfterStep.NEXT_FRAME
+            if self._wall.now_ns() > self._wait_until_ns:
+                return AfterStep.STOP
+            return AfterStep.HOLD_CLOCK
+        if mode is Mode.HOLD:
+            return AfterStep.STOP
+        if self._sim.now_ns - self._started_ns > self._limit_ns:
+            self._runtime.set_mode(Mode.HOLD)  # the operator's abort at the time limit
+        return AfterStep.NEXT_FRAME
