@@ -20,7 +20,12 @@ from shared.mavlink.mission.gcs import (
     UploadDone,
 )
 from shared.mavlink.mission.goal import Goal, goals_from_items
-from shared.mavlink.mission.items import MissionItem, MissionRefusal, item_from_message
+from shared.mavlink.mission.items import (
+    KNOWN_FRAMES,
+    MissionItem,
+    MissionRefusal,
+    item_from_message,
+)
 from shared.mavlink.mission.vehicle import (
     CurrentSet,
     MissionCleared,
@@ -328,7 +333,8 @@ def test_upload_and_download_survive_20_percent_loss(seed: int) -> None:
 finite32 = st.floats(allow_nan=False, allow_infinity=False, width=32)
 
 
-@given(st.builds(MissionItem, command=st.integers(0, 65535), frame=st.integers(0, 21),
+@given(st.builds(MissionItem, command=st.integers(0, 65535),
+                 frame=st.sampled_from(sorted(KNOWN_FRAMES)),
                  param1=finite32, param2=finite32, param3=finite32, param4=finite32,
                  x=st.integers(-2**31, 2**31 - 1), y=st.integers(-2**31, 2**31 - 1), z=finite32,
                  autocontinue=st.booleans()),
