@@ -31,7 +31,11 @@ Rules:
 4. Missions are goal items (``shared.mavlink.mission.goal``), validated on upload by
    ``VehicleApp.validate_goals``; a refused upload keeps the mission in force. While
    the uploaded mission runs, uploads and clears are refused (MAV_MISSION_DENIED):
-   switch to HOLD first.
+   switch to HOLD first. An upload is refused at its MISSION_COUNT, before any item is
+   requested, and again at its end if the mission started meanwhile. The protocol would
+   allow an atomic replacement, but the run drives to the goals it started with: a
+   new mission in the store would make MISSION_CURRENT and a download describe goals
+   the robot is not driving to.
 5. Parameters are ``robot_params`` over the config; the parameter file is applied
    on construction and rewritten atomically after every change, and the
    application gets the new config (``params_changed``), at construction too.
