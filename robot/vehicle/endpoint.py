@@ -21,7 +21,9 @@ Rules:
    the user commands of ``user_commands``), missions, parameters, FTP over the
    memory and upload area (``robot.vehicle.ftp_memory``); HEARTBEATs of ground
    stations feed the failsafe; MANUAL_CONTROL, SET_MODE and TIMESYNC are handled
-   here. Replies wait in an outbox for the next :meth:`poll`.
+   here. Replies wait in an outbox for the next :meth:`poll`. Every message is
+   checked before use (the cores check theirs): a MANUAL_CONTROL with an axis
+   outside -1000..1000 (INT16_MAX: unused) or a SET_MODE naming no mode is dropped.
 3. Modes: DO_SET_MODE (ArduPilot or PX4 encoding) and SET_MODE go to
    ``VehicleApp.set_mode``, except AUTO, which (like MISSION_START) starts the
    uploaded mission from its current item through ``VehicleApp.start_mission``;
@@ -29,7 +31,11 @@ Rules:
 4. Missions are goal items (``shared.mavlink.mission.goal``), validated on upload by
    ``VehicleApp.validate_goals``; a refused upload keeps the mission in force. While
    the uploaded mission runs, uploads and clears are refused (MAV_MISSION_DENIED):
-   switch to HOLD first.
+   switch to HOLD first. An upload is refused at its MISSION_COUNT, before any item is
+   requested, and again at its end if the mission started meanwhile. The protocol would
+   allow an atomic replacement, but the run drives to the goals it started with: a
+   new mission in the store would make MISSION_CURRENT and a download describe goals
+   the robot is not driving to.
 5. Parameters are ``robot_params`` over the config; the parameter file is applied
    on construction and rewritten atomically after every change, and the
    application gets the new config (``params_changed``), at construction too.
@@ -39,20 +45,28 @@ Rules:
    MISSION_CURRENT and VISUAL_SERVO_STATUS, and as STATUSTEXT for people
    (``progress``); the application's notices
    (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
-   SYS_STATUS ``errors_comm`` counts the corrupt packets received (:meth:`stats`).
+   SYS_STATUS counts what went wrong on reception (:meth:`stats`), each capped at
+   65535: ``errors_comm`` the corrupt packets, ``errors_count1`` the handler faults
+   (rule 9), ``errors_count2`` the messages refused (rule 9).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
    packets in that are unsigned (except RADIO_STATUS from a radio modem), wrongly
    signed or replayed are dropped and counted (:meth:`stats`); the outgoing
    timestamp is raised to the wall clock every 10 s (``SigningClock``).
+9. Hostile input: a message is refused when it is answered with an error (MISSION_ACK
+   other than ACCEPTED, PARAM_ERROR, COMMAND_ACK other than ACCEPTED or IN_PROGRESS)
+   or dropped as malformed (rule 2); both are counted. An exception of a handler is a
+   bug, but one packet must not end the link: it is counted per kind and logged once
+   per kind with its traceback (:class:`~shared.handler_faults.HandlerFaults`,
+   :attr:`VehicleEndpoint.faults`), the message is dropped and the next one handled.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from robot.config import VmnavConfig
@@ -74,6 +88,7 @@ from robot.vehicle.telemetry import (
 from robot.vehicle.user_commands import user_handlers
 from shared.config import FtpConfig
 from shared.errors import InputError
+from shared.handler_faults import HandlerFaults
 from shared.mavlink.address import Address, is_for
 from shared.mavlink.commands.intervals import MessageIntervals
 from shared.mavlink.commands.vehicle import (
@@ -110,6 +125,8 @@ _SEVERITIES = {logging.DEBUG: mavlink.MAV_SEVERITY_DEBUG, logging.INFO: mavlink.
                logging.ERROR: mavlink.MAV_SEVERITY_ERROR,
                logging.CRITICAL: mavlink.MAV_SEVERITY_CRITICAL}
 _INT16_MAX = 0x7FFF
+#: MANUAL_CONTROL's axis range (common.xml), besides INT16_MAX for "axis unused".
+_AXIS_LIMIT = 1000
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,17 +138,34 @@ class LinkStats:
         bad_packets: packets dropped as corrupt or by the signature check.
         unsigned_rejected: message id -> packets dropped for lacking a valid signature.
         signing: pymavlink's signing counters; None without signing.
+        refused: messages answered with an error or dropped as malformed (rule 9).
+        handler_faults: "<message type>: <exception class>" -> exceptions of handlers
+            (rule 9), in the order the kinds first happened.
     """
 
     messages: int
     bad_packets: int
     unsigned_rejected: dict[int, int]
     signing: SigningStats | None
+    refused: int = 0
+    handler_faults: dict[str, int] = field(default_factory=dict)
 
 
-def _axis(value: int) -> float:
-    """A MANUAL_CONTROL axis, -1000..1000, normalized; INT16_MAX (axis unused) is NaN."""
-    return math.nan if value == _INT16_MAX else value / 1000
+def _axis(value: int) -> float | None:
+    """A MANUAL_CONTROL axis, -1000..1000, normalized; INT16_MAX (axis unused) is NaN;
+    None for any other value (a malformed message)."""
+    if value == _INT16_MAX:
+        return math.nan
+    return value / _AXIS_LIMIT if -_AXIS_LIMIT <= value <= _AXIS_LIMIT else None
+
+
+def _is_refusal(msg: Message) -> bool:
+    """Whether a reply refuses the message it answers (module rule 9)."""
+    if isinstance(msg, mavlink.MAVLink_mission_ack_message):
+        return bool(msg.type != mavlink.MAV_MISSION_ACCEPTED)
+    if isinstance(msg, mavlink.MAVLink_command_ack_message):
+        return msg.result not in (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
+    return isinstance(msg, mavlink.MAVLink_param_error_message)
 
 
 class VehicleEndpoint:
@@ -165,7 +199,8 @@ class VehicleEndpoint:
         self.config = config_with_params(config, self._table)
         """The config in force: ``config`` with the parameters applied."""
         self._params = ParamServer(self._table, self.address, link)
-        self._mission = MissionServer(self.address, link, validate=self._validate)
+        self._mission = MissionServer(self.address, link, validate=self._validate,
+                                      admit=self._admit_upload)
         ftp = ftp if ftp is not None else FtpConfig()
         self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes)
         self._ftp = FtpServer(self._fs, ftp)
@@ -174,7 +209,8 @@ class VehicleEndpoint:
             _HEARTBEAT: self._heartbeat,
             mavlink.MAVLINK_MSG_ID_MISSION_CURRENT: lambda t, us: self._mission.current_message(),
             mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda t, us: sys_status_message(
-                t, us, errors_comm=self.codec.bad_packets),
+                t, us, errors_comm=self.codec.bad_packets, handler_faults=self.faults.total,
+                refused=self._refused),
             **TELEMETRY_BUILDERS,
         }
         self._streams = TelemetryStreams(builders, self._period_ns)
@@ -198,6 +234,9 @@ class VehicleEndpoint:
             self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns)
         self._outbox: list[Message] = []
         self._messages = 0
+        self._refused = 0
+        self.faults = HandlerFaults(logger, "vehicle")
+        """Exceptions of the handlers (rule 9); the UDP adapter records its own here too."""
         self._boot_ns: int | None = None
         self._now_ns = 0
         self._notice_id = 0
@@ -216,8 +255,14 @@ class VehicleEndpoint:
         self._tick(now_ns)
         messages = self.codec.parse(data, datagram)
         for msg in messages:
-            self._outbox += self._handle(msg, now_ns)
-            self._outbox += self._drain_events()
+            try:
+                replies = self._handle(msg, now_ns)
+                replies += self._drain_events()
+            except Exception as e:  # a bug; one packet must not end the link (rule 9)
+                self.faults.record(msg.get_type(), e)
+                continue
+            self._refused += sum(map(_is_refusal, replies))
+            self._outbox += replies
         self._messages += len(messages)
         return len(messages)
 
@@ -256,7 +301,8 @@ class VehicleEndpoint:
         return LinkStats(
             self._messages, self.codec.bad_packets,
             dict(self._policy.rejected) if self._policy is not None else {},
-            signing_stats(self.codec) if self._policy is not None else None)
+            signing_stats(self.codec) if self._policy is not None else None,
+            self._refused, self.faults.counts())
 
     def close(self) -> None:
         """Discard FTP uploads in progress (nothing half-written is kept)."""
@@ -275,13 +321,20 @@ class VehicleEndpoint:
                     for payload in self._ftp.handle(msg.payload, now_ns, peer)]
         if isinstance(msg, mavlink.MAVLink_manual_control_message):
             if msg.target in (0, self.address.system_id):
-                self._app.manual_control(_axis(msg.x), _axis(msg.y), _axis(msg.z), _axis(msg.r),
-                                         msg.buttons, now_ns)
+                x, y, z, r = axes = (_axis(msg.x), _axis(msg.y), _axis(msg.z), _axis(msg.r))
+                if x is None or y is None or z is None or r is None:
+                    logger.debug("vehicle: MANUAL_CONTROL axes %s out of range: dropped", axes)
+                    self._refused += 1
+                else:
+                    self._app.manual_control(x, y, z, r, msg.buttons, now_ns)
             return []
         if isinstance(msg, mavlink.MAVLink_set_mode_message):
-            mode = mode_from_set_mode(msg.base_mode, msg.custom_mode)
-            if is_for(msg, self.address) and mode is not None:
-                self._set_mode(mode)
+            if is_for(msg, self.address):
+                mode = mode_from_set_mode(msg.base_mode, msg.custom_mode)
+                if mode is None:
+                    self._refused += 1
+                else:
+                    self._set_mode(mode)
             return []
         if isinstance(msg, mavlink.MAVLink_timesync_message):
             return [mavlink.MAVLink_timesync_message(now_ns, msg.ts1)] if msg.tc1 == 0 else []
@@ -349,13 +402,19 @@ class VehicleEndpoint:
     def _result(ok: bool) -> int:
         return mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
 
-    def _validate(self, items: tuple[MissionItem, ...]) -> MissionRefusal | None:
-        """The mission server's hook (module rule 4)."""
+    def _admit_upload(self) -> MissionRefusal | None:
+        """The mission server's admission hook: no upload while the mission runs (rule 4)."""
         if self._app.telemetry().mission_running:
             return MissionRefusal(mavlink.MAV_MISSION_DENIED,
                                   "the mission is running; switch to HOLD first")
-        if not items:
-            return None
+        return None
+
+    def _validate(self, items: tuple[MissionItem, ...]) -> MissionRefusal | None:
+        """The mission server's validation hook (module rule 4): asked again at the end,
+        since the mission may have started during the upload."""
+        refusal = self._admit_upload()
+        if refusal is not None or not items:
+            return refusal
         goals = goals_from_items(items)
         if isinstance(goals, MissionRefusal):
             return goals

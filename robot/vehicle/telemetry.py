@@ -74,11 +74,16 @@ def _millivolts(volts: float) -> int:
     return min(max(round(volts * 1000), 0), UINT16_MAX - 1)
 
 
-def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0) -> Message:
+def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0,
+                       handler_faults: int = 0, refused: int = 0) -> Message:
     """SYS_STATUS: motors (enabled when armed, unhealthy while the base does not report),
     battery voltage, vision (unhealthy when LOST),
     and ``errors_comm``: the packets received corrupt so far (common.xml: "dropped packets
-    on all links (packets that were corrupted on reception on the MAV)"), capped at 65535.
+    on all links (packets that were corrupted on reception on the MAV)"); common.xml
+    leaves ``errors_count1..4`` to the autopilot: ``errors_count1`` carries the
+    exceptions of message handlers (``handler_faults``, bugs), ``errors_count2`` the
+    messages refused (``refused``: answered with an error or dropped as malformed).
+    Each is capped at 65535.
 
     The GEOFENCE health bit is set although there is no fence: MAVProxy otherwise prints
     a spurious "fence breach" (reference sec. 1.8).
@@ -93,7 +98,8 @@ def sys_status_message(t: VehicleTelemetry, time_usec: int, errors_comm: int = 0
         health |= mavlink.MAV_SYS_STATUS_SENSOR_VISION_POSITION
     return mavlink.MAVLink_sys_status_message(
         _SENSORS, enabled, health, 0, _millivolts(t.battery_v), -1, -1, 0,
-        min(errors_comm, UINT16_MAX), 0, 0, 0, 0)
+        min(errors_comm, UINT16_MAX), min(handler_faults, UINT16_MAX), min(refused, UINT16_MAX),
+        0, 0)
 
 
 def battery_status_message(t: VehicleTelemetry, time_usec: int) -> Message:

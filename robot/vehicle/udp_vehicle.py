@@ -22,7 +22,11 @@ Rules:
    thread: the field log's MAVLink in and out.
 4. Errors: a closed or failed socket raises
    :class:`~shared.byte_link.LinkClosedError` from :meth:`service`; the thread logs
-   it and ends.
+   it and ends. Any other exception of a round (a bug in the endpoint or a tap) is
+   recorded in the endpoint's :attr:`~robot.vehicle.endpoint.VehicleEndpoint.faults`
+   (counted in SYS_STATUS, logged once per kind), the rest of the round is dropped and
+   the next round runs: the link outlives it, whether the thread or the robot's loop
+   calls :meth:`service`.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ import threading
 from collections.abc import Callable
 
 from robot.vehicle.endpoint import VehicleEndpoint
+from shared.byte_link import LinkClosedError
 from shared.clock import Clock, service_loop
 from shared.errors import IllegalEventError
 from shared.udp_link import Peer, UdpLink
@@ -67,7 +72,20 @@ class UdpVehicle:
         return cls(endpoint, UdpLink.open(url), clock)
 
     def service(self, now_ns: int) -> None:
-        """One round of I/O at ``now_ns`` (rule 1)."""
+        """One round of I/O at ``now_ns`` (rules 1 and 4).
+
+        Raises:
+            LinkClosedError: the socket is closed or failed.
+        """
+        try:
+            self._exchange(now_ns)
+        except LinkClosedError:
+            raise
+        except Exception as e:  # a bug; it must not end the link (rule 4)
+            self.endpoint.faults.record("I/O round", e)
+
+    def _exchange(self, now_ns: int) -> None:
+        """Datagrams in, packets out (rule 1)."""
         with self._lock:
             if self._closed:
                 return

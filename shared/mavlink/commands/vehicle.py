@@ -12,6 +12,11 @@ specification's order for REQUEST_MESSAGE). A command without a handler gets
 sec. 0.8), e.g. REQUEST_PROTOCOL_VERSION (519), whose PROTOCOL_VERSION message
 pymavlink 2.4.50 lacks.
 
+Parameters are checked before a handler sees them: a command with an infinite
+parameter, or a COMMAND_INT in a frame that is no MAV_FRAME, is ``MAV_RESULT_DENIED``
+(common.xml: "supported but has invalid parameters"); NaN stays "not set". Handlers
+check the rest (whole numbers, ranges) and deny what does not fit.
+
 A COMMAND_LONG resent because our ACK was lost arrives with ``confirmation`` > 0;
 if it repeats the last command from that sender it is answered from the cache
 and not executed twice (reference sec. 1.3).
@@ -30,6 +35,7 @@ from typing import Any
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.commands.intervals import MessageIntervals
 from shared.mavlink.dialect import Message, mavlink
+from shared.mavlink.mission.items import KNOWN_FRAMES
 from shared.mavlink.modes import Mode, mode_from_command
 
 #: COMPONENT_ARM_DISARM param2 that forces arming/disarming (common.xml).
@@ -81,6 +87,12 @@ def request_from_message(msg: Any) -> CommandRequest:
     return CommandRequest(msg.command, params, source_of(msg), confirmation=msg.confirmation)
 
 
+def _malformed(request: CommandRequest) -> bool:
+    """An infinite parameter, or a COMMAND_INT frame that is no MAV_FRAME (module docstring)."""
+    return (any(math.isinf(p) for p in request.params)
+            or (request.frame is not None and request.frame not in KNOWN_FRAMES))
+
+
 def _cache_key(request: CommandRequest) -> tuple[Any, ...]:
     params = tuple(None if math.isnan(p) else p for p in request.params)
     return (request.source, request.command, params)
@@ -110,8 +122,12 @@ class CommandDispatcher:
             reply = self._last[1]
         else:
             handler = self.handlers.get(request.command)
-            reply = (handler(request) if handler is not None
-                     else CommandReply(mavlink.MAV_RESULT_UNSUPPORTED))
+            if handler is None:
+                reply = CommandReply(mavlink.MAV_RESULT_UNSUPPORTED)
+            elif _malformed(request):
+                reply = CommandReply(mavlink.MAV_RESULT_DENIED)
+            else:
+                reply = handler(request)
             self._last = (key, reply)
         ack = mavlink.MAVLink_command_ack_message(
             request.command, reply.result, target_system=request.source.system_id,

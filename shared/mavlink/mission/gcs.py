@@ -25,6 +25,9 @@ Rules:
    download with MISSION_ACK ACCEPTED (the vehicle does not need it).
 5. A MISSION_ACK with an error from the vehicle ends any operation
    (:class:`OperationRefused`); the vehicle keeps its previous mission.
+6. A downloaded item that is not one (:func:`~shared.mavlink.mission.items.item_from_message`:
+   an unknown frame, a legacy x/y out of range) ends the download: the station sends
+   MISSION_ACK with the refusal's result and reports :class:`DownloadInvalid`.
 """
 
 from __future__ import annotations
@@ -38,7 +41,12 @@ from shared.config import MavlinkConfig
 from shared.errors import LocalProtocolError
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.dialect import Message, mavlink
-from shared.mavlink.mission.items import MissionItem, item_from_message, mission_result_name
+from shared.mavlink.mission.items import (
+    MissionItem,
+    MissionRefusal,
+    item_from_message,
+    mission_result_name,
+)
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 
@@ -91,7 +99,15 @@ class OperationTimedOut:
     reason: str
 
 
-MissionClientEvent = UploadDone | DownloadDone | ClearDone | OperationRefused | OperationTimedOut
+@dataclass(frozen=True, slots=True)
+class DownloadInvalid:
+    """The vehicle sent an item that is not one; the download was cancelled (rule 6)."""
+
+    refusal: MissionRefusal
+
+
+MissionClientEvent = (UploadDone | DownloadDone | ClearDone | OperationRefused | OperationTimedOut
+                      | DownloadInvalid)
 
 
 class MissionClient:
@@ -207,7 +223,11 @@ class MissionClient:
 
     def _on_item(self, msg: Any, now_ns: int) -> list[Message]:
         if msg.seq == len(self._received):
-            self._received.append(item_from_message(msg))
+            item = item_from_message(msg)
+            if isinstance(item, MissionRefusal):
+                self._end(DownloadInvalid(item))
+                return [self._message(mavlink.MAVLink_mission_ack_message, item.result, MISSION)]
+            self._received.append(item)
             self._retries = 0
             if len(self._received) == self._count:
                 return self._finish_download()

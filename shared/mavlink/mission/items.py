@@ -5,10 +5,17 @@ A :class:`MissionItem` is a MISSION_ITEM_INT without its addressing, ``seq``,
 are rounded to float32 on construction, as the wire does, so an item survives an
 upload and download unchanged (``==``). What a command means (our goal items)
 lives in ``goal.py``.
+
+Received items are checked before they become a :class:`MissionItem`
+(:func:`item_from_message`): the frame must be a MAV_FRAME (reserved numbers and
+ENUM_END are refused), and a deprecated MISSION_ITEM's float x/y must be finite and
+fit MISSION_ITEM_INT's int32 once scaled for its frame (a latitude of 1000 deg does
+not; the vehicle could not send it back).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from shared.mavlink.address import Address
@@ -20,6 +27,11 @@ _GLOBAL_FRAMES = frozenset({
     mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
     mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT, mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT,
 })
+#: The MAV_FRAMEs an item may name: common.xml's, without its reserved numbers and ENUM_END.
+KNOWN_FRAMES = frozenset(
+    value for value, entry in mavlink.enums["MAV_FRAME"].items()
+    if "_RESERVED_" not in entry.name and not entry.name.endswith("_ENUM_END"))
+_INT32_MIN, _INT32_MAX = -2**31, 2**31 - 1
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,17 +68,43 @@ class MissionItem:
 
 def item_from_message(
     msg: mavlink.MAVLink_mission_item_int_message | mavlink.MAVLink_mission_item_message,
-) -> MissionItem:
+) -> MissionItem | MissionRefusal:
     """The item a MISSION_ITEM_INT carries, or a deprecated MISSION_ITEM (float x/y,
-    converted to MISSION_ITEM_INT's integer scaling for its frame)."""
+    converted to MISSION_ITEM_INT's integer scaling for its frame: degrees * 1e7 in a
+    global frame, metres * 1e4 in a local one, as is in ``MAV_FRAME_MISSION``).
+
+    Returns:
+        The item, or why it cannot be one (module docstring), labelled with
+        ``msg.seq``: MAV_MISSION_UNSUPPORTED_FRAME for an unknown frame,
+        MAV_MISSION_INVALID_PARAM5_X / PARAM6_Y for a MISSION_ITEM x / y that is not
+        finite or out of int32 range once scaled.
+    """
+    if msg.frame not in KNOWN_FRAMES:
+        return MissionRefusal(mavlink.MAV_MISSION_UNSUPPORTED_FRAME,
+                              f"item {msg.seq}: frame {msg.frame} is not a MAV_FRAME")
     x, y = msg.x, msg.y
     if isinstance(msg, mavlink.MAVLink_mission_item_message):
         scale = 1e7 if msg.frame in _GLOBAL_FRAMES else (
             1.0 if msg.frame == mavlink.MAV_FRAME_MISSION else 1e4)
-        x, y = round(msg.x * scale), round(msg.y * scale)
+        x, y = _scaled(msg.x, scale), _scaled(msg.y, scale)
+        if x is None:
+            return MissionRefusal(mavlink.MAV_MISSION_INVALID_PARAM5_X,
+                                  f"item {msg.seq}: x {msg.x} out of range in frame {msg.frame}")
+        if y is None:
+            return MissionRefusal(mavlink.MAV_MISSION_INVALID_PARAM6_Y,
+                                  f"item {msg.seq}: y {msg.y} out of range in frame {msg.frame}")
     return MissionItem(command=msg.command, frame=msg.frame, param1=msg.param1,
                        param2=msg.param2, param3=msg.param3, param4=msg.param4,
                        x=int(x), y=int(y), z=msg.z, autocontinue=bool(msg.autocontinue))
+
+
+def _scaled(value: float, scale: float) -> int | None:
+    """``value * scale`` rounded, or None if not finite or outside int32."""
+    product = value * scale
+    if not math.isfinite(product):
+        return None
+    scaled = round(product)
+    return scaled if _INT32_MIN <= scaled <= _INT32_MAX else None
 
 
 @dataclass(frozen=True, slots=True)

@@ -23,6 +23,13 @@ Rules:
    MISSION_ACK result, with a STATUSTEXT giving the reason, and the mission in
    force is kept (:class:`MissionRejected`). Clears pass the hook too (with no
    items), so the application can refuse to clear a mission it is running.
+   Every message is checked before use: a MISSION_COUNT above ``mission_max_items``
+   gets NO_SPACE, and one the application's ``admit`` hook refuses (a mission
+   running) gets its refusal before any item is requested; an item that is not
+   one (:func:`~shared.mavlink.mission.items.item_from_message`: an unknown frame,
+   a legacy x/y that is not finite or out of range) ends the upload with its
+   MISSION_RESULT (UNSUPPORTED_FRAME, INVALID_PARAM5_X...) and a STATUSTEXT
+   (:class:`MissionRejected`).
 3. The vehicle owns the upload's retry loop: it re-requests the expected item
    after ``mission_item_timeout_ns``, up to ``mission_retries`` times, then
    cancels (MISSION_ACK OPERATION_CANCELLED, :class:`UploadFailed`). Items out of
@@ -62,6 +69,8 @@ from shared.mavlink.statustext import statustext_messages
 
 #: Validation hook: None accepts the items, a refusal keeps the old mission.
 Validator = Callable[[tuple[MissionItem, ...]], MissionRefusal | None]
+#: Admission hook, asked before an upload starts: None lets it start, a refusal answers it.
+Admission = Callable[[], MissionRefusal | None]
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 
@@ -90,7 +99,10 @@ class MissionCleared:
 
 @dataclass(frozen=True, slots=True)
 class MissionRejected:
-    """The validation hook refused a mission or a clear; the old mission stays."""
+    """A mission, a clear or an upload's item was refused (rule 2); the old mission stays.
+
+    ``items`` are those received (for an item refused, the ones before it).
+    """
 
     refusal: MissionRefusal
     items: tuple[MissionItem, ...]
@@ -135,13 +147,16 @@ class MissionServer:
         config: timeouts, retries and the item limit.
         validate: called with the complete items of every upload (and ``()`` for a
             clear); returns None to accept or a :class:`MissionRefusal`.
+        admit: called on a MISSION_COUNT of a new upload, before any item is requested;
+            returns None to go on or a :class:`MissionRefusal` to answer it with.
     """
 
     def __init__(self, address: Address, config: MavlinkConfig | None = None,
-                 validate: Validator | None = None) -> None:
+                 validate: Validator | None = None, admit: Admission | None = None) -> None:
         self.address = address
         self.config = config if config is not None else MavlinkConfig()
         self._validate = validate
+        self._admit = admit
         self._items: tuple[MissionItem, ...] = ()
         self._current = 0
         self._run_state = mavlink.MISSION_STATE_NOT_STARTED
@@ -223,6 +238,10 @@ class MissionServer:
         if msg.count == 0:
             self._upload = None
             return self._finish(source, ())
+        refusal = self._admit() if self._admit is not None else None
+        if refusal is not None:
+            self._upload = None
+            return self._refuse(source, refusal, ())
         self._upload = _Upload(source, msg.count)
         return [self._request(self._upload, now_ns)]
 
@@ -239,7 +258,11 @@ class MissionServer:
             upload.legacy = True
         if msg.seq != len(upload.items):
             return [self._request(upload, now_ns)]
-        upload.items.append(item_from_message(msg))
+        item = item_from_message(msg)
+        if isinstance(item, MissionRefusal):
+            self._upload = None
+            return self._refuse(source, item, tuple(upload.items))
+        upload.items.append(item)
         upload.retries = 0
         if len(upload.items) < upload.count:
             return [self._request(upload, now_ns)]
@@ -335,9 +358,7 @@ class MissionServer:
         refusal = self._validate(items) if self._validate is not None else None
         if refusal is not None:
             result = refusal.result
-            self._events.append(MissionRejected(refusal, items, source))
-            out: list[Message] = [self._ack(source, result, mission_type)]
-            out += self._notice(f"mission refused: {refusal.reason}")
+            out = self._refuse(source, refusal, items, mission_type)
         else:
             result = mavlink.MAV_MISSION_ACCEPTED
             self._items, self._current = items, 0
@@ -348,6 +369,13 @@ class MissionServer:
         if items:
             self._last_ack = (source, len(items), result)
         return out
+
+    def _refuse(self, source: Address, refusal: MissionRefusal, items: tuple[MissionItem, ...],
+                mission_type: int = MISSION) -> list[Message]:
+        """Answer an upload, an item or a clear with ``refusal`` (rule 2)."""
+        self._events.append(MissionRejected(refusal, items, source))
+        return [self._ack(source, refusal.result, mission_type),
+                *self._notice(f"mission refused: {refusal.reason}")]
 
     def _fail_upload(self, reason: str) -> None:
         assert self._upload is not None

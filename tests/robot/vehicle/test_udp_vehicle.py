@@ -1,16 +1,22 @@
 """UdpVehicle: the vehicle sending first (udpout) to a listening ground station, datagrams
-parsed on their own, the reply address moved only by verified messages, and closing."""
+parsed on their own, the reply address moved only by verified messages, a thread that
+outlives a handler's exception, and closing."""
 
 from __future__ import annotations
 
+import select
+import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
+from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import ManualClock
 from shared.errors import IllegalEventError
-from shared.mavlink.dialect import mavlink
+from shared.mavlink.dialect import make_codec, mavlink
+from shared.mavlink.modes import Mode
 from shared.udp_link import UdpLink
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.robot.vehicle.harness import Ground, Net, make_vehicle
@@ -65,6 +71,32 @@ def test_an_unknown_message_does_not_divert_a_listening_vehicle(
             if m.get_type() == "HEARTBEAT" and t > sent_ns] == [1_000_000_000]
     ack = net.command(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_HEARTBEAT)
     assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+
+
+#: Wall-clock limit for the live thread's answers, s: generous, for a loaded machine.
+PATIENCE_S = 60.0
+
+
+def test_the_io_thread_outlives_a_handler_exception(live_vehicle: UdpVehicle,
+                                                    app: FakeApp) -> None:
+    def broken(*args: Any) -> None:
+        raise RuntimeError("a bug in the application")
+
+    app.manual_control = broken  # type: ignore[method-assign]
+    ground = make_codec(255, 190)
+    types: list[str] = []
+    with UdpLink.open(f"udpout:127.0.0.1:{live_vehicle.link.local_port}") as link:
+        link.send(ground.pack(mavlink.MAVLink_manual_control_message(1, 500, 0, 0, 0, 0)))
+        link.send(ground.pack(mavlink.MAVLink_command_long_message(
+            1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+            int(Mode.HOLD), 0, 0, 0, 0, 0)))
+        limit = time.monotonic() + PATIENCE_S
+        while not ("COMMAND_ACK" in types and "HEARTBEAT" in types[types.index("COMMAND_ACK"):]):
+            assert time.monotonic() < limit, f"the vehicle went quiet after {types}"
+            select.select([link], [], [], 0.1)
+            types += [m.get_type() for data, _ in link.receive() for m in ground.parse(data)]
+    assert app.state.mode is Mode.HOLD
+    assert live_vehicle.endpoint.faults.counts() == {"MANUAL_CONTROL: RuntimeError": 1}
 
 
 def test_close_is_idempotent_and_final(tmp_path: Path, app: FakeApp,

@@ -7,12 +7,15 @@ ACKs, resends with rising confirmation, IN_PROGRESS, time-outs.
 from __future__ import annotations
 
 import math
+import random
 from typing import Any
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shared.errors import LocalProtocolError
-from shared.mavlink.address import Address
+from shared.mavlink.address import Address, is_for
 from shared.mavlink.commands.gcs import CommandClient, CommandDone, CommandTimedOut, result_name
 from shared.mavlink.commands.intervals import MessageIntervals
 from shared.mavlink.commands.vehicle import (
@@ -24,6 +27,7 @@ from shared.mavlink.commands.vehicle import (
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.modes import Mode
 from tests.shared.mavlink.link import GCS, VEHICLE
+from tools.bench.hostile_messages import random_message
 
 NAN = math.nan
 HEARTBEAT, HOME = mavlink.MAVLINK_MSG_ID_HEARTBEAT, mavlink.MAVLINK_MSG_ID_HOME_POSITION
@@ -178,6 +182,42 @@ def test_broadcast_commands_are_answered() -> None:
         0, 0, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, 4, 0, 0, 0, 0, 0))
     assert ack_of(replies)[1] == mavlink.MAV_RESULT_ACCEPTED
     assert Address(*[replies[0].target_system, replies[0].target_component]) == GCS
+
+
+def test_infinite_param_or_unknown_frame_is_denied_before_the_handler() -> None:
+    robot = Robot()
+    inf = math.inf
+    assert ack_of(robot.command(mavlink.MAV_CMD_DO_SET_MODE, 1, 4, -inf))[1] == \
+        mavlink.MAV_RESULT_DENIED
+    assert ack_of(robot.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1, NAN, NAN, NAN, NAN,
+                                NAN, inf))[1] == mavlink.MAV_RESULT_DENIED
+    assert ack_of(robot.exchange(mavlink.MAVLink_command_int_message(
+        1, 1, 200, mavlink.MAV_CMD_DO_SET_MODE, 0, 0, 1, 4, 0, 0, 0, 0, 0)))[1] == \
+        mavlink.MAV_RESULT_DENIED
+    assert ack_of(robot.command(31999, inf))[1] == mavlink.MAV_RESULT_UNSUPPORTED
+    assert robot.calls == []
+
+
+@settings(derandomize=True, max_examples=150, deadline=None)
+@given(st.randoms(use_true_random=False),
+       st.sampled_from([mavlink.MAVLink_command_long_message,
+                        mavlink.MAVLink_command_int_message]))
+def test_random_commands_get_one_ack_and_infinite_params_never_reach_a_handler(
+        rng: random.Random, cls: type[Message]) -> None:
+    robot = Robot()
+    msg = random_message(rng, cls, VEHICLE)
+    replies = robot.exchange(msg)
+    if not is_for(msg, VEHICLE):
+        assert replies == []
+        return
+    assert replies[0].get_type() == "COMMAND_ACK" and replies[0].command == msg.command
+    assert [m.get_type() for m in replies].count("COMMAND_ACK") == 1
+    params = ([msg.param1, msg.param2, msg.param3, msg.param4, msg.z]
+              if cls is mavlink.MAVLink_command_int_message
+              else [getattr(msg, f"param{i}") for i in range(1, 8)])
+    if any(math.isinf(p) for p in params):
+        assert replies[0].result in (mavlink.MAV_RESULT_DENIED, mavlink.MAV_RESULT_UNSUPPORTED)
+        assert robot.calls == []
 
 
 # -- the ground station's end -------------------------------------------------------

@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+import math
+import random
+from typing import Any
+
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared.config import MavlinkConfig
 from shared.errors import LocalProtocolError
 from shared.mavlink.address import Address
-from shared.mavlink.dialect import mavlink
+from shared.mavlink.dialect import make_codec, mavlink
 from shared.mavlink.mission.gcs import (
     ClearDone,
     DownloadDone,
+    DownloadInvalid,
     MissionClient,
     Operation,
     OperationRefused,
@@ -20,7 +25,12 @@ from shared.mavlink.mission.gcs import (
     UploadDone,
 )
 from shared.mavlink.mission.goal import Goal, goals_from_items
-from shared.mavlink.mission.items import MissionItem, MissionRefusal, item_from_message
+from shared.mavlink.mission.items import (
+    KNOWN_FRAMES,
+    MissionItem,
+    MissionRefusal,
+    item_from_message,
+)
 from shared.mavlink.mission.vehicle import (
     CurrentSet,
     MissionCleared,
@@ -30,6 +40,7 @@ from shared.mavlink.mission.vehicle import (
     UploadFailed,
 )
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events, of_type
+from tools.bench.hostile_messages import HANDLED_MESSAGES, random_message
 
 KNOWN_KEYS = set(range(100))
 
@@ -328,7 +339,8 @@ def test_upload_and_download_survive_20_percent_loss(seed: int) -> None:
 finite32 = st.floats(allow_nan=False, allow_infinity=False, width=32)
 
 
-@given(st.builds(MissionItem, command=st.integers(0, 65535), frame=st.integers(0, 21),
+@given(st.builds(MissionItem, command=st.integers(0, 65535),
+                 frame=st.sampled_from(sorted(KNOWN_FRAMES)),
                  param1=finite32, param2=finite32, param3=finite32, param4=finite32,
                  x=st.integers(-2**31, 2**31 - 1), y=st.integers(-2**31, 2**31 - 1), z=finite32,
                  autocontinue=st.booleans()),
@@ -338,3 +350,119 @@ def test_any_item_survives_the_wire_unchanged(item: MissionItem, seq: int) -> No
     (msg,) = vehicle.codec.parse(ground.codec.pack(item.to_message(seq, VEHICLE)))
     assert (msg.seq, msg.mission_type) == (seq, mavlink.MAV_MISSION_TYPE_MISSION)
     assert item_from_message(msg) == item
+
+
+# -- hostile input (issue 15) ------------------------------------------------------------
+
+NAN, INF = math.nan, math.inf
+LEGACY_ITEM = mavlink.MAVLink_mission_item_message
+ITEM_CLASSES = (LEGACY_ITEM, mavlink.MAVLink_mission_item_int_message)
+
+
+def legacy_item(seq: int, frame: int, x: float, y: float) -> Any:
+    """A deprecated MISSION_ITEM of goal key image 1 for the vehicle."""
+    return LEGACY_ITEM(1, 1, seq, frame, 31000, 0, 1, 1, 0, 0, 0, x, y, 0.0)
+
+
+@pytest.mark.parametrize(("frame", "x", "y", "result"), [
+    (mavlink.MAV_FRAME_MISSION, NAN, 0.0, mavlink.MAV_MISSION_INVALID_PARAM5_X),
+    (mavlink.MAV_FRAME_MISSION, INF, 0.0, mavlink.MAV_MISSION_INVALID_PARAM5_X),
+    (mavlink.MAV_FRAME_LOCAL_NED, 0.0, -INF, mavlink.MAV_MISSION_INVALID_PARAM6_Y),
+    (mavlink.MAV_FRAME_GLOBAL, 1000.0, 8.5, mavlink.MAV_MISSION_INVALID_PARAM5_X),
+    (mavlink.MAV_FRAME_LOCAL_NED, 1.0, 3e5, mavlink.MAV_MISSION_INVALID_PARAM6_Y),  # 3e9 > int32
+])
+def test_legacy_item_not_finite_or_out_of_range_is_refused_and_the_mission_kept(
+        frame: int, x: float, y: float, result: int) -> None:
+    link, client, server = make_link()
+    upload(link, client, goal_items(1, 2))
+    events(client), events(server)
+    link.send(link.ground, [mavlink.MAVLink_mission_count_message(1, 1, 2, 0),
+                            legacy_item(0, frame, x, y)])
+    link.deliver()
+    assert of_type(link.ground.received, "MISSION_ACK")[-1].type == result
+    (rejected,) = events(server)
+    assert isinstance(rejected, MissionRejected) and rejected.refusal.result == result
+    axis = "x" if result == mavlink.MAV_MISSION_INVALID_PARAM5_X else "y"
+    assert rejected.refusal.reason.startswith(f"item 0: {axis} ")
+    notice = "".join(m.text for m in of_type(link.ground.received, "STATUSTEXT")[-2:])
+    assert notice.startswith("mission refused: item 0")
+    assert server.get_timer() is None  # the upload ended: nothing more is requested
+    link.send(link.ground, client.download(link.now_ns))
+    link.run(lambda: client.operation is None)
+    assert events(client) == [DownloadDone(goal_items(1, 2))]
+
+
+@pytest.mark.parametrize("frame", [13, mavlink.MAV_FRAME_ENUM_END, 200])
+def test_item_in_no_mav_frame_is_unsupported_frame(frame: int) -> None:
+    link, client, server = make_link()
+    upload(link, client, (MissionItem(command=31000, frame=frame, param1=1),))
+    assert events(client) == [OperationRefused(Operation.UPLOAD,
+                                               mavlink.MAV_MISSION_UNSUPPORTED_FRAME)]
+    assert server.items == ()
+
+
+def test_admission_hook_refuses_an_upload_before_any_item_is_requested() -> None:
+    running = MissionRefusal(mavlink.MAV_MISSION_DENIED, "the mission is running")
+    client = MissionClient(GCS, VEHICLE)
+    server = MissionServer(VEHICLE, admit=lambda: running)
+    link = Link(Endpoint(GCS, client), Endpoint(VEHICLE, server))
+    upload(link, client, goal_items(1, 2))
+    assert events(client) == [OperationRefused(Operation.UPLOAD, mavlink.MAV_MISSION_DENIED)]
+    assert events(server) == [MissionRejected(running, (), GCS)]
+    assert of_type(link.ground.received, "MISSION_REQUEST_INT") == []
+    assert of_type(link.ground.received, "STATUSTEXT")[-1].text == \
+        "mission refused: the mission is running"
+
+
+def test_station_cancels_a_download_of_an_item_that_is_not_one() -> None:
+    client = MissionClient(GCS, VEHICLE)
+    link = Link(Endpoint(GCS, client), Endpoint(VEHICLE))
+    link.send(link.ground, client.download(0))
+    link.send(link.vehicle, [mavlink.MAVLink_mission_count_message(255, 190, 1, 0),
+                             LEGACY_ITEM(255, 190, 0, 0, 31000, 0, 1, 1, 0, 0, 0, NAN, 0, 0)])
+    link.deliver()
+    (invalid,) = events(client)
+    assert isinstance(invalid, DownloadInvalid)
+    assert invalid.refusal.result == mavlink.MAV_MISSION_INVALID_PARAM5_X
+    assert of_type(link.vehicle.received, "MISSION_ACK")[-1].type == \
+        mavlink.MAV_MISSION_INVALID_PARAM5_X
+    assert client.operation is None
+
+
+@settings(derandomize=True, max_examples=200, deadline=None)
+@given(st.randoms(use_true_random=False), st.sampled_from(ITEM_CLASSES))
+def test_any_item_after_a_count_is_acked_and_what_is_stored_downloads(
+        rng: random.Random, cls: type) -> None:
+    server = MissionServer(VEHICLE)  # stores anything the protocol lets through
+    ground, vehicle = make_codec(255, 190), make_codec(1, 1)
+
+    def exchange(msg: Any) -> list[Any]:
+        (received,) = vehicle.parse(ground.pack(msg))
+        return [reply for out in server.handle_message(received, 0)
+                for reply in ground.parse(vehicle.pack(out))]
+
+    exchange(mavlink.MAVLink_mission_count_message(1, 1, 1, 0))
+    item = random_message(rng, cls, VEHICLE)
+    item.target_system, item.target_component, item.seq, item.mission_type = 1, 1, 0, 0
+    ack, *notices = exchange(item)
+    assert ack.get_type() == "MISSION_ACK"
+    assert {m.get_type() for m in notices} <= {"STATUSTEXT"}
+    assert (ack.type == mavlink.MAV_MISSION_ACCEPTED) == (len(server.items) == 1)
+    if server.items:
+        (download,) = exchange(mavlink.MAVLink_mission_request_int_message(1, 1, 0, 0))
+        assert repr(item_from_message(download)) == repr(server.items[0])  # NaN params too
+
+
+@settings(derandomize=True, max_examples=60, deadline=None)
+@given(st.randoms(use_true_random=False), st.integers(1, 30))
+def test_random_mission_messages_never_raise_and_every_reply_packs(
+        rng: random.Random, count: int) -> None:
+    server = MissionServer(VEHICLE, validate=refuse_unknown_keys)
+    ground, vehicle = make_codec(255, 190), make_codec(1, 1)
+    mission_classes = [c for c in HANDLED_MESSAGES if c.__name__.startswith("MAVLink_mission")]
+    for i in range(count):
+        msg = random_message(rng, rng.choice(mission_classes), VEHICLE)
+        (received,) = vehicle.parse(ground.pack(msg))
+        now_ns = i * 300_000_000
+        for out in server.handle_message(received, now_ns) + server.handle_timer(now_ns):
+            vehicle.pack(out)

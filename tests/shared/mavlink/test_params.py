@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import random
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shared.config import MavlinkConfig
 from shared.errors import ConfigError, LocalProtocolError
-from shared.mavlink.dialect import mavlink, to_float32
+from shared.mavlink.dialect import make_codec, mavlink, to_float32
 from shared.mavlink.params.gcs import (
     ParamClient,
     ParamOperation,
@@ -18,6 +22,7 @@ from shared.mavlink.params.gcs import (
 from shared.mavlink.params.table import ParamSpec, ParamTable
 from shared.mavlink.params.vehicle import ParamChanged, ParamRefused, ParamServer
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events, of_type
+from tools.bench.hostile_messages import random_message
 
 
 def make_table(n_extra: int = 0) -> ParamTable:
@@ -183,3 +188,27 @@ def test_table_refuses_bad_declarations() -> None:
         ParamTable([ParamSpec("B", 5, 0, 1, "")])
     with pytest.raises(ConfigError, match="param C: no such parameter"):
         make_table().set("C", 0)
+
+
+PARAM_REQUESTS = (mavlink.MAVLink_param_set_message, mavlink.MAVLink_param_request_read_message,
+                  mavlink.MAVLink_param_request_list_message)
+
+
+@settings(derandomize=True, max_examples=80, deadline=None)
+@given(st.randoms(use_true_random=False), st.integers(1, 20))
+def test_random_requests_never_raise_and_every_value_stays_in_its_range(
+        rng: random.Random, count: int) -> None:
+    table = make_table()
+    server = ParamServer(table, VEHICLE)
+    ground, vehicle = make_codec(255, 190), make_codec(1, 1)
+    for i in range(count):
+        msg = random_message(rng, rng.choice(PARAM_REQUESTS), VEHICLE)
+        if isinstance(msg, mavlink.MAVLink_param_set_message) and rng.random() < 0.5:
+            msg.param_id = rng.choice(list(table.values())).encode("ascii")
+        (received,) = vehicle.parse(ground.pack(msg))
+        now_ns = i * 100_000_000
+        for out in server.handle_message(received, now_ns) + server.handle_timer(now_ns):
+            ground.parse(vehicle.pack(out))
+        events(server)
+    for spec in table:
+        assert spec.problem(table.value(spec.name)) is None, spec.name
