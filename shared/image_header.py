@@ -28,6 +28,8 @@ Rules:
    to the next marker (``FF`` followed by neither ``00`` stuffing nor RST0-7, B.1.1.5).
    Progressive files decode every scan over the whole picture, so at most
    :data:`MAX_JPEG_SCANS` scans are accepted.
+4. At most :data:`MAX_SEGMENTS` chunks or marker segments: with the file's size capped
+   by the caller, the walk takes milliseconds whatever the file.
 
 The walk is linear in the file's size and allocates nothing in proportion to what the
 file declares. Errors are one line: what is wrong, with the byte offset.
@@ -54,6 +56,9 @@ MAX_PNG_COMPRESSED_ANCILLARY_BYTES = 1 << 16
 #: Scans a JPEG may hold: a progressive camera JPEG has about 10; each costs a pass
 #: over the whole picture.
 MAX_JPEG_SCANS = 64
+#: Chunks (PNG) or marker segments (JPEG) a file may hold: encoders write a few dozen,
+#: or one IDAT per 8 KiB; the cap keeps the walk's Python loop short on any file.
+MAX_SEGMENTS = 1 << 14
 
 _PNG_MAX_LENGTH = (1 << 31) - 1  # section 5.3: a chunk length is at most 2^31 - 1
 _PNG_COMPRESSED_ANCILLARY = frozenset({b"zTXt", b"iTXt", b"iCCP"})
@@ -69,6 +74,8 @@ _JPEG_SOF = frozenset({0xC0, 0xC1, 0xC2, 0xC9, 0xCA})  # DCT, sequential or prog
 _JPEG_OTHER_SOF = frozenset({0xC3, 0xC5, 0xC6, 0xC7, 0xCB, 0xCD, 0xCE, 0xCF})
 _JPEG_SOS, _JPEG_EOI, _JPEG_SOI = 0xDA, 0xD9, 0xD8
 _JPEG_STANDALONE = frozenset({0x01, *range(0xD0, 0xD8)})  # TEM, RST0-7: no length
+#: A marker's FF and the fill bytes (more FF, B.1.1.2) before its code.
+_JPEG_FILL = re.compile(rb"\xff+(?=[^\xff])")
 #: The start of the next marker after entropy-coded data: FF not followed by a stuffed
 #: 00, a restart marker or another FF (fill).
 _JPEG_NEXT_MARKER = re.compile(rb"\xff(?=[^\x00\xd0-\xd7\xff])")
@@ -143,7 +150,11 @@ def _png_header(data: bytes, where: str | Path, error: type[InputError]) -> Imag
     idat_seen = False
     compressed_ancillary = 0
     pos = len(PNG_SIGNATURE)
+    chunks = 0
     while True:
+        chunks += 1
+        if chunks > MAX_SEGMENTS:
+            raise corrupt(f"more than {MAX_SEGMENTS} chunks (at byte {pos})")
         if pos + 12 > len(data):
             raise corrupt(f"cut short at byte {pos} (no IEND chunk)")
         length, kind = struct.unpack_from(">I4s", data, pos)
@@ -204,13 +215,17 @@ def _jpeg_header(data: bytes, where: str | Path, error: type[InputError]) -> Ima
     header: ImageHeader | None = None
     scans = 0
     pos = len(JPEG_SOI)
+    segments = 0
     while pos < len(data):
         if data[pos] != 0xFF:
             raise corrupt(f"byte {pos} is 0x{data[pos]:02x}, not a marker")
-        while pos + 1 < len(data) and data[pos + 1] == 0xFF:  # fill bytes, B.1.1.2
-            pos += 1
-        if pos + 1 >= len(data):
+        segments += 1
+        if segments > MAX_SEGMENTS:
+            raise corrupt(f"more than {MAX_SEGMENTS} marker segments (at byte {pos})")
+        fill = _JPEG_FILL.match(data, pos)
+        if fill is None:  # only fill bytes to the end of the file
             break
+        pos = fill.end() - 1
         marker = data[pos + 1]
         if marker == _JPEG_EOI:
             break

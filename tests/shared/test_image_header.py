@@ -15,6 +15,7 @@ from shared.errors import InputError, MemoryFormatError
 from shared.image_header import (
     MAX_JPEG_SCANS,
     MAX_PNG_COMPRESSED_ANCILLARY_BYTES,
+    MAX_SEGMENTS,
     PNG_SIGNATURE,
     ImageFormat,
     ImageHeader,
@@ -224,3 +225,15 @@ def test_fuzz_random_bytes_after_a_signature(tail: bytes) -> None:
             assert "\n" not in str(e)
         else:
             assert header.width_px >= 1 and header.height_px >= 1
+
+
+def test_the_walk_is_short_on_any_file() -> None:
+    # Many empty chunks, a run of fill bytes: refused or read at C speed, no long loop.
+    data = png(RNG_IMAGE)
+    many = png_chunk(b"tEXt", b"") * (MAX_SEGMENTS + 1)
+    assert f"more than {MAX_SEGMENTS} chunks" in refused(with_chunk_after_ihdr(data, many))
+    comments = b"\xff\xfe\x00\x02" * (MAX_SEGMENTS + 1)
+    assert f"more than {MAX_SEGMENTS} marker segments" in refused(b"\xff\xd8" + comments)
+    frame = jpeg(RNG_IMAGE)
+    fill = frame[:2] + b"\xff" * (1 << 22) + frame[2:]
+    assert read_image_header(fill, "x.jpg").width_px == 64
