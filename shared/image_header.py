@@ -149,6 +149,7 @@ def _png_header(data: bytes, where: str | Path, error: type[InputError]) -> Imag
     header: ImageHeader | None = None
     idat_seen = False
     compressed_ancillary = 0
+    view = memoryview(data)
     pos = len(PNG_SIGNATURE)
     chunks = 0
     while True:
@@ -164,9 +165,9 @@ def _png_header(data: bytes, where: str | Path, error: type[InputError]) -> Imag
         if length > _PNG_MAX_LENGTH or pos + 12 + length > len(data):
             raise corrupt(f"chunk {name} at byte {pos} declares {length} bytes, the file "
                           f"has {len(data) - pos - 12} after its header")
-        body = data[pos + 8:pos + 8 + length]
+        body = view[pos + 8:pos + 8 + length]  # no copy, however long the chunk
         (crc,) = struct.unpack_from(">I", data, pos + 8 + length)
-        if zlib.crc32(kind + body) != crc:
+        if zlib.crc32(body, zlib.crc32(kind)) != crc:
             raise corrupt(f"chunk {name} at byte {pos}: CRC mismatch")
         if header is None:
             if kind != b"IHDR":
@@ -189,7 +190,7 @@ def _png_header(data: bytes, where: str | Path, error: type[InputError]) -> Imag
         pos += 12 + length
 
 
-def _png_ihdr(body: bytes, corrupt: _Corrupt) -> ImageHeader:
+def _png_ihdr(body: memoryview, corrupt: _Corrupt) -> ImageHeader:
     """The IHDR chunk's 13 bytes as a header (section 11.2.2)."""
     if len(body) != 13:
         raise corrupt(f"IHDR holds {len(body)} bytes, not 13")
