@@ -13,10 +13,10 @@ The bombs are built here, also for the tests:
   OpenCV's own cap), with a few bytes of image data;
 - :func:`bogus_chunk_png`: a small valid PNG with a tEXt chunk declaring 2^31 - 1 bytes
   (with OpenCV alone: 8 s and +2 GB before it gives up);
-- :func:`large_png`: a valid all-black 30000x30000 PNG in ~880 KB (OpenCV alone: 4 s,
+- :func:`large_png`: a valid all-black 30000x30000 PNG in 911 KB (OpenCV alone: 4 s,
   +1.8 GB).
 
-Runs in about 10 s (five child processes, each importing OpenCV; building the large PNG
+Runs in about 10 s (four child processes, each importing OpenCV; building the large PNG
 takes ~1 s).
 """
 
