@@ -27,14 +27,13 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import ParamSpec
 
-import cv2
-
 from robot.config import VmnavConfig
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mode_events import Event, PathNotStored, PathStored, PhotoFound, PhotoNotFound
 from shared.camera_model import CameraModel
-from shared.errors import VmnavError
+from shared.errors import InputError, VmnavError
+from shared.image_decode import photo_pixel_limit, read_grey
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
 from shared.memory.store import check_no_orphans
 
@@ -79,18 +78,24 @@ class Worker:
 def find_photo(path: Path, localizer: Localizer, camera: CameraModel) -> Event:
     """Read the photo at ``path`` and find it among the key images of ``localizer``.
 
+    The photo came from outside (an FTP upload): its header is checked before it is
+    decoded, with a budget of a few times the camera's pixels
+    (:func:`shared.image_decode.read_grey`), so a forged file costs neither memory nor
+    time here.
+
     Args:
-        path: an image file (any format OpenCV reads), read as grey.
+        path: a PNG or JPEG file, read as grey.
         localizer: over the memory in force (read only).
         camera: the memory's camera; the photo must have its size.
 
     Returns:
-        :class:`PhotoFound`, or :class:`PhotoNotFound` saying why (unreadable, another
-        size than the camera's, not in the memory).
+        :class:`PhotoFound`, or :class:`PhotoNotFound` saying why (unreadable or
+        refused, another size than the camera's, not in the memory).
     """
-    photo = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if photo is None:
-        return PhotoNotFound(logging.ERROR, f"photo {path.name}: not a readable image")
+    try:
+        photo = read_grey(path, photo_pixel_limit(camera.width, camera.height))
+    except InputError as e:
+        return PhotoNotFound(logging.ERROR, f"photo {path.name}: {e.problem}")
     if photo.shape != (camera.height, camera.width):
         return PhotoNotFound(logging.ERROR,
                              f"photo {path.name}: {photo.shape[1]}x{photo.shape[0]} px, the "

@@ -137,6 +137,7 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     """Dispatch the goal; with ``--wait``, 0 when reached and 1 when not."""
     from ground.telemetry_text import not_reached_text
     from shared.errors import InputError
+    from shared.image_decode import check_image
     from shared.mavlink.mission.goal import Goal
 
     if (args.goal_key is None) == (args.image is None):
@@ -147,6 +148,7 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
             data = args.image.read_bytes()
         except OSError as e:
             raise InputError(args.image, f"cannot read the goal photo: {e.strerror}") from None
+        check_image(data, args.image)  # refused here in one line rather than by the robot
         photo_id = station.goto_photo(data, args.image.suffix)
         print(f"vehicle {vehicle.system_id}: going to photo {args.image.name} "
               f"(uploaded as photo {photo_id})")

@@ -17,11 +17,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from shared.aria.sip import Sip, SipFlags, SipType
+from shared.errors import InputError
+from shared.image_decode import decode_grey
 from shared.interfaces import BaseState
 from shared.logs.schemas import LOG_LEVELS, POINTS_ANNOTATION_TYPES
 
@@ -71,15 +72,17 @@ def image_from_compressed(message: Mapping[str, Any]) -> tuple[npt.NDArray[np.ui
         (``jpeg``, ``png``, ...; ``""`` when missing).
 
     Raises:
-        ValueError: no base64 ``data`` field, or data that does not decode as an image.
+        ValueError: no base64 ``data`` field, or data that is not a PNG or JPEG within
+            :func:`shared.image_decode.decode_grey`'s limits, or does not decode.
     """
     try:
         data = base64.b64decode(message["data"], validate=True)
     except (KeyError, TypeError, binascii.Error):
         raise ValueError("no base64 'data' field") from None
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
-    if image is None:
-        raise ValueError("cannot be decoded as an image")
+    try:
+        image = decode_grey(data, "data")
+    except InputError as e:
+        raise ValueError(e.problem) from None
     return image, str(message.get("format", ""))
 
 

@@ -57,6 +57,7 @@ from shared.atomic_file import write_bytes_atomic, write_text_atomic
 from shared.calibration import camera_from_dict, camera_to_dict
 from shared.camera_model import CameraModel
 from shared.errors import CalibrationError, InputError, MemoryFormatError
+from shared.image_decode import check_image
 from shared.json_file import parse_json
 from shared.memory.graph import VisualMemory
 from shared.memory.keyframe import (
@@ -333,6 +334,7 @@ def _read_png(path: Path, shape: tuple[int, int]) -> GreyImage:
         raise MemoryFormatError(path, "not a PNG file")
     if not data.endswith(_PNG_END):
         raise MemoryFormatError(path, "truncated PNG (it does not end with an IEND chunk)")
+    check_image(data, path, error=MemoryFormatError)  # no bomb reaches the decoder
     image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise MemoryFormatError(path, "corrupt PNG: cannot decode it")

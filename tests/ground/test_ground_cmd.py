@@ -7,6 +7,7 @@ import re
 import time
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -19,6 +20,7 @@ from shared.udp_link import UdpLink
 from tests.ground.conftest import run_ground
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.shared.memory.builders import loop_memory
+from tools.bench.hostile_images import bogus_chunk_png
 from tools.cli import main
 
 Capsys = pytest.CaptureFixture[str]
@@ -124,13 +126,24 @@ def test_goto_wait_not_reached(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys
 def test_goto_image_uploads_the_photo_and_sends_the_command(
         vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
     photo = tmp_path / "goal.jpg"
-    photo.write_bytes(bytes(range(256)) * 3)
+    photo.write_bytes(cv2.imencode(".jpg", np.full((60, 80), 128, np.uint8))[1].tobytes())
     assert run_ground(vehicle, "goto", "--image", str(photo)) == 0
     assert run_ground(vehicle, "goto", "--image", str(photo)) == 0  # a second one, new id
     assert [(path.name, data) for path, data in app.called("goto_image")] == [
         ("1.jpg", photo.read_bytes()), ("2.jpg", photo.read_bytes())]
     assert capsys.readouterr().out.splitlines()[-1] == \
         "vehicle 1: going to photo goal.jpg (uploaded as photo 2)"
+
+
+def test_goto_image_refuses_a_bomb_before_uploading_it(
+        vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
+    photo = tmp_path / "goal.png"
+    photo.write_bytes(bogus_chunk_png(np.random.default_rng(0)))
+    assert run_ground(vehicle, "goto", "--image", str(photo)) == 1
+    assert one_line_error(capsys) == (
+        f"vmnav ground: error: {photo}: corrupt PNG: chunk tEXt at byte 33 declares "
+        "2147483647 bytes, the file has 3163 after its header\n")
+    assert app.called("goto_image") == []
 
 
 def test_goto_needs_exactly_one_goal(vehicle: UdpVehicle, capsys: Capsys) -> None:

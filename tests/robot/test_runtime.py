@@ -33,6 +33,7 @@ from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world
 from tests.tools.short_routes import teach_east_a
+from tools.bench.hostile_images import bogus_chunk_png
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
@@ -259,13 +260,17 @@ class TestPhotoGoal:
         cv2.imwrite(str(tmp_path / "1.png"), noise)
         cv2.imwrite(str(tmp_path / "2.png"), noise[:100, :100])
         (tmp_path / "3.jpg").write_bytes(b"not an image")
-        for name in ("1.png", "2.png", "3.jpg"):
+        (tmp_path / "4.png").write_bytes(bogus_chunk_png(np.random.default_rng(0)))
+        for name in ("1.png", "2.png", "3.jpg", "4.png"):
             assert robot.runtime.goto_image(tmp_path / name)
         robot.run(0.5)
         texts = [text for _, text in robot.notices]
         assert any(t.startswith("photo 1.png: not in the memory") for t in texts)
         assert "photo 2.png: 100x100 px, the camera's images are 800x600" in texts
-        assert "photo 3.jpg: not a readable image" in texts
+        assert ("photo 3.jpg: not a PNG or JPEG image (the file starts with 6e 6f 74 20 61 6e "
+                "20 69)") in texts
+        assert any(t.startswith("photo 4.png: corrupt PNG: chunk tEXt at byte 33 declares")
+                   for t in texts)
         assert robot.runtime.telemetry().mode is Mode.HOLD
 
 

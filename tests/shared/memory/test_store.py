@@ -22,6 +22,7 @@ from shared.memory.store import (
     thumbnail_path,
 )
 from tests.shared.memory.builders import loop_memory, make_records, small_camera
+from tools.bench.hostile_images import large_png
 
 
 def assert_same_memory(a: VisualMemory, b: VisualMemory) -> None:
@@ -305,6 +306,7 @@ BAD_INPUT: dict[str, tuple[Corruption, str]] = {
         write_file(thumb3, lambda p: png(np.zeros((120, 160), np.uint8))),
         "expected 80x60 px, got 160x120 px",
     ),
+    "PNG bomb": (write_file(image3, lambda p: large_png(8192)), "more than the 33554432 allowed"),
     "missing features": (remove(features3), "file not found"),
     "truncated features": (
         write_file(features3, lambda p: p.read_bytes()[:500]), "not a valid .npz archive"
