@@ -4,8 +4,8 @@ control loop stops producing commands.
 :func:`measure` runs :func:`tools.harness.stall_rig.run_stall`: the robot process drives
 by hand at 0.2 m/s through the real Pioneer driver (its I/O thread) over loopback TCP to
 the emulated Pioneer in real time, then its loop blocks for 3 s as the operator lets go.
-The figures come from the simulation's ground truth. Takes about 8 s (2 s driving, 3 s
-stalled, 1 s after, start-up).
+The figures come from the simulation's ground truth. Takes about 10 s (2 s driving, 3 s
+stalled, 1 s after, and starting the parts).
 """
 
 from __future__ import annotations
