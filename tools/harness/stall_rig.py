@@ -142,7 +142,7 @@ def run_stall(plan: StallPlan) -> StallRun:
     sim.add_step_hook(truth)
     wall = WallClock()
     with contextlib.ExitStack() as stack:
-        listener = TcpListener("127.0.0.1", 0)
+        listener = stack.enter_context(contextlib.closing(TcpListener("127.0.0.1", 0)))
         server = PioneerServer(EmulatedPioneer(sim, sim.config.emulator,
                                                np.random.default_rng(plan.seed)),
                                links=[], listeners=[listener])
