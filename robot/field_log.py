@@ -213,7 +213,8 @@ class FieldLog:
         """How the Pioneer link ended, once the driver closed (stop and CLOSE sent), as a
         ``foxglove.Log`` line at ``t_ns``: the link state, the SIPs received and how long
         before ``t_ns`` the last came (with :meth:`sip` observing the driver, the last
-        :data:`~shared.logs.topics.SIP` message), link losses, commands dropped.
+        :data:`~shared.logs.topics.SIP` message), link losses, commands dropped, commands
+        stopped by the driver's watchdog (the loop gave none in time).
 
         Args:
             t_ns: when the driver had closed, ns (the robot's clock).
@@ -224,7 +225,8 @@ class FieldLog:
                 else f" (the last {(t_ns - status.last_sip_ns) / 1e6:.1f} ms before)")
         self._writer.log_text(
             t_ns, "INFO", f"pioneer {status.link.value.lower()}: {counters.sips} SIPs{last}; "
-            f"{counters.link_losses} link losses, {counters.dropped_commands} commands dropped",
+            f"{counters.link_losses} link losses, {counters.dropped_commands} commands dropped, "
+            f"{counters.expired_commands} expired",
             PIONEER_SOURCE)
 
     def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:

@@ -81,6 +81,10 @@ class MobileBase(Protocol):
     def command(self, v_m_s: float, omega_rad_s: float) -> None:
         """Drive at a forward speed and turn rate (robot frame) until the next command.
 
+        A base with a command watchdog (the Pioneer driver: ``[pioneer]
+        command_timeout_ns``) stops a command older than its limit, so a caller repeats
+        its command at its loop's rate for as long as the robot should move.
+
         Args:
             v_m_s: forward speed, m/s (negative reverses).
             omega_rad_s: turn rate about z, counter-clockwise positive, rad/s.

@@ -40,6 +40,12 @@ class PioneerDriverConfig:
     command_refresh_ns: int = 500_000_000
     """Re-send VEL/RVEL this often while moving or until the robot reports it stopped, ns
     (ARIA's state reflection: 500 ms); covers packets lost on a noisy line."""
+    command_timeout_ns: int = 300_000_000
+    """The command watchdog under the robot's loop: a non-zero velocity command older than
+    this is never refreshed; the driver sends VEL 0 and RVEL 0 and holds zero until the
+    next command, ns. The loop re-commands on every frame, so this must exceed its longest
+    normal frame period (a camera at 15 frames/s: 67 ms); a loop stalled longer stops the
+    robot (issue 15)."""
     reconnect_initial_ns: int = 500_000_000
     """First wait before re-opening a lost link, ns; doubles per failure in a row."""
     reconnect_max_ns: int = 8_000_000_000
@@ -67,7 +73,7 @@ class PioneerDriverConfig:
         require(bool(self.url.strip()), "url must not be empty")
         for name in (
             "baud", "write_timeout_s", "service_period_ns", "config_retry_ns", "config_wait_ns",
-            "command_refresh_ns", "reconnect_initial_ns", "reconnect_max_ns",
+            "command_refresh_ns", "command_timeout_ns", "reconnect_initial_ns", "reconnect_max_ns",
             "noise_report_period_ns", "report_timeout_ns", "max_speed_m_s", "max_omega_rad_s",
             "accel_m_s2", "decel_m_s2", "rot_accel_rad_s2", "rot_decel_rad_s2",
         ):

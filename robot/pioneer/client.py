@@ -20,6 +20,11 @@ Rules:
    ``command_refresh_ns`` while the command is non-zero or the robot still reports
    wheel motion (ARIA's state reflection re-sends them; the protocol has no
    acknowledgement). When nothing else goes out, the session sends PULSE after 500 ms.
+   The refresh never outlives its caller: a non-zero command given more than
+   ``command_timeout_ns`` ago is replaced by zero (VEL 0, RVEL 0 go out, a
+   :class:`CommandExpired` event, counted) until the next command; a caller that stopped
+   commanding (a stalled loop) stops the robot (issue 15). ARIA has no such limit and
+   keeps a crashed caller's last velocity alive (reference §7).
 5. Odometry continues across reconnects (``odometry.py``).
 6. SIPs during the handshake mean a previous connection was never closed: send CLOSE
    and SYNC0 again, at most once per ``sync_reply_timeout_ns`` (ARIA's recovery, §3).
@@ -39,6 +44,7 @@ from collections.abc import Callable
 from robot.config import PioneerDriverConfig
 from robot.pioneer.events import (
     Closed,
+    CommandExpired,
     Connected,
     ConnectFailed,
     EStopPressed,
@@ -98,6 +104,7 @@ class PioneerClient:
         self._command: tuple[int, int] = _STOPPED  # (VEL mm/s, RVEL deg/s) wire values
         self._sent: tuple[int, int] | None = None
         self._command_sent_ns = 0
+        self._command_given_ns = 0  # when the caller gave self._command
         self._last_sip: Sip | None = None
         self._last_sip_ns: int | None = None
         self._flags: SipFlags | None = None  # this session's last FLAGS
@@ -106,6 +113,7 @@ class PioneerClient:
         self._unexpected = 0
         self._sips = 0
         self._dropped = 0
+        self._expired = 0
         self._connects = 0
         self._losses = 0
         self._noise_reported = (0, 0, 0, 0)
@@ -166,7 +174,7 @@ class PioneerClient:
         return LinkCounters(
             bad_checksums=bad, skipped_bytes=skipped, abandoned_frames=abandoned,
             unexpected_packets=self._unexpected, sips=self._sips, dropped_commands=self._dropped,
-            connects=self._connects, link_losses=self._losses,
+            connects=self._connects, link_losses=self._losses, expired_commands=self._expired,
         )
 
     def next_event(self) -> PioneerEvent | None:
@@ -253,7 +261,7 @@ class PioneerClient:
             self._send(enable(True), now_ns)
 
     def _set_command(self, wire: tuple[int, int], now_ns: int) -> None:
-        self._command = wire
+        self._command, self._command_given_ns = wire, now_ns
         if self._state is LinkState.CONNECTED and wire != self._sent:
             self._send_command(now_ns)
 
@@ -263,6 +271,22 @@ class PioneerClient:
         self._send(ClientCommand(Command.RVEL, omega_deg_s), now_ns)
         self._sent = self._command
         self._command_sent_ns = now_ns
+
+    def _command_expires_ns(self) -> int | None:
+        """When the current non-zero command expires (rule 4), ns; None if nothing to expire."""
+        if self._state is not LinkState.CONNECTED or self._command == _STOPPED:
+            return None
+        return self._command_given_ns + self.config.command_timeout_ns
+
+    def _expire_command(self, now_ns: int) -> None:
+        """Replace a command older than ``command_timeout_ns`` by zero (rule 4)."""
+        expires_ns = self._command_expires_ns()
+        if expires_ns is None or now_ns < expires_ns:
+            return
+        self._expired += 1
+        self._events.append(CommandExpired(now_ns - self._command_given_ns,
+                                           self.config.command_timeout_ns))
+        self._set_command(_STOPPED, now_ns)
 
     def _needs_refresh(self) -> bool:
         sip = self._last_sip
@@ -288,13 +312,16 @@ class PioneerClient:
             deadlines.append(self._config_giveup_ns)
         if self._needs_refresh():
             deadlines.append(self._command_sent_ns + self.config.command_refresh_ns)
+        if (expires_ns := self._command_expires_ns()) is not None:
+            deadlines.append(expires_ns)
         if self._noise_report_ns is not None and self._noise_totals() != self._noise_reported:
             deadlines.append(self._noise_report_ns + self.config.noise_report_period_ns)
         return min(deadlines) if deadlines else None
 
     def handle_timer(self, now_ns: int) -> None:
         """Do what is due: session timers (SYNC0 retry, PULSE, link loss), CONFIG retry,
-        command refresh, a pending noise report. Safe to call early."""
+        the expiry of an old command, else its refresh, a pending noise report. Safe to
+        call early."""
         if self._session is None:
             return
         self._outbox += self._session.handle_timer(now_ns)
@@ -305,6 +332,7 @@ class PioneerClient:
             elif now_ns >= self._config_retry_ns:
                 self._send(ClientCommand(Command.CONFIG, 1), now_ns)
                 self._config_retry_ns = now_ns + self.config.config_retry_ns
+        self._expire_command(now_ns)
         if (self._needs_refresh()
                 and now_ns >= self._command_sent_ns + self.config.command_refresh_ns):
             self._send_command(now_ns)

@@ -14,7 +14,10 @@ Rules:
    through ``link_factory`` after a backoff (``reconnect_initial_ns``, doubling up to
    ``reconnect_max_ns``, reset by a completed connect), forever until :meth:`close`.
 3. Commands go to the client at once and out on the next round; the client drops
-   them while disconnected or while the motors are off (``client.py`` rule 3).
+   them while disconnected or while the motors are off (``client.py`` rule 3). Each is
+   stamped with the clock's time when given: a round finding the last non-zero command
+   older than ``command_timeout_ns`` sends zero instead of refreshing it (the command
+   watchdog, ``client.py`` rule 4), so a stalled caller never leaves the robot driving.
 4. Locks: ``_io_lock`` serialises service rounds and :meth:`close`; ``_lock`` guards
    the client and the event queue. Opening, reading, writing and closing the
    transport hold only ``_io_lock``, so callers of :meth:`command` and :meth:`state`
@@ -33,6 +36,7 @@ from types import TracebackType
 from robot.config import PioneerDriverConfig
 from robot.pioneer.client import PioneerClient
 from robot.pioneer.events import (
+    CommandExpired,
     Connected,
     ConnectFailed,
     EStopPressed,
@@ -58,7 +62,7 @@ logger = logging.getLogger(__name__)
 EVENT_QUEUE_LEN = 1024
 """Events kept for :meth:`PioneerDriver.next_event`; the oldest go first when nobody reads."""
 _WARNINGS = (ConnectFailed, LinkLost, StaleStream, UnknownSubtype, EStopPressed, MotorsDisabled,
-             LinkNoise, TransportFailed)
+             CommandExpired, LinkNoise, TransportFailed)
 
 
 class PioneerDriver:
@@ -103,7 +107,8 @@ class PioneerDriver:
     # -- MobileBase -------------------------------------------------------------------
 
     def command(self, v_m_s: float, omega_rad_s: float) -> None:
-        """Drive at ``v_m_s`` (m/s, forward +) and ``omega_rad_s`` (rad/s, CCW +).
+        """Drive at ``v_m_s`` (m/s, forward +) and ``omega_rad_s`` (rad/s, CCW +) for at
+        most ``config.command_timeout_ns``: call again to go on (module rule 3).
 
         Dropped (and counted) unless connected with the motors enabled.
         """

@@ -96,6 +96,24 @@ class MotorsDisabled:
 
 
 @dataclass(frozen=True, slots=True)
+class CommandExpired:
+    """The command watchdog fired: no velocity command came for ``limit_ns``, so the last
+    non-zero one was replaced by zero (VEL 0, RVEL 0 sent) until the next command.
+
+    Attributes:
+        age_ns: how old the command was when it expired, ns.
+        limit_ns: the limit, ``PioneerDriverConfig.command_timeout_ns``, ns.
+    """
+
+    age_ns: int
+    limit_ns: int
+
+    def __str__(self) -> str:
+        return (f"no velocity command for {self.age_ns / 1e9:.2f} s (limit "
+                f"{self.limit_ns / 1e9:.2f} s): stopped until the next command")
+
+
+@dataclass(frozen=True, slots=True)
 class LinkNoise:
     """Corrupt or unexpected input since the last report (at most one report per period).
 
@@ -145,7 +163,7 @@ class Closed:
 
 PioneerEvent = (
     Connected | ConnectFailed | LinkLost | StaleStream | UnknownSubtype | EStopPressed
-    | EStopReleased | MotorsEnabled | MotorsDisabled | LinkNoise | Reconnecting
+    | EStopReleased | MotorsEnabled | MotorsDisabled | CommandExpired | LinkNoise | Reconnecting
     | TransportFailed | Closed
 )
 """Everything the client and the driver report."""

@@ -69,6 +69,8 @@ class LinkCounters:
         dropped_commands: velocity commands refused (not connected or motors disabled).
         connects: completed connections.
         link_losses: connections that ended without a CLOSE.
+        expired_commands: non-zero velocity commands replaced by zero because the caller
+            gave none for ``command_timeout_ns`` (the command watchdog).
     """
 
     bad_checksums: int = 0
@@ -79,3 +81,4 @@ class LinkCounters:
     dropped_commands: int = 0
     connects: int = 0
     link_losses: int = 0
+    expired_commands: int = 0

@@ -214,13 +214,15 @@ def test_how_the_pioneer_link_ended_is_one_log_line(tmp_path: Path) -> None:
     with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
         log.pioneer_closed(5 * MS, status, LinkCounters())
         log.pioneer_closed(9 * MS, dataclasses.replace(status, last_sip_ns=9 * MS - 12_345_678),
-                           LinkCounters(sips=57, link_losses=1, dropped_commands=3))
+                           LinkCounters(sips=57, link_losses=1, dropped_commands=3,
+                                        expired_commands=2))
     lines = [(m.log_time_ns, m.data["name"], m.data["message"])
              for m in read_messages(log.close().files[0], [topics.LOG])]
     assert lines == [
-        (5 * MS, "robot.pioneer", "pioneer closed: 0 SIPs; 0 link losses, 0 commands dropped"),
+        (5 * MS, "robot.pioneer", "pioneer closed: 0 SIPs; 0 link losses, 0 commands dropped, "
+                                  "0 expired"),
         (9 * MS, "robot.pioneer", "pioneer closed: 57 SIPs (the last 12.3 ms before); "
-                                  "1 link losses, 3 commands dropped")]
+                                  "1 link losses, 3 commands dropped, 2 expired")]
 
 
 def test_the_camera_transform_of_a_forward_camera() -> None:

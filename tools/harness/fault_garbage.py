@@ -35,6 +35,8 @@ from tools.harness.hil_rig import FaultCaseError, SimSide, Taught, expect, open_
 DRIVE_M_S = 0.2
 #: Driver connect limit, s.
 CONNECT_S = 10.0
+#: The command watchdog of :func:`driving_driver`, which commands once: longer than a case, ns.
+ONE_COMMAND_NS = 600 * NS_PER_S
 #: Undecodable frames sent to the robot: 2 s of the simulator's 15 frames/s.
 BAD_FRAMES = 30
 
@@ -47,10 +49,14 @@ def random_bytes(rng: np.random.Generator, count: int) -> bytes:
 def driving_driver(side: SimSide) -> PioneerDriver:
     """A driver on ``side``'s ARIA port, connected and driving at :data:`DRIVE_M_S`.
 
+    It drives on one command (no control loop repeats it), so its command watchdog is
+    set past any case's length.
+
     Raises:
         FaultCaseError: it did not connect within :data:`CONNECT_S`.
     """
-    driver = PioneerDriver.from_config(PioneerDriverConfig(url=side.aria_url), WallClock())
+    config = PioneerDriverConfig(url=side.aria_url, command_timeout_ns=ONE_COMMAND_NS)
+    driver = PioneerDriver.from_config(config, WallClock())
     driver.start_thread()
     if not driver.wait_connected(round(CONNECT_S * NS_PER_S)):
         link = driver.status().link

@@ -163,6 +163,12 @@ class TruthRecorder:
         expect(bool(inside), f"no truth between {t0_ns / 1e9:.2f} and {t1_ns / 1e9:.2f} s")
         return max(s for s, _ in inside), max(w for _, w in inside)
 
+    def speeds(self, t0_ns: int, t1_ns: int) -> list[tuple[int, float]]:
+        """``(t_ns, speed m/s)`` of every sample in ``[t0_ns, t1_ns]``, in time order."""
+        with self._lock:
+            return [(t, speed) for t, (speed, _) in zip(self._t_ns, self._motion, strict=True)
+                    if t0_ns <= t <= t1_ns]
+
     def travelled_m(self, t0_ns: int, t1_ns: int) -> float:
         """Path length driven in ``[t0_ns, t1_ns]``, m."""
         with self._lock:

@@ -27,6 +27,7 @@ def test_from_a_toml_table() -> None:
 @pytest.mark.parametrize(("table", "message"), [
     ({"url": " "}, "url must not be empty"),
     ({"baud": 0}, "baud must be > 0"),
+    ({"command_timeout_ns": 0}, "command_timeout_ns must be > 0"),
     ({"reconnect_initial_ns": 10, "reconnect_max_ns": 5}, "reconnect_max_ns"),
     ({"max_speed_m_s": 0.0}, "max_speed_m_s must be > 0"),
     ({"link": {"sync_attempts": 0}}, "sync_attempts must be >= 1"),

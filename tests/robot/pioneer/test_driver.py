@@ -11,6 +11,7 @@ from robot.config import PioneerDriverConfig
 from robot.pioneer.driver import PioneerDriver
 from robot.pioneer.events import (
     Closed,
+    CommandExpired,
     Connected,
     ConnectFailed,
     EStopPressed,
@@ -133,7 +134,10 @@ def test_command_writes_vel_and_rvel_bytes() -> None:
     rig.driver.command(0.2, math.radians(10))  # unchanged: nothing new on the wire
     rig.step()
     assert bytes(link.written) == vel_200 + rvel_10
-    rig.run(0.5)  # ARIA's 500 ms state reflection re-sends a non-zero command
+    for _ in range(5):  # a loop repeating its command at 10 Hz
+        rig.driver.command(0.2, math.radians(10))
+        rig.run(0.1)
+    # ARIA's 500 ms state reflection re-sends a non-zero command.
     assert bytes(link.written).count(vel_200) == 2
 
 
@@ -147,6 +151,44 @@ def test_stop_sends_zero_velocities_and_refresh_ends() -> None:
     # Connect, command, stop; no refresh once the robot reports its wheels stopped.
     assert args_of(rig, Command.VEL) == [0, -200, 0]
     assert args_of(rig, Command.RVEL) == [0, -6, 0]
+
+
+def test_a_command_not_repeated_expires_to_zero_until_the_next_one() -> None:
+    rig = Rig()
+    rig.connect()
+    rig.events()
+    given_ns = rig.clock.now_ns()
+    rig.driver.command(0.2, math.radians(10))
+    rig.run(0.29)
+    assert args_of(rig, Command.VEL) == [0, 200] and rig.events() == []
+    rig.run(0.02)  # the limit, 300 ms, passes: zero goes out at once, not a refresh
+    assert args_of(rig, Command.VEL) == [0, 200, 0]
+    assert args_of(rig, Command.RVEL) == [0, 10, 0]
+    (stop_ns, _), = rig.responder.commands(Command.VEL)[-1:]
+    assert given_ns + 300 * MS <= stop_ns <= given_ns + 310 * MS
+    expired = rig.events()
+    assert len(expired) == 1 and isinstance(expired[0], CommandExpired)
+    assert expired[0].limit_ns == 300 * MS and "stopped until the next command" in str(expired[0])
+    assert rig.driver.counters().expired_commands == 1
+    rig.run(2.0)  # the robot reports its wheels still: nothing more, the old command stays dead
+    assert args_of(rig, Command.VEL) == [0, 200, 0]
+    rig.driver.command(0.2, math.radians(10))  # a new command resumes at once
+    rig.step()
+    assert args_of(rig, Command.VEL) == [0, 200, 0, 200]
+
+
+def test_a_repeated_command_never_expires_and_a_stop_needs_no_repeat() -> None:
+    rig = Rig(PioneerDriverConfig(command_timeout_ns=150 * MS))
+    rig.connect()
+    for _ in range(30):  # 3 s at 10 Hz, each repeat well within the limit
+        rig.driver.command(0.2, 0.0)
+        rig.run(0.1)
+    assert args_of(rig, Command.VEL) == [0, 200, 200, 200, 200, 200, 200]  # connect, refreshes
+    rig.driver.stop()
+    rig.run(2.0)
+    assert args_of(rig, Command.VEL)[-1] == 0
+    assert rig.driver.counters().expired_commands == 0
+    assert not any(isinstance(e, CommandExpired) for e in rig.events())
 
 
 def test_measured_velocities_and_refresh_until_the_wheels_stop() -> None:
