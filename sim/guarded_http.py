@@ -170,11 +170,10 @@ class _Lobby:
         for conn, address in incoming:
             self._waiting[conn] = (address, now + self._limits.idle_timeout_s)
             self._selector.register(conn, selectors.EVENT_READ)
-        while len(self._waiting) > self._limits.max_waiting:
-            self.overflow_closed += 1  # counted before the client can see it
-            self._drop(next(iter(self._waiting)))
         timeout = None
-        if self._waiting:
+        if incoming:  # look for their bytes, then make room (below), before waiting
+            timeout = 0.0
+        elif self._waiting:
             oldest_deadline = next(iter(self._waiting.values()))[1]
             timeout = max(0.0, oldest_deadline - now)
         for key, _ in self._selector.select(timeout):
@@ -187,6 +186,9 @@ class _Lobby:
             address, _ = self._waiting.pop(conn)
             self._selector.unregister(conn)
             self._ready(conn, address)
+        while len(self._waiting) > self._limits.max_waiting:  # after the ready ones left
+            self.overflow_closed += 1  # counted before the client can see it
+            self._drop(next(iter(self._waiting)))
         now = time.monotonic()
         for conn, (_, deadline) in list(self._waiting.items()):
             if deadline > now:
@@ -278,7 +280,15 @@ class GuardedHTTPServer(ThreadingHTTPServer):
             return
         with self._counts_lock:
             self._handling += 1
-        super().process_request(conn, address)
+        try:
+            super().process_request(conn, address)
+        except RuntimeError as e:  # the system would start no thread: this request only fails
+            with self._counts_lock:
+                self._handling -= 1
+                self._handler_errors += 1
+            self._slots.release()
+            log.warning("HTTP request from %s dropped: %s", address, e)
+            self.shutdown_request(conn)
 
 
 class GuardedHandler(BaseHTTPRequestHandler):
