@@ -277,6 +277,8 @@ class EmulatedPioneer:
                 out += self._handle(event, now_ns)
             except Exception as e:  # rule 9: no client byte ends the server
                 self._count_error(event, e)
+                if event is None:  # the session itself failed: try again at the next call
+                    return bytes(out)
 
     def _count_error(self, event: Event | None, error: Exception) -> None:
         """Rule 9: count an exception from handling ``event``; log its first of a kind."""

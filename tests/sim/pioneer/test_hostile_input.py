@@ -103,6 +103,27 @@ def test_an_exception_in_a_handler_is_counted_logged_once_and_the_sips_go_on(
     assert len(logged) == 1 and "command BATTEST raised ZeroDivisionError: a bug" in logged[0]
 
 
+
+def test_a_session_that_fails_is_counted_and_tried_again_at_the_next_tick(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    rig = Rig()
+    rig.connect()
+    session = rig.emulator._session
+    healthy = session.next_event
+    failures = iter([RuntimeError("a bug in the session")])
+
+    def failing_once() -> object:
+        for error in failures:
+            raise error
+        return healthy()
+
+    monkeypatch.setattr(session, "next_event", failing_once)
+    sips = len(rig.host.sips)
+    rig.run_for(0.5)
+    assert rig.emulator.stats.handler_errors == 1
+    assert len(rig.host.sips) >= sips + 4
+
+
 ARGS = st.one_of(
     st.none(),
     st.integers(-0xFFFF, 0xFFFF).map(
