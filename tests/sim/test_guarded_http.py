@@ -23,6 +23,9 @@ class EchoHandler(GuardedHandler):
     """GET /hold waits for RELEASE; GET /boom raises; POST echoes its JSON body."""
 
     def do_GET(self) -> None:  # noqa: N802 - http.server names the method
+        if (refused := self.refusal()) is not None:
+            self._reply(refused.status, refused.reason.encode())
+            return
         if self.path == "/boom":
             raise ZeroDivisionError("a bug")
         if self.path == "/hold":
@@ -139,3 +142,21 @@ def test_a_body_that_does_not_arrive_in_time_is_408() -> None:
           socket.create_connection(server.server_address, timeout=10.0) as conn):
         conn.sendall(post(b'{"a": 1}')[:-3])  # three bytes short, never sent
         assert conn.recv(100).startswith(b"HTTP/1.0 408")
+
+
+@pytest.mark.parametrize("headers, status", [
+    ("", b"200"),  # no Host (HTTP/1.0): no browser sent it
+    ("Host: localhost:8080\r\n", b"200"),
+    ("Host: LOCALHOST\r\n", b"200"),
+    ("Host: 127.0.0.2:8080\r\n", b"200"),
+    ("Host: [::1]:8080\r\n", b"200"),
+    ("Host: 127.0.0.1:8080\r\nOrigin: http://127.0.0.1:8080\r\n", b"200"),
+    ("Host: 10.0.0.7:8080\r\n", b"403"),
+    ("Host: attacker.example\r\n", b"403"),
+    ("Host: 127.0.0.1:8080\r\nOrigin: http://127.0.0.1:9999\r\n", b"403"),
+    ("Origin: http://127.0.0.1:8080\r\n", b"403"),  # an Origin without a Host to match
+])
+def test_host_and_origin_on_a_loopback_server(headers: str, status: bytes) -> None:
+    with serving(HttpLimits()) as server:
+        raw = f"GET / HTTP/1.0\r\n{headers}\r\n".encode()
+        assert request(server, raw).startswith(b"HTTP/1.0 " + status)
