@@ -13,10 +13,15 @@ Rules:
    first). Anything else: 404. Frames are grey JPEGs (OpenCV decodes them to
    three equal channels, which ``cv2.COLOR_BGR2GRAY`` turns back exactly).
 3. **Threads.** One thread accepts, one thread per client writes. A client that
-   goes away (or stops reading) ends or blocks its own thread only; the
-   simulation loop never waits for a client. :meth:`CameraServer.close` shuts
-   every client's socket, stops accepting and joins every thread; idempotent.
-4. **Faults** (tests, issue 8's fault scenarios). :meth:`CameraServer.stall`
+   goes away ends its own thread; one that stops reading for
+   :attr:`~sim.guarded_http.HttpLimits.handler_timeout_s` too. The simulation loop
+   never waits for a client. :meth:`CameraServer.close` shuts every client's socket,
+   stops accepting and joins every thread; idempotent.
+4. **Hostile clients** (:mod:`sim.guarded_http`): connections that send nothing hold
+   no thread and are closed after a while; at most :data:`MAX_CLIENTS` requests are
+   served at once (a stream is one until it ends), others get 503; a request from a
+   web page of another origin, or with a DNS-rebound ``Host``, gets 403.
+5. **Faults** (tests, issue 8's fault scenarios). :meth:`CameraServer.stall`
    withholds the frames of the next stretch of frame time (clients stay connected
    and receive nothing); :meth:`CameraServer.corrupt` sends the next frames as
    bytes that do not decode.
@@ -29,7 +34,6 @@ import logging
 import socket
 import threading
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import urlsplit
 
 import cv2
@@ -38,6 +42,7 @@ import numpy.typing as npt
 
 from shared.camera_model import CameraModel
 from shared.errors import ShapeError, TransportError
+from sim.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
 
@@ -51,6 +56,8 @@ DEFAULT_JPEG_QUALITY = 90
 _POLL_S = 0.05
 """The accept loop checks for :meth:`CameraServer.close` this often, s."""
 _CORRUPT_XOR = 0x5A
+MAX_CLIENTS = 16
+"""Requests served at once (rule 4): streams, snapshots."""
 """A corrupt frame is its JPEG with every byte XORed with this: no start-of-image marker."""
 
 
@@ -156,17 +163,15 @@ class _FrameBoard:
             self._changed.notify_all()
 
 
-class _HttpServer(ThreadingHTTPServer):
+class _HttpServer(GuardedHTTPServer):
     """Client threads are joined at close; their sockets are tracked to be shut (rule 3)."""
-
-    daemon_threads = False
 
     def __init__(self, address: tuple[str, int], board: _FrameBoard) -> None:
         self.board = board
         self._connections: set[socket.socket] = set()
         self._lock = threading.Lock()
         self._dropping = False
-        super().__init__(address, _Handler)
+        super().__init__(address, _Handler, HttpLimits(max_handlers=MAX_CLIENTS))
 
     def track(self, conn: socket.socket) -> None:
         """A client's socket, shut at once if :meth:`drop_all` has begun."""
@@ -192,7 +197,7 @@ def _shut(conn: socket.socket) -> None:
         conn.shutdown(socket.SHUT_RDWR)
 
 
-class _Handler(BaseHTTPRequestHandler):
+class _Handler(GuardedHandler):
     server: _HttpServer
     protocol_version = "HTTP/1.0"  # one request per connection; a stream ends with it
 
@@ -205,10 +210,12 @@ class _Handler(BaseHTTPRequestHandler):
         with contextlib.suppress(OSError):  # the client is gone; nothing is left to flush
             super().finish()
 
-    def do_GET(self) -> None:
+    def do_GET(self) -> None:  # noqa: N802 - http.server names the method
         path = urlsplit(self.path).path
         try:
-            if path == STREAM_PATH:
+            if (refused := self.refusal()) is not None:
+                self.send_error(refused.status, refused.reason)
+            elif path == STREAM_PATH:
                 self._stream()
             elif path == SNAPSHOT_PATH:
                 self._snapshot()

@@ -10,12 +10,17 @@ Rules:
 
 1. ``GET /truth``: ``{"t_ns": simulation time, "pose_w": [x_m, y_m, yaw_rad]}`` of
    the robot's body in the world frame, as of the last simulation step.
-2. ``POST /place`` with ``{"pose_w": [x_m, y_m, yaw_rad]}``: the robot is put at rest
-   there (:meth:`sim.simulation.Simulation.place_robot`) at the next simulation step;
-   the reply (200 with the new truth, or 400 with a one-line reason: bad JSON, an
-   obstacle there) comes once it is done.
+2. ``POST /place`` with ``{"pose_w": [x_m, y_m, yaw_rad]}`` as ``Content-Type:
+   application/json``: the robot is put at rest there
+   (:meth:`sim.simulation.Simulation.place_robot`) at the next simulation step; the
+   reply (200 with the new truth, or 400 with a one-line reason: bad JSON, numbers
+   that are not finite, a position outside the world's walls, an obstacle there)
+   comes once it is done.
 3. Threads: the simulation is only touched in its own loop (:class:`ControlHook`, a
    step hook); HTTP requests wait on it. Loopback by default; anything else is 404.
+4. Hostile clients (:mod:`sim.guarded_http`): idle connections hold no thread, handler
+   threads are bounded, a cross-origin request (a web page in a browser on the same
+   machine) is refused (403), and so is a body that is not JSON (415) or too long (413).
 """
 
 from __future__ import annotations
@@ -25,17 +30,19 @@ import math
 import queue
 import threading
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
 from shared.errors import TransportError, VmnavError
 from shared.pose import Pose2
+from sim.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits, RequestRefusedError
 from sim.simulation import Simulation
 
 TRUTH_PATH = "/truth"
 PLACE_PATH = "/place"
 #: How long a placement waits for the simulation loop, s.
 _PLACE_TIMEOUT_S = 5.0
+PLACE_FORMAT = 'want {"pose_w": [x_m, y_m, yaw_rad]}'
+"""The start of every refusal of a malformed placement."""
 
 
 @dataclass(eq=False)
@@ -81,6 +88,51 @@ class ControlHook:
     def _truth(self) -> dict[str, Any]:
         return {"t_ns": self._sim.now_ns, "pose_w": list(self._sim.body.pose_w)}
 
+    def extent(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The world's walls' bounding box ((x_min, y_min), (x_max, y_max)), m."""
+        return self._sim.world.extent()
+
+
+def placement_pose(body: object,
+                   extent: tuple[tuple[float, float], tuple[float, float]]) -> Pose2:
+    """The pose of a ``POST /place`` body (rule 2).
+
+    Args:
+        body: the parsed JSON.
+        extent: the world's bounding box ((x_min, y_min), (x_max, y_max)), m.
+
+    Raises:
+        ValueError: the body is not ``{"pose_w": [x_m, y_m, yaw_rad]}`` with finite
+            numbers and (x_m, y_m) inside ``extent`` (message says which).
+    """
+    pose = body.get("pose_w") if isinstance(body, dict) else None
+    if not isinstance(pose, list):
+        raise ValueError(f"{PLACE_FORMAT}: got {_short(body)}")
+    if len(pose) != 3:
+        raise ValueError(f"{PLACE_FORMAT}: expected 3 numbers, got {len(pose)}")
+    names = ("x_m", "y_m", "yaw_rad")
+    for name, value in zip(names, pose, strict=True):
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{PLACE_FORMAT}: {name} {_short(value)} is not a number")
+    try:
+        x, y, yaw = (float(v) for v in pose)
+    except OverflowError:
+        raise ValueError(f"{PLACE_FORMAT}: a number is not finite") from None
+    for name, value in zip(names, (x, y, yaw), strict=True):
+        if not math.isfinite(value):
+            raise ValueError(f"{PLACE_FORMAT}: {name} {value} is not finite")
+    (x_min, y_min), (x_max, y_max) = extent
+    if not (x_min <= x <= x_max and y_min <= y <= y_max):
+        raise ValueError(f"pose_w ({x:g}, {y:g}) is outside the world's walls, "
+                         f"x {x_min:g}..{x_max:g} m, y {y_min:g}..{y_max:g} m")
+    return Pose2(x, y, yaw)
+
+
+def _short(value: object) -> str:
+    """``value``'s repr, cut to 40 characters (a reply line, not an echo of the request)."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
 
 class ControlServer:
     """The HTTP side (rules 1-3).
@@ -89,18 +141,19 @@ class ControlServer:
         hook: the simulation's control hook.
         host: address to listen on.
         port: TCP port; 0 picks a free one (see :attr:`port`).
+        limits: what one client may take (rule 4).
 
     Raises:
         TransportError: the port cannot be listened on.
     """
 
-    def __init__(self, hook: ControlHook, host: str = "127.0.0.1", port: int = 0) -> None:
+    def __init__(self, hook: ControlHook, host: str = "127.0.0.1", port: int = 0,
+                 limits: HttpLimits | None = None) -> None:
         handler = type("Handler", (_Handler,), {"hook": hook})
         try:
-            self._http = ThreadingHTTPServer((host, port), handler)
+            self._http = GuardedHTTPServer((host, port), handler, limits or HttpLimits())
         except OSError as e:
             raise TransportError(f"http://{host}:{port}", f"cannot listen: {e.strerror}") from None
-        self._http.daemon_threads = True
         self.port: int = self._http.server_address[1]
         self.url = f"http://{host}:{self.port}"
         self._thread = threading.Thread(target=self._http.serve_forever, name="sim-control",
@@ -121,30 +174,33 @@ class ControlServer:
         self.close()
 
 
-class _Handler(BaseHTTPRequestHandler):
+class _Handler(GuardedHandler):
     hook: ControlHook
 
-    def do_GET(self) -> None:
-        if self.path == TRUTH_PATH:
+    def do_GET(self) -> None:  # noqa: N802 - http.server names the method
+        if (refused := self.refusal()) is not None:
+            self._reply(refused.status, {"error": refused.reason})
+        elif self.path == TRUTH_PATH:
             self._reply(200, self.hook.truth)
         else:
             self._reply(404, {"error": f"no {self.path}"})
 
-    def do_POST(self) -> None:
-        if self.path != PLACE_PATH:
-            self._reply(404, {"error": f"no {self.path}"})
-            return
+    def do_POST(self) -> None:  # noqa: N802 - http.server names the method
         try:
-            body = json.loads(self.rfile.read(int(self.headers.get("Content-Length", 0))))
-            x, y, yaw = (float(v) for v in body["pose_w"])
-            if not all(math.isfinite(v) for v in (x, y, yaw)):
-                raise ValueError("not finite")
-        except (ValueError, TypeError, KeyError) as e:
-            self._reply(400, {"error": f"want {{\"pose_w\": [x_m, y_m, yaw_rad]}}: {e}"})
+            if (refused := self.refusal()) is not None:
+                raise refused
+            if self.path != PLACE_PATH:
+                raise RequestRefusedError(404, f"no {self.path}")
+            pose = placement_pose(self.read_json(), self.hook.extent())
+        except RequestRefusedError as e:
+            self._reply(e.status, {"error": e.reason})
             return
-        error = self.hook.place(Pose2(x, y, yaw))
+        except ValueError as e:
+            self._reply(400, {"error": str(e)})
+            return
+        error = self.hook.place(pose)
         if error is None:
-            self._reply(200, {"t_ns": self.hook.truth["t_ns"], "pose_w": [x, y, yaw]})
+            self._reply(200, {"t_ns": self.hook.truth["t_ns"], "pose_w": list(pose)})
         else:
             self._reply(400, {"error": error})
 

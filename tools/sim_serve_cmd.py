@@ -177,7 +177,8 @@ def run_serve(args: argparse.Namespace) -> int:
     s = emulator.stats
     print(f"stopped after {sim.now_ns / 1e9:.1f} s of simulation: {s.sessions} session(s), "
           f"{s.sips_sent} SIPs, {s.commands} commands, {s.unknown_commands} unknown, "
-          f"{s.bad_checksums} bad checksums, {server.refused_clients} client(s) refused")
+          f"{s.refused_commands} refused, {s.bad_checksums} bad checksums, "
+          f"{s.handler_errors} handler errors, {server.refused_clients} client(s) refused")
     if video_server is not None:
         v = video_server.stats()
         print(f"camera: {v.published} frames, {v.clients} stream client(s)")

@@ -14,12 +14,17 @@ Rules (aria-protocol.md §11, the emulator checklist):
 2. **Commands** are obeyed only while open (ARCOS starts its servers at OPEN); others
    are counted as ignored, as are commands not emulated (POLLING, HOSTBAUD,
    BATTERYINFO, SIM_*, RESET, ...). Packets whose ID is no command are counted as
-   unknown. Nothing a client sends raises.
+   unknown. An int argument outside a C short (-32768..32767, what ARIA's ``comInt``
+   can send), or an ENABLE or SONAR other than 0 or 1, is refused and counted; values
+   within it are clamped as ARCOS does (velocities to the SETV/SETRV maxima, those
+   and the accelerations to the CONFIG tops, headings wrapped).
 3. **SIPs** go out every ``sip_period_ns`` from OPEN, always of type 0x32 (MobileSim
    does the same; a stale stream of 0x33 blocks ARIA's reconnect, §3). Positions are
    the body's wheel odometry (never the truth) since power-up or SETO, in the
    15-bit wrapped counts of DistConvFactor 1.0 mm; the groups run through FAULTFLAGS
    (82 bytes with 16 sonar readings, under the 128 old ARIA clients can read).
+   Every field is clamped to its width at encoding: a BATTEST above 25.5 V reports
+   25.5 V in the u8 BATTERY and the full value in the u16 BATTERYX10.
 4. **CONFIG** is answered with the flash values and the current maxima and
    accelerations, never zero (§6).
 5. **Watchdog.** No client packet for ``watchdog_timeout_ns`` stops the robot until
@@ -33,10 +38,14 @@ Rules (aria-protocol.md §11, the emulator checklist):
    the robot stops) and then SYNC0, and a new session begins.
 8. **Odometry and battery persist** across connections, as on the robot; motion
    limits, motors, SONAR and BATTEST return to their power-up state.
+9. **Nothing a client sends ends the emulator.** An exception while handling a
+   received packet or a due SIP is caught and counted (``handler_errors``), and logged
+   once per kind (event and exception type); the session goes on with the next packet.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import Counter
 from collections.abc import Callable
@@ -88,9 +97,27 @@ from sim.pioneer.p3at import (
 from sim.pioneer.sonar import SonarRing
 from sim.simulation import Simulation
 
+log = logging.getLogger(__name__)
+
 _SONAR_FLAGS = SipFlags.SONAR_ARRAY_1 | SipFlags.SONAR_ARRAY_2  # a P3-AT has two arrays
 _SESSION_COMMANDS = (Command.PULSE, Command.OPEN, Command.CLOSE)
 _COMMAND_IDS = frozenset(int(c) for c in Command)
+_INT_ARG_RANGE = (-0x8000, 0x7FFF)
+"""The int arguments obeyed: a C short, what ARIA's ``comInt`` sends (rule 2)."""
+_FLAG_ARGS = (0, 1)
+"""The arguments ENABLE and SONAR take (off, on)."""
+
+# The widest values the SIP's fields carry (rule 3; reference §5), SI units.
+_SIP_BATTERY_MAX_V = 0xFF / 10
+"""BATTERY, u8 decivolts: 25.5 V."""
+_SIP_BATTERYX10_MAX_V = 0xFFFF / 10
+"""BATTERYX10, u16 decivolts: 6553.5 V."""
+_SIP_WHEEL_MAX_M_S = 0x7FFF / 1000
+"""LVEL/RVEL, s16 mm/s: 32.767 m/s."""
+_SIP_ROTVEL_MAX_RAD_S = math.radians(0x7FFF / 10)
+"""ROTVEL, s16 in 0.1 deg/s: 3276.7 deg/s."""
+_SIP_RANGE_MAX_M = 0xFFFF / 1000
+"""Sonar RANGE, u16 mm: 65.535 m."""
 
 
 class _Handler(NamedTuple):
@@ -99,6 +126,8 @@ class _Handler(NamedTuple):
     needs_int: bool
     """The command is ignored unless its argument is an int."""
     run: Callable[[ClientCommand], None]
+    int_args: tuple[int, ...] | None = None
+    """The only int arguments obeyed (others are refused); None: any in a C short."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +141,8 @@ class EmulatorStats:
     """Commands obeyed (PULSE and OPEN included)."""
     ignored_commands: int
     """Known commands not emulated, sent before OPEN, or with an argument of the wrong kind."""
+    refused_commands: int
+    """Commands with an int argument out of range (outside a C short; ENABLE, SONAR not 0/1)."""
     unknown_commands: int
     """Well-framed packets whose ID is no command."""
     unexpected_packets: int
@@ -122,6 +153,8 @@ class EmulatorStats:
     abandoned_frames: int
     """Partial frames given up after the frame timeout."""
     watchdog_trips: int
+    handler_errors: int
+    """Exceptions caught while handling a received packet or a due SIP (rule 9)."""
 
 
 class EmulatedPioneer:
@@ -153,6 +186,7 @@ class EmulatedPioneer:
         self._counts: Counter[str] = Counter(sessions=1)
         self._session = AriaSession(Role.ROBOT, config.link)
         self._handlers = self._command_handlers()
+        self._errors_logged: set[tuple[str, str]] = set()
         simulation.add_step_hook(self._on_step)
 
     # -- state --------------------------------------------------------------------
@@ -184,12 +218,14 @@ class EmulatedPioneer:
             sips_sent=c["sips_sent"],
             commands=c["commands"],
             ignored_commands=c["ignored_commands"],
+            refused_commands=c["refused_commands"],
             unknown_commands=c["unknown_commands"],
             unexpected_packets=c["unexpected_packets"],
             bad_checksums=c["bad_checksums"] + s.bad_checksums,
             skipped_bytes=c["skipped_bytes"] + s.skipped_bytes,
             abandoned_frames=c["abandoned_frames"] + s.abandoned_frames,
             watchdog_trips=c["watchdog_trips"],
+            handler_errors=c["handler_errors"],
         )
 
     # -- the sans-I/O surface -------------------------------------------------------
@@ -232,9 +268,28 @@ class EmulatedPioneer:
 
     def _drain(self, now_ns: int) -> bytes:
         out = bytearray()
-        while (event := self._session.next_event()) is not None:
-            out += self._handle(event, now_ns)
-        return bytes(out)
+        while True:
+            event: Event | None = None
+            try:
+                event = self._session.next_event()
+                if event is None:
+                    return bytes(out)
+                out += self._handle(event, now_ns)
+            except Exception as e:  # rule 9: no client byte ends the server
+                self._count_error(event, e)
+                if event is None:  # the session itself failed: try again at the next call
+                    return bytes(out)
+
+    def _count_error(self, event: Event | None, error: Exception) -> None:
+        """Rule 9: count an exception from handling ``event``; log its first of a kind."""
+        self._counts["handler_errors"] += 1
+        what = type(event).__name__ if not isinstance(event, ClientCommand) else (
+            f"command {event.command.name}")
+        kind = (what, type(error).__name__)
+        if kind not in self._errors_logged:
+            self._errors_logged.add(kind)
+            log.warning("emulated Pioneer: %s raised %s: %s (counted; logged once per kind)",
+                        what, type(error).__name__, error)
 
     def _handle(self, event: Event, now_ns: int) -> bytes:
         session = self._session
@@ -269,6 +324,9 @@ class EmulatedPioneer:
         if handler is None or (handler.needs_int and not isinstance(arg, int)):
             self._counts["ignored_commands"] += 1
             return b""
+        if handler.needs_int and not _int_arg_obeyed(cast(int, arg), handler):
+            self._counts["refused_commands"] += 1
+            return b""
         self._counts["commands"] += 1
         handler.run(event)
         return b""
@@ -281,7 +339,7 @@ class EmulatedPioneer:
             return _Handler(True, lambda e: action(e.si_value))
 
         def flag(action: Callable[[bool], object]) -> _Handler:
-            return _Handler(True, lambda e: action(e.arg != 0))
+            return _Handler(True, lambda e: action(e.arg != 0), _FLAG_ARGS)
 
         def plain(action: Callable[[], None]) -> _Handler:
             return _Handler(False, lambda e: action())
@@ -363,22 +421,36 @@ class EmulatedPioneer:
             x_counts=wrap_position(round(x / DIST_CONV_M)),
             y_counts=wrap_position(round(y / DIST_CONV_M)),
             th_counts=_thpos(th),
-            left_vel_m_s=left,
-            right_vel_m_s=right,
-            battery_v=battery,
+            left_vel_m_s=_clamp(left, _SIP_WHEEL_MAX_M_S),
+            right_vel_m_s=_clamp(right, _SIP_WHEEL_MAX_M_S),
+            battery_v=min(battery, _SIP_BATTERY_MAX_V),
             left_stalled=body.stalled,
             right_stalled=body.stalled,
             front_bumpers=FRONT_BUMPER_SEGMENTS if body.bumped_front else 0,
             rear_bumpers=REAR_BUMPER_SEGMENTS if body.bumped_rear else 0,
             control_counts=_thpos(th if heading_target is None else heading_target),
             flags=flags,
-            sonar=tuple(SonarReading(n, r) for n, r in self._sonar.take_readings()),
+            sonar=tuple(SonarReading(n, min(r, _SIP_RANGE_MAX_M))
+                        for n, r in self._sonar.take_readings()),
             io=SipIo(),
-            real_battery_v=battery,
+            real_battery_v=min(battery, _SIP_BATTERYX10_MAX_V),
             charge_state=ChargeState.NOT_CHARGING,
-            rot_vel_rad_s=omega,
+            rot_vel_rad_s=_clamp(omega, _SIP_ROTVEL_MAX_RAD_S),
             fault_flags=0,
         )
+
+
+def _int_arg_obeyed(arg: int, handler: _Handler) -> bool:
+    """Whether int argument ``arg`` is in range for ``handler`` (rule 2)."""
+    if handler.int_args is not None:
+        return arg in handler.int_args
+    lo, hi = _INT_ARG_RANGE
+    return lo <= arg <= hi
+
+
+def _clamp(value: float, limit: float) -> float:
+    """``value`` limited to ``-limit..limit``."""
+    return max(-limit, min(limit, value))
 
 
 def _wheels(v_m_s: float, omega_rad_s: float) -> tuple[float, float]:

@@ -20,6 +20,10 @@ from shared.byte_link import LinkClosedError
 from shared.errors import TransportError
 
 _READ_CHUNK = 4096
+READ_LIMIT = 65536
+"""Most bytes one :meth:`StreamLink.read_available` returns (the rest waits for the next
+call): a client that sends without pause cannot hold a tick for ever. A serial line at
+115200 baud carries about 11.5 kB/s."""
 
 
 class StreamLink:
@@ -62,16 +66,17 @@ class StreamLink:
         return cls(where, sock.recv, sock.send, sock.close)
 
     def read_available(self) -> bytes:
-        """Everything received so far (b"" if nothing).
+        """What was received so far, up to :data:`READ_LIMIT` bytes (b"" if nothing).
 
         Raises:
             LinkClosedError: the peer closed the stream, or it failed.
         """
         self._check_open()
         chunks: list[bytes] = []
-        while True:
+        size = 0
+        while size < READ_LIMIT:
             try:
-                chunk = self._recv(_READ_CHUNK)
+                chunk = self._recv(min(_READ_CHUNK, READ_LIMIT - size))
             except BlockingIOError:
                 break
             except OSError as e:
@@ -81,6 +86,7 @@ class StreamLink:
                     break  # deliver these now; the next call reports the end
                 raise LinkClosedError(self.where, "closed by the peer")
             chunks.append(chunk)
+            size += len(chunk)
         return b"".join(chunks)
 
     def write(self, data: bytes) -> None:

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import BinaryIO
 from urllib.error import HTTPError
-from urllib.request import urlopen
+from urllib.request import Request, urlopen
 
 import cv2
 import numpy as np
@@ -25,6 +25,7 @@ from shared.camera_model import CameraModel
 from shared.errors import ShapeError, TransportError
 from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
 from sim.config import SimConfig
+from sim.guarded_http import HttpLimits
 from sim.simulation import Simulation
 from tests.sim.camera_stream import eventually, frame_number, numbered_frame
 from tests.sim.rooms import box_room
@@ -62,7 +63,8 @@ def raw_stream(server: CameraServer) -> Iterator[tuple[socket.socket, BinaryIO]]
     sock = socket.create_connection((server.host, server.port), timeout=5.0)
     reader = sock.makefile("rb")
     try:
-        sock.sendall(b"GET /stream.mjpg HTTP/1.1\r\nHost: camera\r\n\r\n")
+        host = f"{server.host}:{server.port}".encode()
+        sock.sendall(b"GET /stream.mjpg HTTP/1.1\r\nHost: " + host + b"\r\n\r\n")
         assert reader.readline().startswith(b"HTTP/1.0 200")
         while reader.readline() not in (b"\r\n", b""):
             pass
@@ -183,6 +185,32 @@ class TestClients:
                 assert time.perf_counter() - closing < 1.0
         finally:
             server.close()
+
+
+class TestHostileClients:
+    def test_idle_connections_hold_no_thread_and_a_stream_is_still_served(self) -> None:
+        with CameraServer() as server:
+            server.publish(0, numbered_frame(0))
+            before = threading.active_count()
+            idle = [socket.create_connection((server.host, server.port)) for _ in range(300)]
+            try:
+                full = HttpLimits().max_waiting  # the older ones were closed to make room
+                assert eventually(lambda: server._http.stats().waiting == full, 20.0)
+                assert threading.active_count() == before  # the lobby holds them, no thread
+                with capture(server.stream_url) as cap:
+                    assert frame_number(read_grey(cap)) == 0
+                    assert threading.active_count() == before + 1  # the stream's
+            finally:
+                for conn in idle:
+                    conn.close()
+
+    def test_a_request_from_a_web_page_of_another_origin_is_refused(self) -> None:
+        with CameraServer() as server:
+            server.publish(0, numbered_frame(0))
+            request = Request(server.snapshot_url, headers={"Origin": "http://evil.example"})
+            with pytest.raises(HTTPError) as refused:
+                urlopen(request, timeout=5.0)
+            assert refused.value.code == 403
 
 
 class TestFaults:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 import math
+import socket
 import threading
+import time
 import urllib.error
 import urllib.request
 
@@ -16,9 +18,10 @@ from sim.simulation import Simulation
 from sim.world import load_world
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def served():
-    """A lab simulation stepping in a thread; its control server's URL."""
+    """A lab simulation stepping in a thread; its control server's URL (one per module:
+    building the lab takes seconds; every test compares with the truth it finds)."""
     sim = Simulation(load_world("lab"), SimConfig())
     hook = ControlHook(sim)
     sim.add_step_hook(hook)
@@ -37,8 +40,12 @@ def served():
     thread.join()
 
 
-def call(url: str, data: bytes | None = None) -> tuple[int, dict]:
-    request = urllib.request.Request(url, data=data, method="GET" if data is None else "POST")
+def call(url: str, data: bytes | None = None,
+         headers: dict[str, str] | None = None) -> tuple[int, dict]:
+    """GET (no data) or POST ``data`` as JSON, unless ``headers`` say otherwise."""
+    headers = {"Content-Type": "application/json", **(headers or {})}
+    request = urllib.request.Request(url, data=data, method="GET" if data is None else "POST",
+                                     headers=headers)
     try:
         with urllib.request.urlopen(request, timeout=5) as reply:
             return reply.status, json.loads(reply.read())
@@ -57,7 +64,14 @@ def test_truth_and_placement(served) -> None:
 
 
 @pytest.mark.parametrize("body, message", [
-    (b"not json", "want {\"pose_w\": [x_m, y_m, yaw_rad]}"),
+    (b"not json", "the body is not JSON"),
+    (b"{}", "want {\"pose_w\": [x_m, y_m, yaw_rad]}"),
+    (json.dumps({"pose_w": ["1", 2, 0]}).encode(), "x_m '1' is not a number"),
+    (b'{"pose_w": [1e400, 2, 0]}', "x_m inf is not finite"),
+    (json.dumps({"pose_w": [1e308, 2, 0]}).encode(), "outside the world's walls"),
+    (json.dumps({"pose_w": [3, -1e308, 0]}).encode(), "outside the world's walls"),
+    (json.dumps({"pose_w": [3, 10, 10**400]}).encode(), "not finite"),
+    (b"[" * 2000 + b"]" * 2000, "the body is not JSON"),
     (json.dumps({"pose_w": [1, 2]}).encode(), "expected 3"),
     (json.dumps({"pose_w": [1, 2, math.nan]}).encode(), "not finite"),
 ])
@@ -82,3 +96,61 @@ def test_unknown_paths_are_404(served) -> None:
     url = served
     assert call(url + "/nothing")[0] == 404
     assert call(url + "/truth", b"{}")[0] == 404
+
+
+def test_a_1e308_placement_leaves_the_robot_where_it_was(served) -> None:
+    url = served
+    before = call(url + "/truth")[1]["pose_w"]
+    status, _ = call(url + "/place", json.dumps({"pose_w": [1e308, 1e308, 0.0]}).encode())
+    assert status == 400
+    assert call(url + "/truth")[1]["pose_w"] == pytest.approx(before)
+
+
+PLACE = json.dumps({"pose_w": [3.0, 10.0, 0.5]}).encode()
+
+
+@pytest.mark.parametrize("headers, status, message", [
+    # What a web page's fetch(..., {method: "POST", mode: "no-cors", body}) sends.
+    ({"Content-Type": "text/plain;charset=UTF-8", "Origin": "http://evil.example"}, 403,
+     "cross-origin request from 'http://evil.example' refused"),
+    ({"Content-Type": "text/plain"}, 415, "must be Content-Type: application/json"),
+    ({"Content-Type": "application/x-www-form-urlencoded"}, 415, "application/json"),
+    ({"Origin": "null"}, 403, "cross-origin"),
+    ({"Host": "rebound.example:80"}, 403, "not this machine's loopback"),
+])
+def test_requests_from_elsewhere_or_not_json_are_refused(served, headers, status, message
+                                                          ) -> None:
+    url = served
+    before = call(url + "/truth")[1]["pose_w"]
+    code, reply = call(url + "/place", PLACE, headers)
+    assert code == status and message in reply["error"]
+    assert call(url + "/truth")[1]["pose_w"] == pytest.approx(before)
+
+
+def test_a_same_origin_request_is_served(served) -> None:
+    url = served
+    origin = url  # http://127.0.0.1:PORT: the server's own
+    status, placed = call(url + "/place", PLACE, {"Origin": origin})
+    assert status == 200 and placed["pose_w"] == [3.0, 10.0, 0.5]
+
+
+def test_a_body_too_long_is_refused_unread(served) -> None:
+    url = served
+    status, reply = call(url + "/place", b" " * 5000 + PLACE)
+    assert status == 413 and "at most 4096" in reply["error"]
+
+
+def test_idle_connections_hold_no_thread_and_a_client_is_still_served(served) -> None:
+    url = served
+    port = int(url.rpartition(":")[2])
+    before = threading.active_count()
+    idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(300)]
+    try:
+        time.sleep(0.5)  # time for the server to accept them all (and, before, to spawn)
+        assert threading.active_count() - before <= 2
+        status, truth = call(url + "/truth")
+        assert status == 200 and len(truth["pose_w"]) == 3
+        assert threading.active_count() - before <= 2
+    finally:
+        for conn in idle:
+            conn.close()

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -19,7 +20,14 @@ from robot.config import CameraSourceConfig
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
 from shared.errors import InputError
-from tests.sim.pioneer.test_server import PATIENCE_S, connect_and_drive, tcp_client
+from tests.sim.pioneer.aria_host import AriaHost
+from tests.sim.pioneer.test_server import (
+    PATIENCE_S,
+    connect,
+    connect_and_drive,
+    pump,
+    tcp_client,
+)
 from tools.cli import main
 from tools.sim_serve_cmd import PtySpec, TcpSpec, parse_aria_spec, parse_video_spec
 
@@ -30,6 +38,43 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
     code = main(argv)
     out, err = capsys.readouterr()
     return code, out, err
+
+
+def serve_to_a_client(session: Callable[[AriaHost], None],
+                      capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    """``vmnav sim serve`` on a free TCP port in this process, while a client thread
+    connects (once it listens), runs ``session`` and stops the server by SIGTERM, as a
+    user would; the server's exit code and output. ``--duration`` only bounds a hang."""
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    failures: list[BaseException] = []
+
+    def client() -> None:
+        give_up = time.monotonic() + PATIENCE_S
+        try:
+            while True:  # until the server listens (it builds the world first)
+                try:
+                    host = tcp_client(port)
+                    break
+                except ConnectionRefusedError:
+                    if time.monotonic() > give_up:
+                        raise
+                    time.sleep(0.02)
+            session(host)
+            host.link.close()
+            os.kill(os.getpid(), signal.SIGTERM)  # the server's handler stops it
+        except BaseException as e:  # reported to the test's thread
+            failures.append(e)
+
+    thread = threading.Thread(target=client)
+    thread.start()
+    code, out, _ = run(["sim", "serve", "--duration", str(3 * PATIENCE_S),
+                        "--aria", f"tcp:{port}"], capsys)
+    thread.join(timeout=PATIENCE_S)
+    assert not thread.is_alive() and failures == []
+    return code, out
 
 
 class TestAriaSpec:
@@ -79,39 +124,24 @@ class TestServe:
         assert "stopped after 1.0 s" in out
 
     def test_a_client_drives_the_served_robot(self, capsys: pytest.CaptureFixture[str]) -> None:
-        probe = socket.socket()
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-        probe.close()
-        failures: list[BaseException] = []
-
-        def client() -> None:
-            give_up = time.monotonic() + PATIENCE_S
-            try:
-                while True:  # until the server listens (it builds the world first)
-                    try:
-                        host = tcp_client(port)
-                        break
-                    except ConnectionRefusedError:
-                        if time.monotonic() > give_up:
-                            raise
-                        time.sleep(0.02)
-                connect_and_drive(host)
-                host.link.close()
-                os.kill(os.getpid(), signal.SIGTERM)  # as a user stops it: the server's handler
-            except BaseException as e:  # reported to the test's thread
-                failures.append(e)
-
-        thread = threading.Thread(target=client)
-        thread.start()
-        # The server stops on the client's SIGTERM; --duration only bounds a hang.
-        code, out, _ = run(["sim", "serve", "--duration", str(3 * PATIENCE_S),
-                            "--aria", f"tcp:{port}"], capsys)
-        thread.join(timeout=PATIENCE_S)
-        assert not thread.is_alive() and failures == []
+        code, out = serve_to_a_client(connect_and_drive, capsys)
         assert code == 0
         sips = int(re.search(r"(\d+) SIPs", out).group(1))  # type: ignore[union-attr]
         assert sips >= 6
+
+    def test_battest_above_25_5_v_does_not_end_it(self, capsys: pytest.CaptureFixture[str]
+                                                  ) -> None:
+        """Issue 15: ``fa fb 06 fa 3b 00 01 fa 3c`` after the handshake ended the server."""
+
+        def battest(host: AriaHost) -> None:
+            connect(host)
+            host.link.write(bytes.fromhex("fafb06fa3b0001fa3c"))
+            start = len(host.sips)
+            assert pump(host, PATIENCE_S, lambda: len(host.sips) - start >= 3)
+            assert host.sips[-1][1].real_battery_v == pytest.approx(25.6)
+
+        code, out = serve_to_a_client(battest, capsys)
+        assert code == 0 and "0 handler errors" in out
 
     @pytest.mark.parametrize(
         ("args", "fragment"),
