@@ -11,11 +11,16 @@ A kind is where it happened and the exception's class, e.g.
 ``"MISSION_ITEM: OverflowError"``. At most :data:`MAX_KINDS` kinds are kept apart;
 later new kinds count under :data:`OTHER_KIND` (the kinds come from the code, so
 the limit only matters if a caller puts peer-chosen text in ``where``).
+
+Loops whose faults may be the peer's doing rather than a bug (an HTTP client hanging up)
+log at WARNING without the traceback (``level``, ``traceback``). :meth:`record` may be
+called from several threads.
 """
 
 from __future__ import annotations
 
 import logging
+import threading
 
 #: Kinds kept apart; further kinds count as :data:`OTHER_KIND`.
 MAX_KINDS = 64
@@ -27,13 +32,19 @@ class HandlerFaults:
     """Counts of handler exceptions by kind, each kind logged once (module docstring).
 
     Args:
-        logger: where the first fault of each kind goes, at ERROR with its traceback.
+        logger: where the first fault of each kind goes.
         owner: names the loop in the log line, e.g. ``"vehicle"``.
+        level: the log level of that line.
+        traceback: whether the line carries the traceback.
     """
 
-    def __init__(self, logger: logging.Logger, owner: str) -> None:
+    def __init__(self, logger: logging.Logger, owner: str, *, level: int = logging.ERROR,
+                 traceback: bool = True) -> None:
         self._logger = logger
         self._owner = owner
+        self._level = level
+        self._traceback = traceback
+        self._lock = threading.Lock()
         self._counts: dict[str, int] = {}
         self.total = 0
         """Faults recorded so far."""
@@ -42,15 +53,18 @@ class HandlerFaults:
         """Count ``error``, raised while handling ``where`` (e.g. a message type), and log
         it with its traceback if it is the first of its kind."""
         kind = f"{where}: {type(error).__name__}"
-        if kind not in self._counts and len(self._counts) >= MAX_KINDS:
-            kind = OTHER_KIND
-        self.total += 1
-        count = self._counts.get(kind, 0) + 1
-        self._counts[kind] = count
+        with self._lock:
+            if kind not in self._counts and len(self._counts) >= MAX_KINDS:
+                kind = OTHER_KIND
+            self.total += 1
+            count = self._counts.get(kind, 0) + 1
+            self._counts[kind] = count
         if count == 1:
-            self._logger.error("%s: %s: %s (a bug; this kind is only counted from now on)",
-                               self._owner, kind, error, exc_info=error)
+            self._logger.log(self._level, "%s: %s: %s (this kind is only counted from now on)",
+                             self._owner, kind, error,
+                             exc_info=error if self._traceback else None)
 
     def counts(self) -> dict[str, int]:
         """Faults so far by kind, in the order the kinds first happened."""
-        return dict(self._counts)
+        with self._lock:
+            return dict(self._counts)

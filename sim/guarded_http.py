@@ -46,6 +46,8 @@ from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
+from shared.handler_faults import HandlerFaults
+
 log = logging.getLogger(__name__)
 
 _BUSY_REPLY = (b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: text/plain\r\n"
@@ -226,8 +228,9 @@ class GuardedHTTPServer(ThreadingHTTPServer):
         self.loopback_only = _is_loopback(address[0])
         self._slots = threading.BoundedSemaphore(limits.max_handlers)
         self._counts_lock = threading.Lock()
-        self._handling = self._busy_refused = self._handler_errors = 0
-        self._errors_logged: set[str] = set()
+        self._handling = self._busy_refused = 0
+        self._faults = HandlerFaults(log, f"HTTP server on port {address[1]}",
+                                     level=logging.WARNING, traceback=False)
         self._lobby = _Lobby(limits, self._take, self.shutdown_request, f"http-{address[1]}")
         super().__init__(address, handler)  # if it cannot bind, its server_close ends the lobby
 
@@ -236,7 +239,7 @@ class GuardedHTTPServer(ThreadingHTTPServer):
         with self._counts_lock:
             return LobbyStats(self._lobby.waiting, self._handling, self._lobby.idle_closed,
                               self._lobby.overflow_closed, self._busy_refused,
-                              self._handler_errors)
+                              self._faults.total)
 
     def process_request(self, request: Any, client_address: Any) -> None:
         """The accept loop's connection goes to the lobby (rule 1)."""
@@ -253,15 +256,7 @@ class GuardedHTTPServer(ThreadingHTTPServer):
 
     def handle_error(self, request: Any, client_address: Any) -> None:
         """Rule 5: count; log the first error of each kind, without a traceback."""
-        error = _current_exception()
-        kind = type(error).__name__
-        with self._counts_lock:
-            self._handler_errors += 1
-            first = kind not in self._errors_logged
-            self._errors_logged.add(kind)
-        if first:
-            log.warning("HTTP request from %s ended by %s: %s (counted; logged once per kind)",
-                        client_address, kind, error)
+        self._faults.record("request", _current_exception())
 
     def server_close(self) -> None:
         """Close the waiting connections and the socket; join the handler threads."""
@@ -375,7 +370,7 @@ def _one_line(error: BaseException) -> str:
     return str(error).splitlines()[0] if str(error) else type(error).__name__
 
 
-def _current_exception() -> BaseException:
+def _current_exception() -> Exception:
     """The exception being handled (``handle_error`` is called inside an ``except``)."""
     error = sys.exc_info()[1]
-    return error if error is not None else RuntimeError("unknown error")
+    return error if isinstance(error, Exception) else RuntimeError(f"{error!r}")

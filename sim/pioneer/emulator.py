@@ -80,6 +80,7 @@ from shared.aria import (
 )
 from shared.aria.state import OPEN_STATES
 from shared.errors import ConfigError, LocalProtocolError
+from shared.handler_faults import HandlerFaults
 from shared.pose import Pose2
 from sim.config import EmulatorConfig
 from sim.pioneer.motion import MotionController
@@ -186,7 +187,7 @@ class EmulatedPioneer:
         self._counts: Counter[str] = Counter(sessions=1)
         self._session = AriaSession(Role.ROBOT, config.link)
         self._handlers = self._command_handlers()
-        self._errors_logged: set[tuple[str, str]] = set()
+        self._faults = HandlerFaults(log, "emulated Pioneer")
         simulation.add_step_hook(self._on_step)
 
     # -- state --------------------------------------------------------------------
@@ -285,11 +286,7 @@ class EmulatedPioneer:
         self._counts["handler_errors"] += 1
         what = type(event).__name__ if not isinstance(event, ClientCommand) else (
             f"command {event.command.name}")
-        kind = (what, type(error).__name__)
-        if kind not in self._errors_logged:
-            self._errors_logged.add(kind)
-            log.warning("emulated Pioneer: %s raised %s: %s (counted; logged once per kind)",
-                        what, type(error).__name__, error)
+        self._faults.record(what, error)
 
     def _handle(self, event: Event, now_ns: int) -> bytes:
         session = self._session

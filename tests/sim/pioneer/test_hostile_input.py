@@ -100,7 +100,7 @@ def test_an_exception_in_a_handler_is_counted_logged_once_and_the_sips_go_on(
     assert len(rig.host.sips) >= sips + 4
     assert rig.emulator.stats.handler_errors == 3
     logged = [r.getMessage() for r in caplog.records]
-    assert len(logged) == 1 and "command BATTEST raised ZeroDivisionError: a bug" in logged[0]
+    assert len(logged) == 1 and "command BATTEST: ZeroDivisionError: a bug" in logged[0]
 
 
 
