@@ -51,8 +51,9 @@ Rules:
    :data:`SIGNING_PERIOD_NS` the outgoing timestamp is raised to the wall clock
    (``SigningClock``) and, with a ``timestamp_file``, the timestamps (ours and each
    stream's) are written to it atomically; also at :meth:`close`. They are read back
-   on construction, so after a restart no packet accepted before it is accepted again
-   (after a crash, none accepted more than a period before it). A failed write is a
+   on construction (and written once, so a place that cannot hold them fails at
+   start), so after a restart no packet accepted before it is accepted again (after a
+   crash, none accepted more than a period before it). A write that fails later is a
    STATUSTEXT ERROR, once.
 """
 
@@ -164,7 +165,8 @@ class VehicleEndpoint:
     Raises:
         ConfigError: the parameter file is malformed, or a config value lies outside its
             parameter's range (names the file or parameter).
-        InputError: the signing timestamp file cannot be read or is not one.
+        InputError: the signing timestamp file cannot be read, is not one, or cannot be
+            written.
         ValueError: a signing key that is not 32 bytes, or a link id outside 0..255.
     """
 
@@ -216,10 +218,11 @@ class VehicleEndpoint:
                                              UnsignedPolicy(UNSIGNED_ALLOWED))
             self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns,
                                                SIGNING_PERIOD_NS)
-            kept = (read_timestamp_file(self._timestamp_file)
-                    if self._timestamp_file is not None else None)
-            if kept is not None:
-                restore_timestamps(self.codec, kept)
+            if self._timestamp_file is not None:
+                kept = read_timestamp_file(self._timestamp_file)
+                if kept is not None:
+                    restore_timestamps(self.codec, kept)
+                write_timestamp_file(self._timestamp_file, timestamps_of(self.codec))
         self._link_warning = link_warning
         self._gcs_heard = False
         self._outbox: list[Message] = []

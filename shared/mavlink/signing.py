@@ -43,6 +43,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import json
+import secrets
 import string
 from collections import Counter
 from collections.abc import Iterable, Mapping
@@ -57,6 +58,9 @@ from shared.errors import InputError
 KEY_BYTES = 32
 #: Shortest passphrase accepted in a key file, characters.
 MIN_PASSPHRASE_CHARS = 8
+#: Characters of a new passphrase (:func:`new_passphrase`): letters and digits, 62 of
+#: them, so 43 carry 256 bits.
+NEW_PASSPHRASE_CHARS = 43
 #: The signing epoch, 2015-01-01 00:00:00 UTC, in Unix seconds.
 EPOCH_UNIX_S = 1_420_070_400
 #: Signing timestamp units per second (one unit is 10 µs).
@@ -82,6 +86,17 @@ class MAVLink(Protocol):
 def key_from_passphrase(passphrase: str) -> bytes:
     """MAVProxy's key derivation: SHA-256 of the passphrase's bytes (32 bytes)."""
     return hashlib.sha256(passphrase.encode("utf-8")).digest()
+
+
+def new_passphrase() -> str:
+    """A random passphrase of :data:`NEW_PASSPHRASE_CHARS` letters and digits (256 bits).
+
+    MAVProxy takes keys only as a passphrase (``signing key <passphrase>``; a word of
+    ASCII, the key its SHA-256), so a new key is one: its key file holds the passphrase
+    and a newline, never 32 bytes or 64 hex digits.
+    """
+    alphabet = string.ascii_letters + string.digits
+    return "".join(secrets.choice(alphabet) for _ in range(NEW_PASSPHRASE_CHARS))
 
 
 def key_from_file_bytes(path: Path, raw: bytes) -> bytes:
