@@ -11,7 +11,7 @@ Rules:
    for it (``--insecure``); then :func:`check_link` returns the warning line the entry
    point prints at start (the robot also tells each ground station that connects:
    :data:`INSECURE_NOTICE`).
-3. An unsigned link kept on loopback gets one line saying how to open it to the
+3. The unsigned default (no link given) gets one line saying how to open it to the
    network with a key.
 """
 
@@ -39,35 +39,38 @@ def default_url(signed: bool) -> str:
 class LinkCheck(NamedTuple):
     """What :func:`check_link` found."""
 
-    line: str | None  #: one line for the user at start; None for a signed link
+    url: str  #: the connection string to open
+    line: str | None  #: one line for the user at start, or None
     insecure: bool  #: unsigned and open to the network, as asked (``--insecure``)
 
 
-def check_link(url: str, option: str, signed: bool, insecure: bool) -> LinkCheck:
-    """Apply rules 2 and 3 to ``url``.
+def check_link(url: str | None, option: str, signed: bool, insecure: bool) -> LinkCheck:
+    """Apply rules 1 to 3 to ``url``.
 
     Args:
-        url: the connection string.
+        url: the connection string; None for the default (rule 1).
         option: the command-line option it came from, for the message (``--mavlink``).
         signed: the link is signed (a key was given).
         insecure: the user asked for an unsigned link open to the network.
 
     Returns:
-        The line to print (a warning for an insecure link, how to open a loopback one)
-        and whether the link is insecure.
+        The link to open, the line to print (a warning for an insecure link, how to
+        open the unsigned default to the network) and whether the link is insecure.
 
     Raises:
         InputError: an unsigned link open to the network without ``insecure``.
         TransportError: a bad connection string or an unknown host.
     """
-    if signed:
-        return LinkCheck(None, False)
-    if not reaches_network(url):
-        return LinkCheck(f"{url} is unsigned, for this machine only; to reach it from the "
-                         f"network, {HOW_TO_SIGN} and listen on udpin:0.0.0.0:{MAVLINK_PORT}",
-                         False)
+    if url is None:
+        url = default_url(signed)
+        if not signed:
+            return LinkCheck(url, f"{url} is unsigned, for this machine only; to reach it "
+                                  f"from the network, {HOW_TO_SIGN}", False)
+    if signed or not reaches_network(url):
+        return LinkCheck(url, None, False)
     if not insecure:
         raise InputError(f"{option} {url}", "an unsigned link open to the network lets "
                          f"anyone drive the robot: {HOW_TO_SIGN}, or add --insecure")
-    return LinkCheck(f"WARNING: {url} is unsigned and open to the network (--insecure): "
-                     f"anyone who can reach it can drive the robot; {HOW_TO_SIGN}", True)
+    return LinkCheck(url, f"WARNING: {url} is unsigned and open to the network "
+                          f"(--insecure): anyone who can reach it can drive the robot; "
+                          f"{HOW_TO_SIGN}", True)

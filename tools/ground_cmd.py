@@ -97,14 +97,13 @@ def run(args: argparse.Namespace) -> int:
     from shared.config import LogConfig
     from shared.errors import InputError
     from shared.key_file import read_key_file
-    from shared.link_security import check_link, default_url
+    from shared.link_security import check_link
 
     if args.action is run_drive and not sys.stdin.isatty():
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")
     clock = WallClock()
     key = read_key_file(args.key) if args.key is not None else None
-    url = args.connect if args.connect is not None else default_url(key is not None)
-    line = check_link(url, "--connect", key is not None, args.insecure).line
+    url, line, _ = check_link(args.connect, "--connect", key is not None, args.insecure)
     if line is not None:
         print(f"vmnav ground: {line}", file=sys.stderr)
     unix_offset_ns = time.time_ns() - clock.now_ns()

@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     from shared.calibration import read_camera
     from shared.clock import WallClock
     from shared.key_file import read_key_file
-    from shared.link_security import INSECURE_NOTICE, check_link, default_url
+    from shared.link_security import INSECURE_NOTICE, check_link
     from shared.memory import open_or_create
 
     config = load_config(args.config)
@@ -109,8 +109,8 @@ def run(args: argparse.Namespace) -> int:
     if args.duration is not None and not args.duration > 0:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
     key = read_key_file(args.key) if args.key is not None else None
-    url = args.mavlink if args.mavlink is not None else default_url(key is not None)
-    link_check = check_link(url, "--mavlink", key is not None, args.insecure)
+    link_check = check_link(args.mavlink, "--mavlink", key is not None, args.insecure)
+    url = link_check.url
     memory = open_or_create(args.memory, None if args.calibration is None
                             else read_camera(args.calibration))
     signing = None

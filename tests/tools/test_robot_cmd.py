@@ -179,3 +179,15 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
     assert in_use.returncode == 1
     assert f"udpin:127.0.0.1:{port}" in in_use.stderr.splitlines()[-1]
     assert "Traceback" not in bad_camera.stderr + no_robot.stderr + in_use.stderr
+
+
+def test_an_unsigned_link_open_to_the_network_is_refused_at_start(tmp_path) -> None:
+    memory = tmp_path / "memory"
+    result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
+                       "--memory", str(memory), "--mavlink", "udpin:0.0.0.0:14550", "--no-log")
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "vmnav robot: error: --mavlink udpin:0.0.0.0:14550: an unsigned link open to the "
+        "network lets anyone drive the robot: make a key with `vmnav ground keygen FILE` and "
+        "give it to both ends (--key FILE), or add --insecure"]
+    assert not memory.exists()  # refused before anything was opened
