@@ -121,6 +121,21 @@ def test_an_unsigned_message_let_through_does_not_divert_the_replies(net: Net) -
             if m.get_type() == "HEARTBEAT" and t > sent_ns] == [1_000_000_000]
 
 
+def test_the_stations_packets_replayed_from_another_socket_do_not_divert_the_replies(
+        net: Net, app: FakeApp) -> None:
+    net.advance(1.5)
+    captured = net.ground.codec.pack(mavlink.MAVLink_manual_control_message(1, 100, 0, 0, 0, 0))
+    net.ground.link.send(captured)
+    net.advance(0.5)
+    thief = Ground(f"udpout:127.0.0.1:{net.vehicle.link.local_port}", heartbeat=False)
+    net.ends.append(thief)
+    thief.link.send(captured)
+    net.advance(2.0)
+    assert len(app.called("manual_control")) == 1
+    assert thief.datagrams == 0
+    assert net.ground.of_type("HEARTBEAT", net.now_ns - 1_000_000_000)
+
+
 def test_the_timestamp_keeps_up_with_the_wall_clock(net: Net, app: FakeApp) -> None:
     net.advance(100.0)
     wall = timestamp_from_unix_ns(UNIX_OFFSET_NS + net.now_ns)
