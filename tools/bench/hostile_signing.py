@@ -65,7 +65,7 @@ KEY = key_from_passphrase("vmnav hostile signing bench")
 #: Parameter sets the eavesdropper captures.
 CAPTURED = 20
 #: Datagrams an attacker sends before waiting for the vehicle to parse them.
-BURST = 100
+BURST = 50
 #: Longest wait for the vehicle to parse a burst, or for the station to find it, s.
 PATIENCE_S = 30.0
 #: The parameter the station sets (and the captured packets set).
