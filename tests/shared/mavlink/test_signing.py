@@ -6,6 +6,8 @@ import json
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shared.clock import NS_PER_S, ManualClock
 from shared.errors import InputError
@@ -104,6 +106,22 @@ class TestSignedLink:
                                                       mavlink.MAV_PARAM_TYPE_REAL32)
         assert [m.get_type() for m in codec.parse(station.pack(param_set))] == ["PARAM_SET"]
         assert signing_stats(codec).bad == 256
+
+    @settings(derandomize=True, max_examples=200, deadline=None)
+    @given(link_id=st.integers(0, 255), timestamp=st.integers(0, MAX_TIMESTAMP),
+           signature=st.binary(min_size=6, max_size=6), system=st.integers(0, 255))
+    def test_a_forged_signature_never_moves_a_timestamp(self, link_id: int, timestamp: int,
+                                                        signature: bytes, system: int) -> None:
+        codec = make_codec(1, 1)
+        configure_signing(codec, KEY, 0, NOW_TS)
+        codec.signing.stream_timestamps[(1, 255, 190)] = NOW_TS
+        forger = make_codec(system, 190)
+        configure_signing(forger, KEY, link_id, timestamp)
+        packet = bytearray(forger.pack(heartbeat()))
+        packet[-6:] = signature  # not covered by the CRC: the check gets to the signature
+        assert codec.parse(bytes(packet)) == []
+        assert codec.signing.stream_timestamps == {(1, 255, 190): NOW_TS}
+        assert codec.signing.timestamp == NOW_TS
 
     def test_new_stream_window(self, robot: tuple[MavlinkCodec, UnsignedPolicy]) -> None:
         codec, _ = robot
