@@ -7,6 +7,3 @@ terminal), ``ground_log`` (every packet in and out, MCAP and tlog). The sans-I/O
 of the MAVLink protocols the station drives are the GCS roles in ``shared.mavlink``
 (its module docstring).
 """
-
-#: QGroundControl's listening address: vehicles send there by default.
-DEFAULT_URL = "udpin:0.0.0.0:14550"

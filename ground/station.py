@@ -3,8 +3,9 @@
 Theory of operation
 -------------------
 
-The station owns a :class:`~shared.udp_link.UdpLink` (``ground.DEFAULT_URL``,
-``udpin:0.0.0.0:14550`` where QGroundControl listens, or ``udpout:HOST:PORT``), one
+The station owns a :class:`~shared.udp_link.UdpLink` (``udpin:HOST:14550``, where
+QGroundControl listens, or ``udpout:HOST:PORT``; ``vmnav ground`` keeps an unsigned one
+on loopback: ``shared.link_security``), one
 codec, the :class:`~ground.fleet.Fleet` of vehicles it hears, and the sans-I/O client cores
 (missions, parameters, FTP, commands) aimed at the one vehicle it talks to. Each
 blocking call starts an operation on a core and runs :meth:`GroundStation.service`

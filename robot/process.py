@@ -117,6 +117,8 @@ class RobotParts:
         rng: seeds each mission run's generator.
         log: the field log; None records nothing.
         signing: MAVLink 2 signing of the link; None: unsigned.
+        link_warning: told to every ground station that connects (``vmnav robot
+            --insecure``); None: nothing.
         lockstep: the clock is a simulation's (the runtime's worker results land on
             the next frame; the loop may hold the clock).
     """
@@ -130,6 +132,7 @@ class RobotParts:
     rng: np.random.Generator
     log: FieldLog | None = None
     signing: SigningSetup | None = None
+    link_warning: str | None = None
     lockstep: bool = False
 
 
@@ -139,7 +142,7 @@ class RobotProcess:
 
     Args:
         parts: what the robot is made of; the process owns ``parts.log`` from now on.
-        link: the ground link, pymavlink syntax (``udpin:0.0.0.0:14550`` waits for a
+        link: the ground link, pymavlink syntax (``udpin:127.0.0.1:14550`` waits for a
             ground station, ``udpout:HOST:14550`` calls one).
         link_clock: the link's I/O clock (rule 3); None: ``parts.clock``.
         owned: parts the caller opened and hands over, closed after the runtime
@@ -174,7 +177,8 @@ class RobotProcess:
                                         lockstep=parts.lockstep)
             undo.callback(self.runtime.close)
             endpoint = VehicleEndpoint(self.runtime, parts.config, parts.files,
-                                       signing=parts.signing)
+                                       signing=parts.signing,
+                                       link_warning=parts.link_warning)
             self.vehicle = undo.enter_context(UdpVehicle.open(link, endpoint, self._link_clock))
             if log is not None:
                 self.vehicle.packet_taps.append(self._mavlink_tap(log))

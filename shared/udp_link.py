@@ -7,8 +7,13 @@ Connection strings (pymavlink ``mavutil.mavlink_connection`` spells them the sam
                        a free one, see :attr:`UdpLink.local_port`); send to the last peer a
                        datagram came from, so nothing goes out before the first one arrives
 ``udp:HOST:PORT``      the same as ``udpin`` (pymavlink's alias)
-``udpout:HOST:PORT``   send to HOST:PORT from a free local port; receive from anyone
+``udpout:HOST:PORT``   send to HOST:PORT from a free local port (on loopback when HOST is
+                       a loopback address, else on every interface); receive from anyone
+                       who can reach that port
 =====================  ===================================================================
+
+:func:`reaches_network` tells whether a string's socket can be reached from another
+machine (the entry points refuse that unsigned unless asked: ``shared.link_security``).
 
 Theory of operation: one datagram carries one or more whole MAVLink packets; the
 link never splits or joins them. ``send`` and ``receive`` never block. UDP loses
@@ -22,12 +27,13 @@ IPv4 only, like pymavlink's UDP links.
 from __future__ import annotations
 
 import enum
+import ipaddress
 import socket
 
 from shared.byte_link import LinkClosedError
 from shared.errors import TransportError
 
-__all__ = ["Peer", "UdpLink", "UdpMode", "parse_udp_url"]
+__all__ = ["Peer", "UdpLink", "UdpMode", "parse_udp_url", "reaches_network"]
 
 #: An IPv4 address and port, as ``socket`` gives them.
 Peer = tuple[str, int]
@@ -77,6 +83,26 @@ def _resolve(url: str, host: str, port: int) -> Peer:
     return str(address), int(resolved_port)
 
 
+def _bind_address(mode: UdpMode, address: Peer) -> Peer:
+    """Where a link's socket is bound: the listening address, or for ``udpout`` a free port
+    on loopback (a loopback peer) or on every interface."""
+    if mode is UdpMode.IN:
+        return address
+    return ("127.0.0.1" if ipaddress.ip_address(address[0]).is_loopback else "0.0.0.0", 0)
+
+
+def reaches_network(url: str) -> bool:
+    """Whether another machine can send to the socket :meth:`UdpLink.open` makes for
+    ``url``: it is bound to an address other than a loopback one.
+
+    Raises:
+        TransportError: a bad string or an unknown host.
+    """
+    mode, host, port = parse_udp_url(url)
+    bound = _bind_address(mode, _resolve(url, host, port))[0]
+    return not ipaddress.ip_address(bound).is_loopback
+
+
 class UdpLink:
     """A non-blocking UDP socket that carries MAVLink datagrams (module docstring).
 
@@ -114,7 +140,7 @@ class UdpLink:
         address = _resolve(url, host, port)
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
-            sock.bind(address if mode is UdpMode.IN else ("0.0.0.0", 0))
+            sock.bind(_bind_address(mode, address))
             sock.setblocking(False)
         except OSError as e:
             sock.close()

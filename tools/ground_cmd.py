@@ -7,10 +7,15 @@ vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. Wit
 ``--log DIR`` every MAVLink packet in and out also goes to ``DIR/ground-NNNN.mcap`` and
 ``DIR/ground-<stamp>.tlog`` (``ground.ground_log``).
 
+Without ``--key`` the link stays on this machine (``shared.link_security``): the
+default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
+open to the network is refused unless ``--insecure`` (a warning on stderr).
+
 The subcommands with actions of their own are modules of their own, registered here:
 ``memory`` (:mod:`tools.ground_memory_cmd`), ``teach`` (:mod:`tools.ground_teach_cmd`),
-``params`` (:mod:`tools.ground_params_cmd`). Every action is ``(station, args) -> exit
-code``, called by :func:`run` once the vehicle is heard.
+``params`` (:mod:`tools.ground_params_cmd`), ``keygen`` (:mod:`tools.ground_keygen_cmd`,
+which connects to nothing). Every other action is ``(station, args) -> exit code``,
+called by :func:`run` once the vehicle is heard.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tools import ground_memory_cmd, ground_params_cmd, ground_teach_cmd
+from tools import ground_keygen_cmd, ground_memory_cmd, ground_params_cmd, ground_teach_cmd
 
 if TYPE_CHECKING:
     from ground.station import GroundStation
@@ -38,18 +43,19 @@ Subparsers = argparse._SubParsersAction  # type: ignore[type-arg]
 
 def add_parser(subparsers: Subparsers) -> None:
     """Register ``vmnav ground`` and its subcommands."""
-    from ground import DEFAULT_URL
-
     ground = subparsers.add_parser(
         "ground", help="the MAVLink ground station: status, goals, teaching",
         description="Talk to a vmnav robot (or several, by system id) over MAVLink.")
-    ground.add_argument("--connect", default=DEFAULT_URL, metavar="URL",
-                        help=f"udpin:HOST:PORT or udpout:HOST:PORT (default {DEFAULT_URL})")
+    ground.add_argument("--connect", metavar="URL",
+                        help="udpin:HOST:PORT or udpout:HOST:PORT (default "
+                             "udpin:0.0.0.0:14550 with --key, else udpin:127.0.0.1:14550)")
     ground.add_argument("--system", type=int, metavar="N",
                         help="the vehicle's system id (default: the first one heard)")
     ground.add_argument("--key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing key file (32 raw bytes, 64 hex digits "
-                             "or a passphrase)")
+                             "or a passphrase; `vmnav ground keygen FILE` makes one)")
+    ground.add_argument("--insecure", action="store_true",
+                        help="allow an unsigned --connect link open to the network")
     ground.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT_S, metavar="S",
                         help=f"wait this long for the vehicle, s (default {DEFAULT_TIMEOUT_S:g})")
     ground.add_argument("--log", type=Path, metavar="DIR",
@@ -75,6 +81,7 @@ def add_parser(subparsers: Subparsers) -> None:
     goto.set_defaults(action=run_goto)
     ground_teach_cmd.add_parser(sub)
     ground_params_cmd.add_parser(sub)
+    ground_keygen_cmd.add_parser(sub)
     sub.add_parser("drive", help="keyboard teleoperation in MANUAL: w/s speed, a/d turn, "
                    "space stop, q quit").set_defaults(action=run_drive)
     ground.set_defaults(run=run)
@@ -90,15 +97,19 @@ def run(args: argparse.Namespace) -> int:
     from shared.config import LogConfig
     from shared.errors import InputError
     from shared.key_file import read_key_file
+    from shared.link_security import check_link
 
     if args.action is run_drive and not sys.stdin.isatty():
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")
     clock = WallClock()
     key = read_key_file(args.key) if args.key is not None else None
+    url, line, _ = check_link(args.connect, "--connect", key is not None, args.insecure)
+    if line is not None:
+        print(f"vmnav ground: {line}", file=sys.stderr)
     unix_offset_ns = time.time_ns() - clock.now_ns()
     with contextlib.ExitStack() as stack:
         station = stack.enter_context(GroundStation.open(
-            args.connect, clock, system_id=args.system, key=key, unix_offset_ns=unix_offset_ns))
+            url, clock, system_id=args.system, key=key, unix_offset_ns=unix_offset_ns))
         if args.log is not None:
             ground_log = GroundLog(LogConfig(output_dir=str(args.log)), clock, unix_offset_ns)
             stack.callback(lambda: print(

@@ -8,7 +8,10 @@ It wires the parts the field runs, each on its own thread, around one loop:
   index, a file, or a URL such as ``vmnav sim serve``'s MJPEG stream);
 * the ground link: :class:`robot.vehicle.udp_vehicle.UdpVehicle` on ``--mavlink URL``
   (pymavlink connection strings: ``udpin:0.0.0.0:14550`` waits for a ground station,
-  ``udpout:HOST:14550`` calls one);
+  ``udpout:HOST:14550`` calls one); signed with ``--key FILE``, whose timestamps are
+  kept in ``--state DIR``. Without a key the link stays on loopback
+  (``shared.link_security``): the default is ``udpin:127.0.0.1:14550``, and a link open
+  to the network is refused unless ``--insecure``;
 * the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``.
 
 :class:`robot.process.RobotProcess` assembles them and runs the loop: it hands each
@@ -46,21 +49,27 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                         help="cv2.VideoCapture source: device index, file or URL "
                              "(http://127.0.0.1:8080/stream.mjpg) [default: the config's "
                              "camera.source]")
-    parser.add_argument("--mavlink", metavar="URL", default="udpin:0.0.0.0:14550",
-                        help="ground link, pymavlink syntax [default: %(default)s]")
+    parser.add_argument("--mavlink", metavar="URL",
+                        help="ground link, pymavlink syntax [default: udpin:0.0.0.0:14550 "
+                             "with --key, else udpin:127.0.0.1:14550, this machine only]")
     parser.add_argument("--memory", required=True, type=Path, metavar="DIR",
                         help="the visual memory (created when teaching into an empty folder)")
     parser.add_argument("--calibration", type=Path, metavar="FILE",
                         help="camera calibration JSON for a new memory [default: the "
                              "simulator's 800x600 camera]; a stored memory has its own")
     parser.add_argument("--state", type=Path, default=Path("vmnav-state"), metavar="DIR",
-                        help="parameters set from the ground and uploaded goal photos "
-                             "[default: %(default)s]")
+                        help="parameters set from the ground, uploaded goal photos and the "
+                             "signing timestamps [default: %(default)s]")
     parser.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
     parser.add_argument("--system", type=int, metavar="N",
                         help="MAVLink system id [default: the config's mavlink.system_id]")
     parser.add_argument("--key", type=Path, metavar="FILE",
-                        help="MAVLink 2 signing key file: sign everything, drop unsigned input")
+                        help="MAVLink 2 signing key file (vmnav ground keygen FILE makes one): "
+                             "sign everything, drop unsigned input")
+    parser.add_argument("--insecure", action="store_true",
+                        help="allow an unsigned --mavlink link open to the network (anyone "
+                             "on it can drive the robot); warns at start and to each ground "
+                             "station")
     parser.add_argument("--log", type=Path, metavar="DIR",
                         help="write the field log to DIR/robot-NNNN.mcap: frames, matches, "
                              "servo state, commands, odometry, SIPs, MAVLink in and out, events "
@@ -85,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
     from shared.calibration import read_camera
     from shared.clock import WallClock
     from shared.key_file import read_key_file
+    from shared.link_security import INSECURE_NOTICE, check_link
     from shared.memory import open_or_create
 
     config = load_config(args.config)
@@ -98,12 +108,16 @@ def run(args: argparse.Namespace) -> int:
                                                        else {"system_id": args.system})))
     if args.duration is not None and not args.duration > 0:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    key = read_key_file(args.key) if args.key is not None else None
+    link_check = check_link(args.mavlink, "--mavlink", key is not None, args.insecure)
+    url = link_check.url
     memory = open_or_create(args.memory, None if args.calibration is None
                             else read_camera(args.calibration))
     signing = None
     clock = WallClock()
-    if args.key is not None:
-        signing = SigningSetup(read_key_file(args.key), time.time_ns() - clock.now_ns())
+    if key is not None:
+        signing = SigningSetup(key, time.time_ns() - clock.now_ns(),
+                               timestamp_file=args.state / "signing-timestamps.json")
     # The process closes what `owned` holds after the runtime stopped the base, then has
     # the field log record how the Pioneer link ended, and finishes the log last
     # (robot.process, rule 4).
@@ -127,16 +141,19 @@ def run(args: argparse.Namespace) -> int:
 
         files = VehicleFiles(args.memory, args.state / "upload", args.state / "params.parm")
         parts = RobotParts(memory, driver, camera, clock, config, files, np.random.default_rng(),
-                           log=log, signing=signing)
-        with RobotProcess(parts, args.mavlink, owned=owned.pop_all(),
+                           log=log, signing=signing,
+                           link_warning=INSECURE_NOTICE if link_check.insecure else None)
+        with RobotProcess(parts, url, owned=owned.pop_all(),
                           log_end=pioneer_closed) as process:
             identity = driver.status().identity
             width, height = camera.size_wh
             print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
                   f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
-                  f"MAVLink system {config.mavlink.system_id} on {args.mavlink}"
+                  f"MAVLink system {config.mavlink.system_id} on {url}"
                   f"{' (signed)' if signing else ''}; memory {args.memory}: "
                   f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
+            if link_check.line is not None:
+                print(f"vmnav robot: {link_check.line}", flush=True)
             ended = process.run(end_ns=None if args.duration is None
                                 else clock.now_ns() + round(args.duration * 1e9))
     print(f"vmnav robot: {ended}; base stopped, links closed", flush=True)

@@ -49,11 +49,20 @@ Rules:
    65535: ``errors_comm`` the corrupt packets, ``errors_count1`` the handler faults
    (rule 9), ``errors_count2`` the messages refused (rule 9).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
-   while lost.
+   while lost. A ``link_warning`` (``vmnav robot --insecure``: unsigned and open to the
+   network) goes out as a STATUSTEXT WARNING to every ground station that connects:
+   with the first GCS HEARTBEAT, and again each time the link is regained.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
    packets in that are unsigned (except RADIO_STATUS from a radio modem), wrongly
-   signed or replayed are dropped and counted (:meth:`stats`); the outgoing
-   timestamp is raised to the wall clock every 10 s (``SigningClock``).
+   signed or replayed are dropped and counted (:meth:`stats`); a wrongly signed packet
+   moves no timestamp (``shared.mavlink.signing.check_signature``). Every
+   :data:`SIGNING_PERIOD_NS` the outgoing timestamp is raised to the wall clock
+   (``SigningClock``) and, with a ``timestamp_file``, the timestamps (ours and each
+   stream's) are written to it atomically; also at :meth:`close`. They are read back
+   on construction (and written once, so a place that cannot hold them fails at
+   start), so after a restart no packet accepted before it is accepted again (after a
+   crash, none accepted more than a period before it). A write that fails later is a
+   STATUSTEXT ERROR, once.
 9. Hostile input: a message is refused when it is answered with an error (MISSION_ACK
    other than ACCEPTED, PARAM_ERROR, COMMAND_ACK other than ACCEPTED or IN_PROGRESS)
    or dropped as malformed (rule 2); both are counted. An exception of a handler is a
@@ -86,6 +95,7 @@ from robot.vehicle.telemetry import (
     system_status,
 )
 from robot.vehicle.user_commands import user_handlers
+from shared.clock import NS_PER_S
 from shared.config import FtpConfig
 from shared.errors import InputError
 from shared.handler_faults import HandlerFaults
@@ -108,9 +118,12 @@ from shared.mavlink.signing import (
     SigningStats,
     UnsignedPolicy,
     configure_signing,
+    restore_timestamps,
     signing_stats,
+    timestamps_of,
 )
 from shared.mavlink.statustext import statustext_messages
+from shared.signing_timestamp_file import read_timestamp_file, write_timestamp_file
 
 logger = logging.getLogger(__name__)
 
@@ -118,6 +131,9 @@ logger = logging.getLogger(__name__)
 COMPONENT_ID = 1
 #: Messages accepted unsigned on a signed link: a radio modem's own reports.
 UNSIGNED_ALLOWED = (mavlink.MAVLINK_MSG_ID_RADIO_STATUS,)
+#: How often the signing timestamp is raised to the wall clock and kept, ns (the spec
+#: asks at least once a minute).
+SIGNING_PERIOD_NS = NS_PER_S
 _HEARTBEAT = mavlink.MAVLINK_MSG_ID_HEARTBEAT
 #: ``logging`` level of an application notice -> STATUSTEXT severity.
 _SEVERITIES = {logging.DEBUG: mavlink.MAV_SEVERITY_DEBUG, logging.INFO: mavlink.MAV_SEVERITY_INFO,
@@ -178,16 +194,19 @@ class VehicleEndpoint:
         signing: sign the link; None leaves it unsigned.
         ftp: FTP server limits.
         uid: the robot's unique id in AUTOPILOT_VERSION (64 bits).
+        link_warning: told to every ground station that connects (rule 7); None: nothing.
 
     Raises:
         ConfigError: the parameter file is malformed, or a config value lies outside its
             parameter's range (names the file or parameter).
+        InputError: the signing timestamp file cannot be read, is not one, or cannot be
+            written.
         ValueError: a signing key that is not 32 bytes, or a link id outside 0..255.
     """
 
     def __init__(self, app: VehicleApp, config: VmnavConfig, files: VehicleFiles, *,
                  signing: SigningSetup | None = None, ftp: FtpConfig | None = None,
-                 uid: int = 0) -> None:
+                 uid: int = 0, link_warning: str | None = None) -> None:
         link = config.mavlink
         self.address = Address(link.system_id, COMPONENT_ID)
         self.codec = make_codec(link.system_id, COMPONENT_ID)
@@ -228,10 +247,20 @@ class VehicleEndpoint:
         })
         self._policy: UnsignedPolicy | None = None
         self._signing_clock: SigningClock | None = None
+        self._timestamp_file = signing.timestamp_file if signing is not None else None
+        self._timestamps_unsaved = False
         if signing is not None:
             self._policy = configure_signing(self.codec, signing.key, signing.link_id, 0,
                                              UnsignedPolicy(UNSIGNED_ALLOWED))
-            self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns)
+            self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns,
+                                               SIGNING_PERIOD_NS)
+            if self._timestamp_file is not None:
+                kept = read_timestamp_file(self._timestamp_file)
+                if kept is not None:
+                    restore_timestamps(self.codec, kept)
+                write_timestamp_file(self._timestamp_file, timestamps_of(self.codec))
+        self._link_warning = link_warning
+        self._gcs_heard = False
         self._outbox: list[Message] = []
         self._messages = 0
         self._refused = 0
@@ -253,6 +282,7 @@ class VehicleEndpoint:
             How many messages were accepted (0 when all were corrupt or unsigned).
         """
         self._tick(now_ns)
+        self._keep_signing(now_ns)
         messages = self.codec.parse(data, datagram)
         for msg in messages:
             try:
@@ -270,8 +300,7 @@ class VehicleEndpoint:
         """Everything due at ``now_ns``: replies, timer retries, heartbeat, telemetry,
         progress and failsafe notices; one packed MAVLink packet per element."""
         self._tick(now_ns)
-        if self._signing_clock is not None and now_ns >= (self._signing_clock.get_timer() or 0):
-            self._signing_clock.handle_timer(now_ns)
+        self._keep_signing(now_ns)
         out, self._outbox = self._outbox, []
         t = self._app.telemetry()
         out += self._progress.update(t, self._time_usec())
@@ -305,8 +334,30 @@ class VehicleEndpoint:
             self._refused, self.faults.counts())
 
     def close(self) -> None:
-        """Discard FTP uploads in progress (nothing half-written is kept)."""
+        """Discard FTP uploads in progress (nothing half-written is kept); keep the signing
+        timestamps (rule 8)."""
         self._ftp.close()
+        self._save_timestamps()
+
+    # -- signing ------------------------------------------------------------------------
+
+    def _keep_signing(self, now_ns: int) -> None:
+        """When due, raise the signing timestamp to the wall clock and keep it (rule 8)."""
+        clock = self._signing_clock
+        if clock is not None and now_ns >= (clock.get_timer() or 0):
+            clock.handle_timer(now_ns)
+            self._save_timestamps()
+
+    def _save_timestamps(self) -> None:
+        if self._timestamp_file is None:
+            return
+        try:
+            write_timestamp_file(self._timestamp_file, timestamps_of(self.codec))
+        except InputError as e:
+            if not self._timestamps_unsaved:
+                self._outbox += self._notice(mavlink.MAV_SEVERITY_ERROR,
+                                             f"signing timestamps not saved: {e}")
+            self._timestamps_unsaved = True
 
     # -- input --------------------------------------------------------------------------
 
@@ -342,10 +393,17 @@ class VehicleEndpoint:
                 + self._params.handle_message(msg, now_ns))
 
     def _on_heartbeat(self, msg: Any, now_ns: int) -> list[Message]:
-        if msg.type != mavlink.MAV_TYPE_GCS or not self._watchdog.heartbeat(now_ns):
+        if msg.type != mavlink.MAV_TYPE_GCS:
             return []
-        self._app.gcs_regained()
-        return self._notice(mavlink.MAV_SEVERITY_INFO, "GCS heartbeat regained")
+        first, self._gcs_heard = not self._gcs_heard, True
+        out: list[Message] = []
+        regained = self._watchdog.heartbeat(now_ns)
+        if regained:
+            self._app.gcs_regained()
+            out += self._notice(mavlink.MAV_SEVERITY_INFO, "GCS heartbeat regained")
+        if self._link_warning is not None and (first or regained):
+            out += self._notice(mavlink.MAV_SEVERITY_WARNING, self._link_warning)
+        return out
 
     def _drain_events(self) -> list[Message]:
         """Persist and apply parameter changes; log mission events."""

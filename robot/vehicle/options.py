@@ -31,6 +31,9 @@ class SigningSetup:
             the entry point (``time.time_ns() - clock.now_ns()``); keeps the outgoing
             signing timestamp at the wall clock.
         link_id: this link's id in signed packets, 0..255.
+        timestamp_file: where the signing timestamps are kept across restarts
+            (``shared.signing_timestamp_file``; the robot's is ``STATE/signing-timestamps.json``);
+            None keeps them only in memory.
 
     ``VehicleEndpoint`` raises ValueError for a key that is not 32 bytes or a link id
     out of range (``configure_signing``).
@@ -39,3 +42,4 @@ class SigningSetup:
     key: bytes
     unix_offset_ns: int
     link_id: int = 0
+    timestamp_file: Path | None = None

@@ -13,10 +13,14 @@ Rules:
    dialect, so its CRC was checked, and on a signed link validly signed; the codec
    checks both while the endpoint parses, before the reply address is chosen and
    anything is sent). Corrupt packets and unknown message ids are counted
-   (``codec.bad_packets``, ``codec.unknown_packets``) but never move the reply address,
-   so neither garbage that happens to decode as an unknown message nor a stranger's
-   unsigned datagram (even one the signing policy lets through) diverts the telemetry.
-   A ``udpout`` link always sends to its peer.
+   (``codec.bad_packets``, ``codec.unknown_packets``) but never move the reply address.
+   On a signed link that is the ground station that authenticated last: a stranger's
+   unsigned datagram (even one the signing policy lets through), a wrongly signed one
+   and a replay of the station's own packets from another socket (its timestamp is
+   spent) all leave the replies and telemetry where they are. On an unsigned link any
+   well-formed packet moves them, so whoever can reach the socket can take them: the
+   entry points keep unsigned links on loopback (``shared.link_security``). A
+   ``udpout`` link always sends to its peer.
 3. Every datagram received and every packet sent goes to the ``packet_taps``
    (``tap(direction, data, now_ns)``, direction ``"in"`` or ``"out"``), in the I/O
    thread: the field log's MAVLink in and out.

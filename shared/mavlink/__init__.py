@@ -42,8 +42,10 @@ FTP             ``ftp/``: ``payload`` (codec, CRC32),   ``robot/vehicle/ftp_memo
                 ``vehicle`` (server, the file-system    (the memory and upload area)
                 Protocol), ``gcs`` (client)
 statustext      ``statustext`` (chunking, text length)  --
-signing         ``signing`` (keys, unsigned policy,     ``shared/key_file.py`` (reads the
-                the timestamp bump)                     key file, for both entry points)
+signing         ``signing`` (keys, unsigned policy,     ``shared/key_file.py`` (reads and
+                the signature check, the timestamp      creates the key file, for both
+                bump, the timestamps kept across        entry points),
+                restarts)                               ``shared/signing_timestamp_file.py``
 telemetry       -- (single messages, no conversation)   ``robot/vehicle/telemetry.py``
                                                         builds them, ``ground/`` reads
 ==============  ======================================  ==================================

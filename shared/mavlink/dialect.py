@@ -24,6 +24,7 @@ import struct
 os.environ["MAVLINK20"] = "1"
 
 from shared.mavlink import vmnav_dialect as mavlink
+from shared.mavlink.signing import check_signature
 
 __all__ = ["MavlinkCodec", "Message", "make_codec", "mavlink", "to_float32"]
 
@@ -45,7 +46,9 @@ class MavlinkCodec(mavlink.MAVLink):
     after garbage (``robust_parsing``): corrupt packets are counted in
     :attr:`bad_packets` and dropped, never raised. Packets of a message id the dialect
     lacks come out as ``UNKNOWN_<id>`` messages, counted in :attr:`unknown_packets`;
-    only :meth:`is_verified` messages count in :attr:`verified_packets`.
+    only :meth:`is_verified` messages count in :attr:`verified_packets`. Signatures are
+    checked by :func:`shared.mavlink.signing.check_signature` (a wrongly signed packet
+    moves no timestamp), not by the generated check.
     """
 
     def __init__(self, system_id: int, component_id: int) -> None:
@@ -71,6 +74,10 @@ class MavlinkCodec(mavlink.MAVLink):
         if isinstance(msg, mavlink.MAVLink_unknown):
             return False
         return self.signing.secret_key is None or msg.get_signed()
+
+    def check_signature(self, msgbuf: bytearray, src_system: int, src_component: int) -> bool:
+        """pymavlink's hook for a signed packet: :func:`~shared.mavlink.signing.check_signature`."""
+        return check_signature(self.signing, msgbuf, src_system, src_component)
 
     def pack(self, msg: Message) -> bytes:
         """Encode one message as a MAVLink 2 packet and advance the sequence number."""

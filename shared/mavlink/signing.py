@@ -17,18 +17,36 @@ leaves to the application:
   message id. pymavlink itself counts packets in ``mav.signing``
   (:func:`signing_stats`); a rejected packet comes out of ``parse_buffer`` as
   BAD_DATA ("Invalid signature") when ``robust_parsing`` is set, else raises.
+- **The check itself.** pymavlink's generated ``check_signature`` stores a stream's
+  timestamp *before* it checks the signature, so a packet with a wrong key and a
+  timestamp near 2**48 locks its (link id, system, component) stream out until restart:
+  256 such packets, one per link id, shut out the real station. :func:`check_signature`
+  is the same check in the safe order (the signature first, then the stream's and our
+  own timestamps move) with a constant-time comparison;
+  :class:`~shared.mavlink.dialect.MavlinkCodec` uses it.
+- **Freshness.** A packet is accepted only with a timestamp above its stream's last
+  (no replay), and a stream not heard before only within :data:`NEW_STREAM_WINDOW`
+  (60 s) behind our own timestamp.
 - **A current timestamp.** pymavlink adds 1 per packet sent, so after idle time its
   timestamp lags the wall clock, and peers reject a new stream more than 60 s old.
   :class:`SigningClock` raises it to the wall clock every ``period_ns`` (MAVProxy
   PR #1598 does so every 10 s).
+- **Across restarts.** The spec asks a signing end to keep its timestamp in persistent
+  storage and to start from the larger of it and the clock. :class:`SigningTimestamps`
+  is what is kept: our own timestamp and every stream's last accepted one, so that
+  after a restart no packet accepted before it is accepted again
+  (:func:`restore_timestamps`; the file is ``shared/signing_timestamp_file.py``'s).
 """
 
 from __future__ import annotations
 
 import hashlib
+import hmac
+import json
+import secrets
 import string
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -40,12 +58,23 @@ from shared.errors import InputError
 KEY_BYTES = 32
 #: Shortest passphrase accepted in a key file, characters.
 MIN_PASSPHRASE_CHARS = 8
+#: Characters of a new passphrase (:func:`new_passphrase`): letters and digits, 62 of
+#: them, so 43 carry 256 bits.
+NEW_PASSPHRASE_CHARS = 43
 #: The signing epoch, 2015-01-01 00:00:00 UTC, in Unix seconds.
 EPOCH_UNIX_S = 1_420_070_400
 #: Signing timestamp units per second (one unit is 10 µs).
 TICKS_PER_S = 100_000
 #: The timestamp field is 48 bits.
 MAX_TIMESTAMP = (1 << 48) - 1
+#: How far behind our own timestamp the first packet of a stream not heard before may
+#: be, ticks (60 s, as pymavlink and the C library have it).
+NEW_STREAM_WINDOW = 60 * TICKS_PER_S
+#: Bytes of the signature block: link id (1), timestamp (6), signature (6).
+SIGNATURE_BLOCK_BYTES = 13
+
+#: A signing stream: (link id, system id, component id) of the sender.
+Stream = tuple[int, int, int]
 
 
 class MAVLink(Protocol):
@@ -57,6 +86,17 @@ class MAVLink(Protocol):
 def key_from_passphrase(passphrase: str) -> bytes:
     """MAVProxy's key derivation: SHA-256 of the passphrase's bytes (32 bytes)."""
     return hashlib.sha256(passphrase.encode("utf-8")).digest()
+
+
+def new_passphrase() -> str:
+    """A random passphrase of :data:`NEW_PASSPHRASE_CHARS` letters and digits (256 bits).
+
+    MAVProxy takes keys only as a passphrase (``signing key <passphrase>``; a word of
+    ASCII, the key its SHA-256), so a new key is one: its key file holds the passphrase
+    and a newline, never 32 bytes or 64 hex digits.
+    """
+    alphabet = string.ascii_letters + string.digits
+    return "".join(secrets.choice(alphabet) for _ in range(NEW_PASSPHRASE_CHARS))
 
 
 def key_from_file_bytes(path: Path, raw: bytes) -> bytes:
@@ -155,6 +195,107 @@ def configure_signing(mav: MAVLink, key: bytes, link_id: int, timestamp: int,
     mav.signing.timestamp = timestamp
     mav.signing.allow_unsigned_callback = policy
     return policy
+
+
+def check_signature(signing: Any, msgbuf: bytes | bytearray, src_system: int,
+                    src_component: int) -> bool:
+    """Whether a signed packet is genuine and fresh; only then move the timestamps.
+
+    pymavlink's ``check_signature`` with the order fixed (module docstring): the
+    packet's stream timestamp must exceed the stream's last accepted one (or, for a
+    stream not heard before, lie at most :data:`NEW_STREAM_WINDOW` behind
+    ``signing.timestamp``), and its signature must match; only then do the stream's
+    timestamp and ``signing.timestamp`` (our own, the larger of the two) move.
+
+    Args:
+        signing: a pymavlink ``MAVLinkSigning`` with its ``secret_key`` set.
+        msgbuf: the whole packet, ending with its 13-byte signature block.
+        src_system: the packet's system id.
+        src_component: the packet's component id.
+    """
+    block = bytes(msgbuf[-SIGNATURE_BLOCK_BYTES:])
+    timestamp = int.from_bytes(block[1:7], "little")
+    stream = (block[0], src_system, src_component)
+    last = signing.stream_timestamps.get(stream)
+    if last is not None and timestamp <= last:
+        return False
+    if last is None and timestamp + NEW_STREAM_WINDOW < signing.timestamp:
+        return False
+    expected = hashlib.sha256(signing.secret_key + bytes(msgbuf[:-6])).digest()[:6]
+    if not hmac.compare_digest(expected, block[7:]):
+        return False
+    signing.stream_timestamps[stream] = timestamp
+    signing.timestamp = max(signing.timestamp, timestamp)
+    return True
+
+
+@dataclass(frozen=True, slots=True)
+class SigningTimestamps:
+    """What a signing end keeps across restarts (module docstring).
+
+    Attributes:
+        timestamp: our own signing timestamp, ticks (10 µs since 2015-01-01 UTC).
+        streams: each stream's last accepted timestamp, ticks, by (link id, system id,
+            component id) of its sender.
+    """
+
+    timestamp: int
+    streams: Mapping[Stream, int]
+
+
+def timestamps_of(mav: MAVLink) -> SigningTimestamps:
+    """A copy of ``mav``'s signing timestamps, to keep."""
+    return SigningTimestamps(int(mav.signing.timestamp), dict(mav.signing.stream_timestamps))
+
+
+def restore_timestamps(mav: MAVLink, saved: SigningTimestamps) -> None:
+    """Raise ``mav``'s own and stream timestamps to ``saved``'s (never lower one)."""
+    signing = mav.signing
+    signing.timestamp = max(signing.timestamp, saved.timestamp)
+    for stream, timestamp in saved.streams.items():
+        signing.stream_timestamps[stream] = max(signing.stream_timestamps.get(stream, 0),
+                                                timestamp)
+
+
+def timestamps_to_json(saved: SigningTimestamps) -> bytes:
+    """``saved`` as UTF-8 JSON: ``{"timestamp": T, "streams": [[link, system, component,
+    T], ...]}`` (ticks), streams sorted."""
+    streams = sorted([*stream, t] for stream, t in saved.streams.items())
+    return (json.dumps({"timestamp": saved.timestamp, "streams": streams}) + "\n").encode()
+
+
+def timestamps_from_json(path: Path, document: object) -> SigningTimestamps:
+    """The timestamps a parsed :func:`timestamps_to_json` document holds.
+
+    Args:
+        path: the file it came from, for the message.
+        document: the parsed JSON.
+
+    Raises:
+        InputError: not that shape, or a number out of range (the message says where).
+    """
+    if not isinstance(document, dict) or set(document) != {"timestamp", "streams"}:
+        raise InputError(path, 'signing timestamp file: want {"timestamp": T, "streams": [...]}')
+    timestamp = document["timestamp"]
+    if not _is_int_in(timestamp, MAX_TIMESTAMP):
+        raise InputError(path, f"signing timestamp file: timestamp {timestamp!r} is not an "
+                               "integer in 0..2**48-1")
+    if not isinstance(document["streams"], list):
+        raise InputError(path, "signing timestamp file: streams is not a list")
+    streams: dict[Stream, int] = {}
+    for i, entry in enumerate(document["streams"]):
+        if (not isinstance(entry, list) or len(entry) != 4
+                or not all(_is_int_in(v, 255) for v in entry[:3])
+                or not _is_int_in(entry[3], MAX_TIMESTAMP)):
+            raise InputError(path, f"signing timestamp file: streams[{i}] is not "
+                                   "[link_id, system, component, timestamp] in range")
+        streams[(entry[0], entry[1], entry[2])] = entry[3]
+    return SigningTimestamps(timestamp, streams)
+
+
+def _is_int_in(value: object, top: int) -> bool:
+    """``value`` is an int (not a bool) in 0..``top``."""
+    return isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= top
 
 
 @dataclass(frozen=True, slots=True)

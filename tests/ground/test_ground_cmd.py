@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import re
+import stat
 import time
 from pathlib import Path
 
@@ -13,12 +14,16 @@ import pytest
 
 from robot.mission import MissionState
 from robot.vehicle.udp_vehicle import UdpVehicle
+from shared.clock import WallClock
+from shared.key_file import read_key_file
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
+from shared.mavlink.signing import key_from_passphrase
 from shared.memory.store import read_memory, thumbnail_path, write_memory
 from shared.udp_link import UdpLink
 from tests.ground.conftest import run_ground
 from tests.robot.vehicle.fake_app import FakeApp
+from tests.robot.vehicle.harness import make_vehicle
 from tests.shared.memory.builders import loop_memory
 from tools.bench.hostile_images import bogus_chunk_png
 from tools.cli import main
@@ -179,3 +184,42 @@ def test_watch_prints_telemetry_lines(vehicle: UdpVehicle, app: FakeApp, capsys:
     assert {"HEARTBEAT:", "SYS_STATUS:", "ODOMETRY:", "MISSION_CURRENT:"} <= kinds
     assert any(line.endswith("vehicle 1  HEARTBEAT: mode MANUAL, standby") for line in lines)
     assert any("ODOMETRY: x +1.50 m, y -0.25 m, yaw +28.6 deg" in line for line in lines)
+
+
+def test_keygen_writes_a_key_both_ends_and_mavproxy_can_use(tmp_path: Path,
+                                                            capsys: Capsys) -> None:
+    path = tmp_path / "vmnav.key"
+    assert main(["ground", "keygen", str(path)]) == 0
+    out = capsys.readouterr().out
+    passphrase = path.read_text().strip()
+    assert read_key_file(path) == key_from_passphrase(passphrase)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert passphrase not in out  # the secret is read from the file, never printed
+    assert f"vmnav robot --key {path.name}" in out and f"vmnav ground --key {path}" in out
+    assert f'echo "udpout:ROBOT:14550 $(cat {path})" >> ~/.mavproxy/signing.keys' in out
+    assert main(["ground", "keygen", str(path)]) == 1
+    assert "exists: a new key never replaces one" in one_line_error(capsys)
+    assert path.read_text().strip() == passphrase
+
+
+def test_an_unsigned_link_open_to_the_network_is_refused(capsys: Capsys) -> None:
+    assert main(["ground", "--connect", "udpin:0.0.0.0:0", "status"]) == 1
+    assert "--connect udpin:0.0.0.0:0: an unsigned link open to the network" in \
+        one_line_error(capsys)
+
+
+def test_a_signed_station_talks_to_a_signed_vehicle(tmp_path: Path, capsys: Capsys) -> None:
+    key = tmp_path / "vmnav.key"
+    assert main(["ground", "keygen", str(key)]) == 0
+    app = FakeApp()
+    app.update(mode=Mode.HOLD)
+    vehicle = make_vehicle(tmp_path, app, WallClock(), key=read_key_file(key))
+    vehicle.start_thread()
+    try:
+        assert main(["ground", "--key", str(key), "--connect",
+                     f"udpout:127.0.0.1:{vehicle.link.local_port}", "status"]) == 0
+        assert capsys.readouterr().out.splitlines()[-1].startswith("vehicle 1: mode HOLD")
+        stats = vehicle.endpoint.stats()
+        assert stats.signing is not None and stats.signing.good > 0 and stats.bad_packets == 0
+    finally:
+        vehicle.close()

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import hashlib
+import stat
 from pathlib import Path
 
 import pytest
 
 from shared.errors import InputError
-from shared.key_file import read_key_file
-from shared.mavlink.signing import key_from_passphrase
+from shared.key_file import create_key_file, read_key_file
+from shared.mavlink.signing import NEW_PASSPHRASE_CHARS, key_from_passphrase
 
 KEY = key_from_passphrase("vmnavsecret")
 
@@ -47,3 +48,33 @@ class TestKeyFile:
     def test_unreadable(self, tmp_path: Path) -> None:
         with pytest.raises(InputError, match="cannot read signing key file: Is a directory"):
             read_key_file(tmp_path)
+
+
+class TestCreateKeyFile:
+    def test_a_new_key_is_a_passphrase_mavproxy_can_take_mode_0600(self, tmp_path: Path) -> None:
+        path = tmp_path / "vmnav.key"
+        create_key_file(path)
+        passphrase = path.read_text(encoding="ascii")
+        assert passphrase.endswith("\n") and passphrase[:-1].isalnum()
+        assert len(passphrase) == NEW_PASSPHRASE_CHARS + 1
+        assert read_key_file(path) == key_from_passphrase(passphrase.strip())
+        assert stat.S_IMODE(path.stat().st_mode) == 0o600
+        assert [p.name for p in tmp_path.iterdir()] == ["vmnav.key"]  # no temporary left
+        create_key_file(tmp_path / "other.key")
+        assert read_key_file(tmp_path / "other.key") != read_key_file(path)
+
+    def test_never_replaces_a_file(self, tmp_path: Path) -> None:
+        path = tmp_path / "vmnav.key"
+        path.write_bytes(KEY)
+        with pytest.raises(InputError, match="exists: a new key never replaces one"):
+            create_key_file(path)
+        assert path.read_bytes() == KEY
+        (tmp_path / "link").symlink_to(tmp_path / "dangling")
+        with pytest.raises(InputError, match="exists"):
+            create_key_file(tmp_path / "link")
+        assert not (tmp_path / "dangling").exists()
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "vmnav.key"]
+
+    def test_a_missing_folder_is_one_line(self, tmp_path: Path) -> None:
+        with pytest.raises(InputError, match="cannot create key file: No such file"):
+            create_key_file(tmp_path / "nope" / "vmnav.key")

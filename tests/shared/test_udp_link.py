@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import select
 import socket
 from collections.abc import Iterator
@@ -11,7 +12,7 @@ import pytest
 from shared.byte_link import LinkClosedError
 from shared.errors import TransportError
 from shared.mavlink.dialect import make_codec, mavlink
-from shared.udp_link import UdpLink, UdpMode, parse_udp_url
+from shared.udp_link import UdpLink, UdpMode, parse_udp_url, reaches_network
 
 
 @pytest.fixture
@@ -63,6 +64,25 @@ class TestConnectionStrings:
             with pytest.raises(TransportError, match=r"cannot bind 127\.0\.0\.1:\d+: "
                                                      r"Address already in use"):
                 UdpLink.open(url)
+
+
+class TestReach:
+    @pytest.mark.parametrize(("url", "reaches"), [
+        ("udpin:0.0.0.0:14550", True),
+        ("udpin:127.0.0.1:14550", False),
+        ("udpin:localhost:0", False),
+        ("udpout:127.0.0.1:14550", False),
+        ("udpout:192.0.2.7:14550", True),  # bound to every interface to reach its peer
+    ])
+    def test_reaches_network(self, url: str, reaches: bool) -> None:
+        assert reaches_network(url) is reaches
+
+    def test_udpout_to_loopback_binds_loopback(self, pair: tuple[UdpLink, UdpLink]) -> None:
+        server, client = pair
+        with socket.socket(fileno=os.dup(client.fileno())) as bound:
+            assert bound.getsockname() == ("127.0.0.1", client.local_port)
+        assert client.send(b"ping")
+        assert [data for data, _ in wait_receive(server)] == [b"ping"]
 
 
 class TestDatagrams:

@@ -27,7 +27,7 @@ NESTED = {
     "tools.sim_cmd": {"tools.sim_serve_cmd"},
     "tools.memory_cmd": {"tools.memory_localize_cmd"},
     "tools.ground_cmd": {"tools.ground_memory_cmd", "tools.ground_teach_cmd",
-                         "tools.ground_params_cmd"},
+                         "tools.ground_params_cmd", "tools.ground_keygen_cmd"},
 }
 #: Lines a top-level tools/ module may have ("under ~200").
 MAX_COMMAND_LINES = 210

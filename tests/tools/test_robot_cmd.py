@@ -8,6 +8,7 @@ the robot's memory; SIGTERM then stops the robot cleanly.
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import socket
@@ -20,6 +21,7 @@ from ground.station import GroundStation
 from shared.calibration import write_camera
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
+from shared.key_file import read_key_file
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory, write_memory
@@ -179,3 +181,43 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
     assert in_use.returncode == 1
     assert f"udpin:127.0.0.1:{port}" in in_use.stderr.splitlines()[-1]
     assert "Traceback" not in bad_camera.stderr + no_robot.stderr + in_use.stderr
+
+
+def test_an_unsigned_link_open_to_the_network_is_refused_at_start(tmp_path) -> None:
+    memory = tmp_path / "memory"
+    result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
+                       "--memory", str(memory), "--mavlink", "udpin:0.0.0.0:14550", "--no-log")
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "vmnav robot: error: --mavlink udpin:0.0.0.0:14550: an unsigned link open to the "
+        "network lets anyone drive the robot: make a key with `vmnav ground keygen FILE` and "
+        "give it to both ends (--key FILE), or add --insecure"]
+    assert not memory.exists()  # refused before anything was opened
+
+
+@pytest.mark.slow
+def test_a_signed_robot_talks_only_to_its_key_and_keeps_its_timestamps(
+        sim_serve, tmp_path) -> None:
+    aria, camera = sim_serve
+    key = tmp_path / "vmnav.key"
+    assert subprocess.run([*VMNAV, "ground", "keygen", str(key)], timeout=60).returncode == 0
+    clock = WallClock()
+    with GroundStation.open("udpin:127.0.0.1:0", clock, key=read_key_file(key),
+                            unix_offset_ns=time.time_ns() - clock.now_ns()) as station:
+        log = tmp_path / "robot.out"
+        robot = start(["robot", "--aria", aria, "--camera", camera, "--key", str(key),
+                       "--mavlink", f"udpout:127.0.0.1:{station.link.local_port}",
+                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
+                       "--no-log"], log)
+        try:
+            station.wait_vehicle(30.0)
+            assert station.set_param("CTL_SPEED", 0.15) == pytest.approx(0.15)
+        finally:
+            robot.send_signal(signal.SIGTERM)
+            code = robot.wait(15)
+    output = log.read_text()
+    assert code == 143 and "Traceback" not in output, output
+    assert f"on udpout:127.0.0.1:{station.link.local_port} (signed)" in output
+    assert station.codec.signing.badsig_count == 0 and station.codec.signing.goodsig_count > 0
+    kept = json.loads((tmp_path / "state" / "signing-timestamps.json").read_text())
+    assert [stream[:3] for stream in kept["streams"]] == [[1, 255, 190]]  # ours, link 1

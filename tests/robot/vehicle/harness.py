@@ -44,12 +44,14 @@ UNIX_OFFSET_NS = 1_750_000_000 * NS_PER_S
 
 def make_vehicle(root: Path, app: FakeApp, clock: Clock,
                  config: VmnavConfig | None = None, key: bytes | None = None,
-                 url: str = "udpin:127.0.0.1:0") -> UdpVehicle:
+                 url: str = "udpin:127.0.0.1:0", timestamp_file: Path | None = None,
+                 link_warning: str | None = None) -> UdpVehicle:
     """A vehicle endpoint on ``url`` with its files under ``root``."""
-    signing = SigningSetup(key, UNIX_OFFSET_NS) if key is not None else None
+    signing = (SigningSetup(key, UNIX_OFFSET_NS, timestamp_file=timestamp_file)
+               if key is not None else None)
     files = VehicleFiles(root / "memory", root / "upload", root / "params.json")
     endpoint = VehicleEndpoint(app, config if config is not None else VmnavConfig(), files,
-                               signing=signing, uid=0xC0FFEE)
+                               signing=signing, uid=0xC0FFEE, link_warning=link_warning)
     return UdpVehicle.open(url, endpoint, clock)
 
 

@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from robot.vehicle.failsafe import GcsWatchdog, gcs_lost_action
+from shared.clock import ManualClock
+from shared.link_security import INSECURE_NOTICE
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.mavlink.params.gcs import ParamSetDone
 from tests.robot.vehicle.fake_app import FakeApp
-from tests.robot.vehicle.harness import Net
+from tests.robot.vehicle.harness import Ground, Net, make_vehicle
 
 S = 1_000_000_000
 
@@ -106,3 +110,22 @@ class TestWatchdog:
     ])
     def test_action_by_mode(self, mode: Mode, configured: str, action: str) -> None:
         assert gcs_lost_action(mode, configured) == action
+
+
+def test_an_insecure_link_warns_each_ground_station_that_connects(
+        tmp_path: Path, app: FakeApp, manual_clock: ManualClock) -> None:
+    vehicle = make_vehicle(tmp_path, app, manual_clock, link_warning=INSECURE_NOTICE)
+    net = Net(manual_clock, vehicle, Ground(f"udpout:127.0.0.1:{vehicle.link.local_port}"))
+    try:
+        net.advance(3.5)  # heartbeats at 0, 1, 2, 3 s: one warning, at connect
+        warnings = [m for m in net.ground.of_type("STATUSTEXT")
+                    if m.severity == mavlink.MAV_SEVERITY_WARNING]
+        assert net.ground.notices() == [INSECURE_NOTICE] and len(warnings) == 1
+        lose_ground(net, app)
+        net.ground.heartbeat = True
+        net.run(lambda: bool(app.called("gcs_regained")))
+        net.advance(2.0)
+        assert net.ground.notices()[-2:] == ["GCS heartbeat regained", INSECURE_NOTICE]
+        assert net.ground.notices().count(INSECURE_NOTICE) == 2
+    finally:
+        net.close()

@@ -2,18 +2,31 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shared.clock import NS_PER_S, ManualClock
+from shared.errors import InputError
 from shared.mavlink.dialect import MavlinkCodec, make_codec, mavlink
 from shared.mavlink.signing import (
     EPOCH_UNIX_S,
+    MAX_TIMESTAMP,
+    NEW_STREAM_WINDOW,
     SigningClock,
+    SigningTimestamps,
     UnsignedPolicy,
     configure_signing,
     key_from_passphrase,
+    restore_timestamps,
     signing_stats,
     timestamp_from_unix_ns,
+    timestamps_from_json,
+    timestamps_of,
+    timestamps_to_json,
 )
 
 KEY = key_from_passphrase("vmnavsecret")
@@ -76,6 +89,47 @@ class TestSignedLink:
         assert len(codec.parse(packet)) == 1
         assert codec.parse(packet) == []
 
+    def test_wrong_key_packets_move_no_timestamp(
+            self, robot: tuple[MavlinkCodec, UnsignedPolicy]) -> None:
+        # The lockout of issue 15: pymavlink's generated check stores the stream's
+        # timestamp before it checks the signature, so these 256 packets (the real
+        # station's address, one per link id, timestamp 2**48-2) shut it out until restart.
+        codec, _ = robot
+        for link_id in range(256):
+            spoof = make_codec(255, 190)
+            configure_signing(spoof, key_from_passphrase("not the key"), link_id,
+                              MAX_TIMESTAMP - 1)
+            assert codec.parse(spoof.pack(heartbeat())) == []
+        assert codec.signing.stream_timestamps == {} and codec.signing.timestamp == NOW_TS
+        station = signed_ground()
+        param_set = mavlink.MAVLink_param_set_message(1, 1, b"CTL_SPEED", 0.3,
+                                                      mavlink.MAV_PARAM_TYPE_REAL32)
+        assert [m.get_type() for m in codec.parse(station.pack(param_set))] == ["PARAM_SET"]
+        assert signing_stats(codec).bad == 256
+
+    @settings(derandomize=True, max_examples=200, deadline=None)
+    @given(link_id=st.integers(0, 255), timestamp=st.integers(0, MAX_TIMESTAMP),
+           signature=st.binary(min_size=6, max_size=6), system=st.integers(0, 255))
+    def test_a_forged_signature_never_moves_a_timestamp(self, link_id: int, timestamp: int,
+                                                        signature: bytes, system: int) -> None:
+        codec = make_codec(1, 1)
+        configure_signing(codec, KEY, 0, NOW_TS)
+        codec.signing.stream_timestamps[(1, 255, 190)] = NOW_TS
+        forger = make_codec(system, 190)
+        configure_signing(forger, KEY, link_id, timestamp)
+        packet = bytearray(forger.pack(heartbeat()))
+        packet[-6:] = signature  # not covered by the CRC: the check gets to the signature
+        assert codec.parse(bytes(packet)) == []
+        assert codec.signing.stream_timestamps == {(1, 255, 190): NOW_TS}
+        assert codec.signing.timestamp == NOW_TS
+
+    def test_new_stream_window(self, robot: tuple[MavlinkCodec, UnsignedPolicy]) -> None:
+        codec, _ = robot
+        assert codec.parse(signed_ground(timestamp=NOW_TS - NEW_STREAM_WINDOW - 1)
+                           .pack(heartbeat())) == []
+        assert len(codec.parse(signed_ground(timestamp=NOW_TS - NEW_STREAM_WINDOW)
+                               .pack(heartbeat()))) == 1
+
     def test_policy_lets_listed_ids_through_unsigned(self) -> None:
         codec = make_codec(1, 1)
         policy = configure_signing(codec, KEY, 0, NOW_TS,
@@ -125,3 +179,48 @@ class TestSigningClock:
     def test_period_must_be_positive(self) -> None:
         with pytest.raises(ValueError, match="period_ns"):
             SigningClock(make_codec(1, 1), 0, period_ns=0)
+
+
+class TestTimestampsKept:
+    def test_a_restored_codec_refuses_what_the_old_one_accepted(self) -> None:
+        before = make_codec(1, 1)
+        configure_signing(before, KEY, 0, NOW_TS)
+        station = signed_ground(timestamp=NOW_TS + 500)
+        captured = [station.pack(heartbeat()) for _ in range(3)]
+        assert all(len(before.parse(packet)) == 1 for packet in captured[:2])
+        kept = timestamps_of(before)
+        assert kept.streams == {(1, 255, 190): NOW_TS + 501}
+        after = make_codec(1, 1)  # a restart, its clock a little behind
+        configure_signing(after, KEY, 0, NOW_TS - 100)
+        restore_timestamps(after, kept)
+        assert after.signing.timestamp == NOW_TS + 501
+        assert all(after.parse(packet) == [] for packet in captured[:2])  # replays
+        assert len(after.parse(captured[2])) == 1  # never accepted before: fresh
+
+    def test_restore_never_lowers(self) -> None:
+        codec = make_codec(1, 1)
+        configure_signing(codec, KEY, 0, NOW_TS)
+        codec.signing.stream_timestamps[(1, 255, 190)] = NOW_TS
+        restore_timestamps(codec, SigningTimestamps(5, {(1, 255, 190): 7, (2, 255, 190): 9}))
+        assert timestamps_of(codec) == SigningTimestamps(
+            NOW_TS, {(1, 255, 190): NOW_TS, (2, 255, 190): 9})
+
+    def test_json_round_trip(self, tmp_path: Path) -> None:
+        kept = SigningTimestamps(NOW_TS, {(1, 255, 190): NOW_TS - 3, (0, 2, 1): MAX_TIMESTAMP})
+        document = json.loads(timestamps_to_json(kept))
+        assert timestamps_from_json(tmp_path, document) == kept
+
+    @pytest.mark.parametrize(("document", "problem"), [
+        ([], "want"),
+        ({"timestamp": 1}, "want"),
+        ({"timestamp": -1, "streams": []}, "timestamp -1"),
+        ({"timestamp": True, "streams": []}, "timestamp True"),
+        ({"timestamp": 2**48, "streams": []}, "timestamp 281474976710656"),
+        ({"timestamp": 1, "streams": {}}, "streams is not a list"),
+        ({"timestamp": 1, "streams": [[1, 2, 3]]}, r"streams\[0\]"),
+        ({"timestamp": 1, "streams": [[0, 1, 1, 5], [256, 1, 1, 5]]}, r"streams\[1\]"),
+        ({"timestamp": 1, "streams": [[0, 1, 1, 1.5]]}, r"streams\[0\]"),
+    ])
+    def test_bad_documents(self, tmp_path: Path, document: object, problem: str) -> None:
+        with pytest.raises(InputError, match=problem):
+            timestamps_from_json(tmp_path / "t.json", document)
