@@ -360,15 +360,24 @@ class FtpConfig:
     max_sessions: int = 5
     """Server: open file sessions at once (MAVProxy's max_sessions default)."""
     burst_packets: int = 32
-    """Server: packets per BurstReadFile reply; the client asks again for the rest."""
+    """Server: packets per BurstReadFile reply; the client asks again for the rest. Only
+    the peer that opened the session gets a burst; every other request gets one reply."""
     session_timeout_ns: int = 30_000_000_000
     """Server: a session unused this long is closed (an unfinished upload dropped), ns."""
     upload_limit_bytes: int = 8 * 1024 * 1024
-    """Server: largest file accepted in the upload area, bytes (the goal photo)."""
+    """Server: largest file accepted in the upload area, bytes (the goal photo); a larger
+    upload is refused with NAK FailErrno EFBIG."""
+    upload_total_bytes: int = 64 * 1024 * 1024
+    """Server: the upload area's quota, bytes: its files plus the uploads in progress (held
+    in RAM); an upload that would pass it is refused with NAK FailErrno ENOSPC."""
+    resend_cache_peers: int = 64
+    """Server: peers whose last request and reply are kept to answer a retry (least
+    recently used forgotten first; at most 502 bytes of payload each)."""
 
     def __post_init__(self) -> None:
         for name in ("ack_timeout_ns", "max_in_flight", "max_sessions", "burst_packets",
-                     "session_timeout_ns", "upload_limit_bytes"):
+                     "session_timeout_ns", "upload_limit_bytes", "upload_total_bytes",
+                     "resend_cache_peers"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.retries >= 0, f"retries must be >= 0, got {self.retries}")
         require(self.max_sessions <= 256, f"max_sessions must be <= 256, got {self.max_sessions}")

@@ -142,7 +142,7 @@ class VehicleEndpoint:
         config: the robot's config; parameters start from its values.
         files: memory, upload area and parameter file.
         signing: sign the link; None leaves it unsigned.
-        ftp: FTP server limits.
+        ftp: FTP server limits; None: ``config.ftp``.
         uid: the robot's unique id in AUTOPILOT_VERSION (64 bits).
 
     Raises:
@@ -166,8 +166,9 @@ class VehicleEndpoint:
         """The config in force: ``config`` with the parameters applied."""
         self._params = ParamServer(self._table, self.address, link)
         self._mission = MissionServer(self.address, link, validate=self._validate)
-        ftp = ftp if ftp is not None else FtpConfig()
-        self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes)
+        ftp = ftp if ftp is not None else config.ftp
+        self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes,
+                                    ftp.upload_total_bytes)
         self._ftp = FtpServer(self._fs, ftp)
         self._intervals = MessageIntervals(default_periods_ns(link), link.min_stream_period_ns)
         builders: dict[int, Builder] = {
