@@ -430,6 +430,11 @@ class LogConfig:
     (about 3 s of 15 frames/s plus 50 Hz telemetry)."""
     retry_period_ns: int = 5_000_000_000
     """After a write error (disk full, folder gone) try a new file this often, ns."""
+    max_bytes: int = 10_000_000_000
+    """Disk quota of one log (all its numbered files), bytes. Once reached, the bulky topics
+    (camera frames and their annotations, MAVLink messages and raw frames) are no longer
+    written (counted in ``LogStats.over_quota``) and one WARNING says so, in the file and
+    on the console; state, commands, transforms, SIPs and events go on (a few kB/s)."""
     replay_frames: bool = False
     """Log every frame a mission cycle consumed losslessly (PNG, whatever ``frame_rate_hz``),
     so that ``vmnav replay`` reproduces the estimates exactly; JPEG frames replay only
@@ -439,7 +444,7 @@ class LogConfig:
     def __post_init__(self) -> None:
         require(bool(self.output_dir.strip()), "output_dir must not be empty")
         for name in ("frame_rate_hz", "flush_period_ns", "chunk_size_bytes", "rotate_size_bytes",
-                     "rotate_period_ns", "queue_messages", "retry_period_ns"):
+                     "rotate_period_ns", "queue_messages", "retry_period_ns", "max_bytes"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(1 <= self.jpeg_quality <= 100,
                 f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
