@@ -157,8 +157,8 @@ def _path(request: FtpPayload) -> str:
     return path
 
 
-#: A server operation: (request, now_ns) -> replies; raises _NakError or OSError.
-_Handler = Callable[[FtpPayload, int], list[FtpPayload]]
+#: A server operation: (request, its sender, now_ns) -> replies; raises _NakError or OSError.
+_Handler = Callable[[FtpPayload, Hashable, int], list[FtpPayload]]
 
 
 class FtpServer:
@@ -174,17 +174,17 @@ class FtpServer:
         self.config = config if config is not None else FtpConfig()
         self._sessions: dict[tuple[Hashable, int], _Session] = {}
         self._last: OrderedDict[Hashable, tuple[bytes, bytes]] = OrderedDict()
-        self._peer: Hashable = None  # the sender of the request being handled
         self._handlers: dict[int, _Handler] = {
-            Opcode.NONE: lambda r, _: [_reply(r)],
+            Opcode.NONE: lambda r, peer, now: [_reply(r)],
             Opcode.TERMINATE_SESSION: self._terminate,
             Opcode.RESET_SESSIONS: self._reset,
             Opcode.LIST_DIRECTORY: self._list,
             Opcode.OPEN_FILE_RO: self._open_ro,
             Opcode.READ_FILE: self._read,
             Opcode.BURST_READ_FILE: self._burst,
-            Opcode.CREATE_FILE: lambda r, now: self._open_wo(r, now, exclusive=True),
-            Opcode.OPEN_FILE_WO: lambda r, now: self._open_wo(r, now, exclusive=False),
+            Opcode.CREATE_FILE: lambda r, peer, now: self._open_wo(r, peer, now, exclusive=True),
+            Opcode.OPEN_FILE_WO: lambda r, peer, now: self._open_wo(r, peer, now,
+                                                                    exclusive=False),
             Opcode.WRITE_FILE: self._write,
             Opcode.REMOVE_FILE: self._remove,
             Opcode.CALC_FILE_CRC32: self._crc,
@@ -224,12 +224,11 @@ class FtpServer:
         except RemoteProtocolError:
             return []
         self._expire(now_ns)
-        self._peer = peer
         handler = self._handlers.get(request.opcode)
         try:
             if handler is None:
                 raise _NakError(NakCode.UNKNOWN_COMMAND)
-            replies = handler(request, now_ns)
+            replies = handler(request, peer, now_ns)
         except _NakError as e:
             replies = [_nak(request, e.code)]
         except OSError as e:
@@ -253,28 +252,28 @@ class FtpServer:
                 del self._sessions[key]
                 session.close(commit=False)
 
-    def _session(self, request: FtpPayload, now_ns: int) -> _Session:
+    def _session(self, request: FtpPayload, peer: Hashable, now_ns: int) -> _Session:
         """The sender's session the request names (rule 6)."""
-        session = self._sessions.get((self._peer, request.session))
+        session = self._sessions.get((peer, request.session))
         if session is None:
             raise _NakError(NakCode.INVALID_SESSION)
         session.last_used_ns = now_ns
         return session
 
-    def _add_session(self, request: FtpPayload, session: _Session) -> None:
+    def _add_session(self, request: FtpPayload, peer: Hashable, session: _Session) -> None:
         """Give ``session`` the sender and the request's id (rules 1 and 6), replacing a
         stale one of the same sender."""
-        old = self._sessions.pop((self._peer, request.session), None)
+        old = self._sessions.pop((peer, request.session), None)
         if old is not None:
             old.close(commit=False)
         if len(self._sessions) >= self.config.max_sessions:
             session.close(commit=False)
             raise _NakError(NakCode.NO_SESSIONS_AVAILABLE)
-        self._sessions[(self._peer, request.session)] = session
+        self._sessions[(peer, request.session)] = session
 
-    def _terminate(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        self._session(request, now_ns)
-        self._sessions.pop((self._peer, request.session)).close(commit=True)
+    def _terminate(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        self._session(request, peer, now_ns)
+        self._sessions.pop((peer, request.session)).close(commit=True)
         return [_reply(request)]
 
     def close(self) -> None:
@@ -283,13 +282,13 @@ class FtpServer:
         for session in sessions.values():
             session.close(commit=False)
 
-    def _reset(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _reset(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         """ResetSessions: the sender's sessions only (rule 5)."""
-        for key in [key for key in self._sessions if key[0] == self._peer]:
+        for key in [key for key in self._sessions if key[0] == peer]:
             self._sessions.pop(key).close(commit=False)
         return [_reply(request)]
 
-    def _list(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _list(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         # Entries longer than a packet are left out before indexing, so that the
         # offset (an entry index) means the same in every reply.
         entries = [e.to_bytes() for e in self.fs.list_directory(_path(request))]
@@ -303,30 +302,31 @@ class FtpServer:
             data += entry
         return [_reply(request, data)]
 
-    def _open_ro(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _open_ro(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         reader = self.fs.open_read(_path(request))
-        self._add_session(request, _Session(now_ns, reader=reader))
+        self._add_session(request, peer, _Session(now_ns, reader=reader))
         return [_reply(request, U32.pack(reader.size))]
 
-    def _open_wo(self, request: FtpPayload, now_ns: int, exclusive: bool) -> list[FtpPayload]:
+    def _open_wo(self, request: FtpPayload, peer: Hashable, now_ns: int,
+                 exclusive: bool) -> list[FtpPayload]:
         writer = self.fs.open_write(_path(request), exclusive)
-        self._add_session(request, _Session(now_ns, writer=writer))
+        self._add_session(request, peer, _Session(now_ns, writer=writer))
         return [_reply(request)]
 
-    def _reader(self, request: FtpPayload, now_ns: int) -> FtpReader:
-        reader = self._session(request, now_ns).reader
+    def _reader(self, request: FtpPayload, peer: Hashable, now_ns: int) -> FtpReader:
+        reader = self._session(request, peer, now_ns).reader
         if reader is None:
             raise _NakError(NakCode.INVALID_SESSION)
         if request.offset >= reader.size:
             raise _NakError(NakCode.EOF)
         return reader
 
-    def _read(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        reader = self._reader(request, now_ns)
+    def _read(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        reader = self._reader(request, peer, now_ns)
         return [_reply(request, reader.read(request.offset, _chunk(request)))]
 
-    def _burst(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        reader = self._reader(request, now_ns)
+    def _burst(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        reader = self._reader(request, peer, now_ns)
         replies, offset, chunk = [], request.offset, _chunk(request)
         for nth in range(self.config.burst_packets):
             data = reader.read(offset, chunk)
@@ -337,8 +337,8 @@ class FtpServer:
                 break
         return replies
 
-    def _write(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        writer = self._session(request, now_ns).writer
+    def _write(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        writer = self._session(request, peer, now_ns).writer
         if writer is None:
             raise _NakError(NakCode.INVALID_SESSION)
         if request.size > MAX_DATA:
@@ -346,11 +346,11 @@ class FtpServer:
         writer.write(request.offset, request.data)
         return [_reply(request)]
 
-    def _remove(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _remove(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         self.fs.remove(_path(request))
         return [_reply(request)]
 
-    def _crc(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _crc(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         reader, crc, offset = self.fs.open_read(_path(request)), 0, 0
         try:
             while offset < reader.size:
