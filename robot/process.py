@@ -10,7 +10,7 @@ connection string) that :class:`RobotProcess` opens. What it assembles:
 :class:`robot.vehicle.endpoint.VehicleEndpoint` on a
 :class:`robot.vehicle.udp_vehicle.UdpVehicle` (its own I/O thread), whose traffic goes
 to the field log: the MAVLink packets accepted and sent, and the counts of what was
-rejected (``UdpVehicle`` rule 4).
+rejected (``UdpVehicle`` rule 3).
 
 Rules:
 

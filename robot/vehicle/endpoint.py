@@ -39,7 +39,8 @@ Rules:
    MISSION_CURRENT and VISUAL_SERVO_STATUS, and as STATUSTEXT for people
    (``progress``); the application's notices
    (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
-   SYS_STATUS ``errors_comm`` counts the corrupt packets received (:meth:`stats`).
+   SYS_STATUS ``errors_comm`` counts the corrupt packets received (:meth:`stats`) and
+   the datagrams the transport dropped unparsed (:attr:`VehicleEndpoint.shed_datagrams`).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
@@ -175,7 +176,7 @@ class VehicleEndpoint:
             _HEARTBEAT: self._heartbeat,
             mavlink.MAVLINK_MSG_ID_MISSION_CURRENT: lambda t, us: self._mission.current_message(),
             mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda t, us: sys_status_message(
-                t, us, errors_comm=self.codec.bad_packets),
+                t, us, errors_comm=self.codec.bad_packets + self.shed_datagrams),
             **TELEMETRY_BUILDERS,
         }
         self._streams = TelemetryStreams(builders, self._period_ns)
@@ -198,6 +199,8 @@ class VehicleEndpoint:
                                              UnsignedPolicy(UNSIGNED_ALLOWED))
             self._signing_clock = SigningClock(self.codec, signing.unix_offset_ns)
         self._outbox: list[Message] = []
+        self.shed_datagrams = 0
+        """Datagrams the transport dropped unparsed under a flood (its owner counts them)."""
         self._messages = 0
         self._boot_ns: int | None = None
         self._now_ns = 0

@@ -9,16 +9,7 @@ Rules:
    calls it, or the vehicle's own thread (:meth:`start_thread`, every
    ``MavlinkConfig.service_period_ns`` on the injected clock); never both. The
    application's callbacks run in that thread.
-2. Floods: the peer the vehicle answers (rule 3; a ``udpout`` link's fixed peer) is
-   trusted: all its datagrams are handled, first. Of everyone else's, at most
-   :data:`STRANGER_BUDGET` per round are handled; the rest are read and dropped
-   unparsed (:attr:`UdpVehicle.shed`), so that however fast strangers send, the
-   socket is emptied each round (up to ``DRAIN_LIMIT`` datagrams), the trusted
-   station's datagrams are not lost in a full buffer, and the round ends with its
-   sending: heartbeats and telemetry go out on time. A new ground station is a
-   stranger until its first verified message; under a flood it competes for the
-   budget.
-3. A listening link (``udpin``) replies to the last sender whose datagram held a
+2. A listening link (``udpin``) replies to the last sender whose datagram held a
    verified message (:meth:`~shared.mavlink.dialect.MavlinkCodec.is_verified`: of our
    dialect, so its CRC was checked, and on a signed link validly signed; the codec
    checks both while the endpoint parses, before the reply address is chosen and
@@ -27,16 +18,25 @@ Rules:
    so neither garbage that happens to decode as an unknown message nor a stranger's
    unsigned datagram (even one the signing policy lets through) diverts the telemetry.
    A ``udpout`` link always sends to its peer.
-4. Every datagram received that held a verified message and every packet sent goes
+3. Every datagram received that held a verified message and every packet sent goes
    to the ``packet_taps`` (``tap(direction, data, now_ns)``, direction ``"in"`` or
    ``"out"``), in the I/O thread: the field log's MAVLink in and out. Rejected
    datagrams (nothing verified in them: corrupt, unknown ids, unsigned or wrongly
    signed) and shed ones are only counted: the ``reject_observers`` get the counts
    (:class:`Rejected`) of each :data:`REJECT_REPORT_PERIOD_NS` that had any, so an
    outsider cannot fill the log.
-5. Errors: a closed or failed socket raises
+4. Errors: a closed or failed socket raises
    :class:`~shared.byte_link.LinkClosedError` from :meth:`service`; the thread logs
    it and ends.
+5. Floods: the peer the vehicle answers (rule 2; a ``udpout`` link's fixed peer) is
+   trusted: all its datagrams are handled, first. Of everyone else's, at most
+   :data:`STRANGER_BUDGET` per round are handled; the rest are read and dropped
+   unparsed (:attr:`UdpVehicle.shed`, also in SYS_STATUS ``errors_comm``), so that
+   however fast strangers send, the socket is emptied each round (up to
+   ``DRAIN_LIMIT`` datagrams), the trusted station's datagrams are not lost in a full
+   buffer, and the round ends with its sending: heartbeats and telemetry go out on
+   time. A new ground station is a stranger until its first verified message; under a
+   flood it competes for the budget.
 """
 
 from __future__ import annotations
@@ -50,15 +50,15 @@ from shared.clock import NS_PER_S, Clock, service_loop
 from shared.errors import IllegalEventError
 from shared.udp_link import Peer, UdpLink
 
-#: Datagrams from anyone but the trusted peer handled per round at most (rule 2).
+#: Datagrams from anyone but the trusted peer handled per round at most (rule 5).
 STRANGER_BUDGET = 16
-#: Rejected traffic is reported at most this often, ns (rule 4).
+#: Rejected traffic is reported at most this often, ns (rule 3).
 REJECT_REPORT_PERIOD_NS = 10 * NS_PER_S
 
 
 @dataclass(frozen=True, slots=True)
 class Rejected:
-    """Datagrams received and not accepted over a report period (rule 4).
+    """Datagrams received and not accepted over a report period (rule 3).
 
     Attributes:
         unverified: handled, but held no verified message (corrupt, unknown message ids,
@@ -91,15 +91,18 @@ class UdpVehicle:
         self._thread: threading.Thread | None = None
         self._closed = False
         self.packet_taps: list[Callable[[str, bytes, int], None]] = []
-        """Called with every accepted datagram in and packet out (rule 4)."""
+        """Called with every accepted datagram in and packet out (rule 3)."""
         self.reject_observers: list[Callable[[Rejected, int], None]] = []
-        """Called with the rejected traffic of a period and the time, ns (rule 4)."""
-        self.shed = 0
-        """Datagrams from strangers dropped unparsed so far (rule 2)."""
+        """Called with the rejected traffic of a period and the time, ns (rule 3)."""
         self.unverified = 0
-        """Datagrams handled that held no verified message so far (rule 4)."""
+        """Datagrams handled that held no verified message so far (rule 3)."""
         self._reported = (0, 0)  # (unverified, shed) at the last report
         self._report_ns: int | None = None
+
+    @property
+    def shed(self) -> int:
+        """Datagrams from strangers dropped unparsed so far (rule 5)."""
+        return self.endpoint.shed_datagrams
 
     @classmethod
     def open(cls, url: str, endpoint: VehicleEndpoint, clock: Clock) -> UdpVehicle:
@@ -111,14 +114,14 @@ class UdpVehicle:
         return cls(endpoint, UdpLink.open(url), clock)
 
     def service(self, now_ns: int) -> None:
-        """One round of I/O at ``now_ns`` (rules 1 and 2)."""
+        """One round of I/O at ``now_ns`` (rules 1 and 5)."""
         with self._lock:
             if self._closed:
                 return
             codec = self.endpoint.codec
             trusted = () if self._reply_to is None else (self._reply_to,)
             drained = self.link.drain(trusted, STRANGER_BUDGET)
-            self.shed += drained.shed
+            self.endpoint.shed_datagrams += drained.shed
             for data, sender in drained.trusted + drained.others:
                 verified = codec.verified_packets
                 self.endpoint.receive(data, now_ns, datagram=True)
@@ -137,7 +140,7 @@ class UdpVehicle:
             self._report_rejects(now_ns)
 
     def _report_rejects(self, now_ns: int) -> None:
-        """Rule 4: the counts of the period, once it is over and if it had any."""
+        """Rule 3: the counts of the period, once it is over and if it had any."""
         if self._report_ns is None:
             self._report_ns = now_ns
         if now_ns - self._report_ns < REJECT_REPORT_PERIOD_NS:

@@ -103,6 +103,8 @@ def test_a_flood_of_strangers_is_shed_and_the_station_served_in_the_same_round(
     assert (net.vehicle.shed, net.vehicle.unverified) == (count - STRANGER_BUDGET,
                                                           STRANGER_BUDGET)
     assert [data[7] for way, data, _ in taps if way == "in"] == [69]  # MANUAL_CONTROL only
+    net.advance(1.0)  # SYS_STATUS errors_comm counts the corrupt and the shed
+    assert net.ground.of_type("SYS_STATUS")[-1].errors_comm == count
 
 
 def test_rejected_traffic_is_reported_once_per_period(net: Net) -> None:
