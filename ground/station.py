@@ -30,9 +30,11 @@ Rules:
 5. Signing (a key given): everything sent is signed, unsigned or badly signed
    packets are dropped by the codec, and the signing timestamp follows the wall
    clock (``SigningClock``).
-6. Taps: every packet parsed off the link and every packet sent (once per datagram)
-   goes to each of :attr:`~GroundStation.packet_taps`, in wire order, with its bytes,
-   its message and the clock's reading at that moment (e.g. ``ground.ground_log``).
+6. Taps: every verified packet received (a message of our dialect, validly signed on a
+   signed link: what strangers' garbage and unknown ids are not) and every packet sent
+   (once per datagram) goes to each of :attr:`~GroundStation.packet_taps`, in wire
+   order, with its bytes, its message and the clock's reading at that moment (e.g.
+   ``ground.ground_log``).
 7. Floods: each service drains the socket
    (:meth:`~shared.udp_link.UdpLink.drain`): every datagram from a vehicle heard
    (its UDP address) is handled, of anyone else's at most :data:`STRANGER_BUDGET`,
@@ -189,7 +191,8 @@ class GroundStation:
             self.link.peer = received[-1][1]
         for data, sender in received:
             for msg in self.codec.parse(data, datagram=True):
-                self._tap("in", bytes(msg.get_msgbuf()), msg)
+                if self.codec.is_verified(msg):
+                    self._tap("in", bytes(msg.get_msgbuf()), msg)
                 self._handle(msg, sender, now_ns)
         if self._signing is not None and now_ns >= (self._signing.get_timer() or 0):
             self._signing.handle_timer(now_ns)

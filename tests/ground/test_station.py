@@ -90,6 +90,22 @@ def test_a_flood_of_strangers_does_not_hide_the_vehicle(tmp_path: Path,
     assert (station.codec.bad_packets, station.shed) == (STRANGER_BUDGET, 300 - STRANGER_BUDGET)
 
 
+def test_only_verified_packets_reach_the_taps(tmp_path: Path, manual_clock: ManualClock) -> None:
+    tapped: list[str] = []
+    with GroundStation.open("udpin:127.0.0.1:0", WallClock()) as station:
+        station.packet_taps.append(lambda way, packet, msg, t_ns: tapped.append(
+            f"{way} {msg.get_type()}"))
+        url = f"udpout:127.0.0.1:{station.link.local_port}"
+        with (UdpLink.open(url) as stranger,
+              make_vehicle(tmp_path, FakeApp(), manual_clock, url=url) as vehicle):
+            # A well-framed packet of an id the dialect lacks: it decodes, unverified.
+            stranger.send(bytes([0xFD, 4, 0, 0, 0, 42, 1, 0xEF, 0xCD, 0xAB]) + bytes(6))
+            vehicle.service(0)
+            station.wait_vehicle(0.5)
+    assert station.codec.unknown_packets == 1
+    assert "in HEARTBEAT" in tapped and not [t for t in tapped if "UNKNOWN" in t]
+
+
 def test_wait_mission_done_from_telemetry(station: GroundStation, app: FakeApp) -> None:
     station.upload_goals([Goal(2), Goal(5)])
     station.start_mission()
