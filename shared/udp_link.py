@@ -235,11 +235,10 @@ class UdpLink:
                 break
             except OSError as e:
                 raise LinkClosedError(self.url, f"receive failed: {e.strerror or e}") from None
-            peer = (str(sender[0]), int(sender[1]))
-            if peer in trusted:
-                out.trusted.append((bytes(self._view[:size]), peer))
+            if sender in trusted:  # an IPv4 (host, port) tuple, as Peer
+                out.trusted.append((bytes(self._view[:size]), sender))
             elif len(out.others) < budget:
-                out.others.append((bytes(self._view[:size]), peer))
+                out.others.append((bytes(self._view[:size]), sender))
             else:
                 out.shed += 1
         return out
