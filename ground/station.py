@@ -31,10 +31,17 @@ Rules:
 5. Signing (a key given): everything sent is signed, unsigned or badly signed
    packets are dropped by the codec, and the signing timestamp follows the wall
    clock (``SigningClock``).
-6. Taps: every packet parsed off the link and every packet sent (once per datagram)
-   goes to each of :attr:`~GroundStation.packet_taps`, in wire order, with its bytes,
-   its message and the clock's reading at that moment (e.g. ``ground.ground_log``).
-7. Each datagram received is parsed on its own
+6. Taps: every verified packet received (a message of our dialect, validly signed on a
+   signed link: what strangers' garbage and unknown ids are not) and every packet sent
+   (once per datagram) goes to each of :attr:`~GroundStation.packet_taps`, in wire
+   order, with its bytes, its message and the clock's reading at that moment (e.g.
+   ``ground.ground_log``).
+7. Floods: each service drains the socket
+   (:meth:`~shared.udp_link.UdpLink.drain`): every datagram from a vehicle heard
+   (its UDP address) is handled, of anyone else's at most :data:`STRANGER_BUDGET`,
+   the rest dropped unparsed (counted in :attr:`GroundStation.shed`); a listening
+   link's peer becomes the sender of the last datagram handled.
+8. Each datagram received is parsed on its own
    (:meth:`~shared.mavlink.dialect.MavlinkCodec.parse` with ``datagram``): a packet it
    leaves unfinished is corrupt, counted in ``codec.bad_packets`` and dropped, so garbage
    that reads as the start of a long packet cannot swallow the packets of the datagrams
@@ -83,6 +90,8 @@ OPERATION_LIMIT_NS = 600 * NS_PER_S
 UNUSED_AXIS = 0x7FFF
 #: Signing link id of the station (the vehicle signs as link 0).
 SIGNING_LINK_ID = 1
+#: Datagrams from senders other than the vehicles heard handled per service at most (rule 7).
+STRANGER_BUDGET = 64
 
 #: (vehicle, message) -> None, called for every message from a known vehicle.
 Listener = Callable[[VehicleState, Any], None]
@@ -147,6 +156,8 @@ class GroundStation:
         self._mission_count = 0
         self._next_beat_ns: int | None = None
         self._discovering = False
+        self.shed = 0
+        """Datagrams from strangers dropped unparsed under a flood (rule 7)."""
 
     @classmethod
     def open(cls, url: str, clock: Clock, **options: Any) -> GroundStation:
@@ -170,12 +181,19 @@ class GroundStation:
     # -- the loop -----------------------------------------------------------------------
 
     def service(self) -> None:
-        """One round at the clock's now: every waiting datagram in (each on its own, rule 7),
-        everything due out."""
+        """One round at the clock's now: the waiting datagrams in (rule 7, each parsed on
+        its own, rule 8), everything due out."""
         now_ns = self.clock.now_ns()
-        for data, sender in self.link.receive():
+        trusted = {v.peer for v in self.fleet.vehicles.values() if v.peer is not None}
+        drained = self.link.drain(trusted, STRANGER_BUDGET)
+        self.shed += drained.shed
+        received = drained.trusted + drained.others
+        if received and self.link.listening:
+            self.link.peer = received[-1][1]
+        for data, sender in received:
             for msg in self.codec.parse(data, datagram=True):
-                self._tap("in", bytes(msg.get_msgbuf()), msg)
+                if self.codec.is_verified(msg):
+                    self._tap("in", bytes(msg.get_msgbuf()), msg)
                 self._handle(msg, sender, now_ns)
         if self._signing is not None and now_ns >= (self._signing.get_timer() or 0):
             self._signing.handle_timer(now_ns)

@@ -27,7 +27,9 @@ on the robot's clock:
   the odometry on :data:`~shared.logs.topics.TF`, what ``vmnav memory build`` reads;
 * :data:`~shared.logs.topics.SIP` (:meth:`FieldLog.sip`): the Pioneer's SIPs;
 * ``/mavlink/<in|out>/<NAME>`` and :data:`~shared.logs.topics.MAVLINK_RAW`
-  (:meth:`FieldLog.mavlink`): every MAVLink packet received and sent;
+  (:meth:`FieldLog.mavlink`): every MAVLink packet accepted and sent; what was
+  rejected is counted, as a WARNING line per period that had any
+  (:meth:`FieldLog.mavlink_rejected`);
 * :data:`~shared.logs.topics.LOG`: mission events (:meth:`FieldLog.event`), the
   runtime's notes (:meth:`FieldLog.note`) and how the Pioneer link ended
   (:meth:`FieldLog.pioneer_closed`) as ``foxglove.Log`` lines.
@@ -65,6 +67,8 @@ from shared.pose import Pose2
 EVENT_SOURCE = "robot.mission_run"
 NOTE_SOURCE = "robot.runtime"
 PIONEER_SOURCE = "robot.pioneer"
+#: ``foxglove.Log`` name of the counts of rejected MAVLink traffic.
+MAVLINK_SOURCE = "robot.vehicle"
 #: Log level of mission events by kind (others are INFO).
 _EVENT_LEVELS = {"lost": "WARNING"}
 #: Foxglove log levels from the lowest ``logging`` level each covers, highest first.
@@ -237,6 +241,21 @@ class FieldLog:
     def mavlink(self, t_ns: int, direction: str, packet: bytes) -> None:
         """A MAVLink packet received (``direction`` ``"in"``) or sent (``"out"``), whole."""
         self._writer.log_mavlink_packet(t_ns, packet, direction)
+
+    def mavlink_rejected(self, t_ns: int, unverified: int, shed: int, period_ns: int) -> None:
+        """MAVLink datagrams rejected over the ``period_ns`` before ``t_ns``, as one
+        WARNING ``foxglove.Log`` line (counts only: an outsider cannot fill the log).
+
+        Args:
+            t_ns: the end of the period, ns.
+            unverified: datagrams that held no verified message.
+            shed: datagrams from strangers dropped unparsed under a flood.
+            period_ns: the period's length, ns.
+        """
+        self._writer.log_text(
+            t_ns, "WARNING", f"mavlink in: {unverified + shed} datagrams rejected in "
+            f"{period_ns / 1e9:.1f} s ({unverified} without a verified message, {shed} shed "
+            f"unparsed)", MAVLINK_SOURCE)
 
     def sip(self, t_ns: int, sip: Sip) -> None:
         """A SIP from the Pioneer, received at ``t_ns`` (a

@@ -9,7 +9,8 @@ connection string) that :class:`RobotProcess` opens. What it assembles:
 :class:`robot.runtime.RobotRuntime` on the base, as the application of a
 :class:`robot.vehicle.endpoint.VehicleEndpoint` on a
 :class:`robot.vehicle.udp_vehicle.UdpVehicle` (its own I/O thread), whose traffic goes
-to the field log.
+to the field log: the MAVLink packets accepted and sent, and the counts of what was
+rejected (``UdpVehicle`` rule 3).
 
 Rules:
 
@@ -61,7 +62,7 @@ from robot.mission_run import CycleRecord
 from robot.runtime import RobotRuntime
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
-from robot.vehicle.udp_vehicle import UdpVehicle
+from robot.vehicle.udp_vehicle import Rejected, UdpVehicle
 from shared.clock import Clock
 from shared.interfaces import MobileBase
 from shared.memory import VisualMemory
@@ -182,6 +183,7 @@ class RobotProcess:
             self.vehicle = undo.enter_context(UdpVehicle.open(link, endpoint, self._link_clock))
             if log is not None:
                 self.vehicle.packet_taps.append(self._mavlink_tap(log))
+                self.vehicle.reject_observers.append(self._reject_observer(log))
             self.vehicle.start_thread()
             self._closing = undo.pop_all()
 
@@ -241,6 +243,16 @@ class RobotProcess:
     def close(self) -> None:
         """Close in the order of rule 4; idempotent."""
         self._closing.close()
+
+    def _reject_observer(self, log: FieldLog) -> Callable[[Rejected, int], None]:
+        """The field log's counts of rejected MAVLink traffic, on the loop's clock (rule 3)."""
+        same = self._link_clock is self._clock
+        clock = self._clock
+
+        def observe(rejected: Rejected, t_ns: int) -> None:
+            log.mavlink_rejected(t_ns if same else clock.now_ns(), rejected.unverified,
+                                 rejected.shed, rejected.period_ns)
+        return observe
 
     def _mavlink_tap(self, log: FieldLog) -> Callable[[str, bytes, int], None]:
         """The field log's MAVLink in and out, on the loop's clock (rule 3)."""

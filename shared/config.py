@@ -360,15 +360,24 @@ class FtpConfig:
     max_sessions: int = 5
     """Server: open file sessions at once (MAVProxy's max_sessions default)."""
     burst_packets: int = 32
-    """Server: packets per BurstReadFile reply; the client asks again for the rest."""
+    """Server: packets per BurstReadFile reply; the client asks again for the rest. Only
+    the peer that opened the session gets a burst; every other request gets one reply."""
     session_timeout_ns: int = 30_000_000_000
     """Server: a session unused this long is closed (an unfinished upload dropped), ns."""
     upload_limit_bytes: int = 8 * 1024 * 1024
-    """Server: largest file accepted in the upload area, bytes (the goal photo)."""
+    """Server: largest file accepted in the upload area, bytes (the goal photo); a larger
+    upload is refused with NAK FailErrno EFBIG."""
+    upload_total_bytes: int = 64 * 1024 * 1024
+    """Server: the upload area's quota, bytes: its files plus the uploads in progress (held
+    in RAM); an upload that would pass it is refused with NAK FailErrno ENOSPC."""
+    resend_cache_peers: int = 64
+    """Server: peers whose last request and reply are kept to answer a retry (least
+    recently used forgotten first; at most 502 bytes of payload each)."""
 
     def __post_init__(self) -> None:
         for name in ("ack_timeout_ns", "max_in_flight", "max_sessions", "burst_packets",
-                     "session_timeout_ns", "upload_limit_bytes"):
+                     "session_timeout_ns", "upload_limit_bytes", "upload_total_bytes",
+                     "resend_cache_peers"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.retries >= 0, f"retries must be >= 0, got {self.retries}")
         require(self.max_sessions <= 256, f"max_sessions must be <= 256, got {self.max_sessions}")
@@ -421,6 +430,11 @@ class LogConfig:
     (about 3 s of 15 frames/s plus 50 Hz telemetry)."""
     retry_period_ns: int = 5_000_000_000
     """After a write error (disk full, folder gone) try a new file this often, ns."""
+    max_bytes: int = 10_000_000_000
+    """Disk quota of one log (all its numbered files), bytes. Once reached, the bulky topics
+    (camera frames and their annotations, MAVLink messages and raw frames) are no longer
+    written (counted in ``LogStats.over_quota``) and one WARNING says so, in the file and
+    on the console; state, commands, transforms, SIPs and events go on (a few kB/s)."""
     replay_frames: bool = False
     """Log every frame a mission cycle consumed losslessly (PNG, whatever ``frame_rate_hz``),
     so that ``vmnav replay`` reproduces the estimates exactly; JPEG frames replay only
@@ -430,7 +444,7 @@ class LogConfig:
     def __post_init__(self) -> None:
         require(bool(self.output_dir.strip()), "output_dir must not be empty")
         for name in ("frame_rate_hz", "flush_period_ns", "chunk_size_bytes", "rotate_size_bytes",
-                     "rotate_period_ns", "queue_messages", "retry_period_ns"):
+                     "rotate_period_ns", "queue_messages", "retry_period_ns", "max_bytes"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(1 <= self.jpeg_quality <= 100,
                 f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")

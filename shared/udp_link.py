@@ -16,12 +16,20 @@ Connection strings (pymavlink ``mavutil.mavlink_connection`` spells them the sam
 machine (the entry points refuse that unsigned unless asked: ``shared.link_security``).
 
 Theory of operation: one datagram carries one or more whole MAVLink packets; the
-link never splits or joins them. ``send`` and ``receive`` never block. UDP loses
+link never splits or joins them. ``send``, ``receive`` and ``drain`` never block. UDP loses
 datagrams by nature, so a send that the kernel refuses (no route, buffer full) is
 counted in :attr:`UdpLink.send_errors` and dropped like a lost datagram; only a
 closed socket raises. Bad connection strings, unresolvable hosts and ports in use
 raise :class:`~shared.errors.TransportError` with one line naming the string.
 IPv4 only, like pymavlink's UDP links.
+
+Floods: the socket asks for a :data:`RECEIVE_BUFFER_BYTES` receive buffer (the kernel
+caps it at ``net.core.rmem_max``, doubled), and :meth:`UdpLink.drain` empties it
+each round, up to :data:`DRAIN_LIMIT` datagrams, copying only what its owner will
+handle: every datagram from the peers it trusts, and at most a budget of the others;
+the rest are read and dropped uncopied (counted), so a flood from strangers cannot
+fill the buffer that the trusted peer's datagrams wait in, nor keep the owner from
+sending.
 """
 
 from __future__ import annotations
@@ -29,11 +37,13 @@ from __future__ import annotations
 import enum
 import ipaddress
 import socket
+from collections.abc import Collection
+from dataclasses import dataclass, field
 
 from shared.byte_link import LinkClosedError
 from shared.errors import TransportError
 
-__all__ = ["Peer", "UdpLink", "UdpMode", "parse_udp_url", "reaches_network"]
+__all__ = ["Drained", "Peer", "UdpLink", "UdpMode", "parse_udp_url", "reaches_network"]
 
 #: An IPv4 address and port, as ``socket`` gives them.
 Peer = tuple[str, int]
@@ -42,6 +52,12 @@ Peer = tuple[str, int]
 MAX_DATAGRAM = 65535
 #: Most datagrams one :meth:`UdpLink.receive` returns, so one busy peer cannot starve a loop.
 MAX_BATCH = 256
+#: Receive buffer asked for, bytes (about 10,000 small datagrams at the kernel's
+#: per-datagram overhead; Linux grants at most twice ``net.core.rmem_max``).
+RECEIVE_BUFFER_BYTES = 8 * 1024 * 1024
+#: Most datagrams one :meth:`UdpLink.drain` reads (about 20 ms of ``recvfrom`` on a loaded
+#: core), so a round of its owner ends and sends whatever comes in.
+DRAIN_LIMIT = 4096
 
 _FORMS = "udpin:HOST:PORT, udpout:HOST:PORT or udp:HOST:PORT"
 
@@ -103,6 +119,22 @@ def reaches_network(url: str) -> bool:
     return not ipaddress.ip_address(bound).is_loopback
 
 
+@dataclass(slots=True)
+class Drained:
+    """What one :meth:`UdpLink.drain` read.
+
+    Attributes:
+        trusted: ``(data, sender)`` of every datagram from a trusted peer, in arrival order.
+        others: ``(data, sender)`` of the first datagrams from anyone else, at most the
+            budget, in arrival order.
+        shed: datagrams from others read past the budget and dropped.
+    """
+
+    trusted: list[tuple[bytes, Peer]] = field(default_factory=list)
+    others: list[tuple[bytes, Peer]] = field(default_factory=list)
+    shed: int = 0
+
+
 class UdpLink:
     """A non-blocking UDP socket that carries MAVLink datagrams (module docstring).
 
@@ -127,6 +159,13 @@ class UdpLink:
         self.send_errors = 0
         """Datagrams the kernel refused to send (dropped)."""
         self._closed = False
+        self._scratch = bytearray(MAX_DATAGRAM)
+        self._view = memoryview(self._scratch)
+
+    @property
+    def receive_buffer_bytes(self) -> int:
+        """The socket's receive buffer as the kernel granted it, bytes."""
+        return self._sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
 
     @classmethod
     def open(cls, url: str) -> UdpLink:
@@ -140,6 +179,7 @@ class UdpLink:
         address = _resolve(url, host, port)
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER_BYTES)
             sock.bind(_bind_address(mode, address))
             sock.setblocking(False)
         except OSError as e:
@@ -199,6 +239,34 @@ class UdpLink:
             out.append((data, (str(sender[0]), int(sender[1]))))
         if out and self.listening:
             self.peer = out[-1][1]
+        return out
+
+    def drain(self, trusted: Collection[Peer], budget: int,
+              limit: int = DRAIN_LIMIT) -> Drained:
+        """Read every datagram waiting (at most ``limit``), without blocking, keeping those
+        of ``trusted`` peers and the first ``budget`` of the others (module docstring).
+
+        Unlike :meth:`receive`, the link's :attr:`peer` does not move: the owner decides
+        whom to answer.
+
+        Raises:
+            LinkClosedError: the link was closed, or the socket failed.
+        """
+        self._check_open()
+        out = Drained()
+        for _ in range(limit):
+            try:
+                size, sender = self._sock.recvfrom_into(self._scratch)
+            except BlockingIOError:
+                break
+            except OSError as e:
+                raise LinkClosedError(self.url, f"receive failed: {e.strerror or e}") from None
+            if sender in trusted:  # an IPv4 (host, port) tuple, as Peer
+                out.trusted.append((bytes(self._view[:size]), sender))
+            elif len(out.others) < budget:
+                out.others.append((bytes(self._view[:size]), sender))
+            else:
+                out.shed += 1
         return out
 
     def close(self) -> None:

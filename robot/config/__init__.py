@@ -49,7 +49,14 @@ from robot.config.vision import (
     RelativePoseConfig,
     TeachConfig,
 )
-from shared.config import SIM_TABLE, LogConfig, MavlinkConfig, from_mapping, load_toml
+from shared.config import (
+    SIM_TABLE,
+    FtpConfig,
+    LogConfig,
+    MavlinkConfig,
+    from_mapping,
+    load_toml,
+)
 from shared.errors import ConfigError
 
 __all__ = [
@@ -92,6 +99,7 @@ class VmnavConfig:
     pioneer: PioneerDriverConfig = field(default_factory=PioneerDriverConfig)
     camera: CameraSourceConfig = field(default_factory=CameraSourceConfig)
     mavlink: MavlinkConfig = field(default_factory=MavlinkConfig)
+    ftp: FtpConfig = field(default_factory=FtpConfig)
     log: LogConfig = field(default_factory=LogConfig)
     teleop: TeleopConfig = field(default_factory=TeleopConfig)
 

@@ -46,8 +46,9 @@ Rules:
    (``progress``); the application's notices
    (``VehicleApp.next_notice``) as STATUSTEXT at their level's severity.
    SYS_STATUS counts what went wrong on reception (:meth:`stats`), each capped at
-   65535: ``errors_comm`` the corrupt packets, ``errors_count1`` the handler faults
-   (rule 9), ``errors_count2`` the messages refused (rule 9).
+   65535: ``errors_comm`` the corrupt packets and the datagrams the transport dropped
+   unparsed (:attr:`VehicleEndpoint.shed_datagrams`), ``errors_count1`` the handler
+   faults (rule 9), ``errors_count2`` the messages refused (rule 9).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost. A ``link_warning`` (``vmnav robot --insecure``: unsigned and open to the
    network) goes out as a STATUSTEXT WARNING to every ground station that connects:
@@ -192,7 +193,7 @@ class VehicleEndpoint:
         config: the robot's config; parameters start from its values.
         files: memory, upload area and parameter file.
         signing: sign the link; None leaves it unsigned.
-        ftp: FTP server limits.
+        ftp: FTP server limits; None: ``config.ftp``.
         uid: the robot's unique id in AUTOPILOT_VERSION (64 bits).
         link_warning: told to every ground station that connects (rule 7); None: nothing.
 
@@ -220,16 +221,17 @@ class VehicleEndpoint:
         self._params = ParamServer(self._table, self.address, link)
         self._mission = MissionServer(self.address, link, validate=self._validate,
                                       admit=self._admit_upload)
-        ftp = ftp if ftp is not None else FtpConfig()
-        self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes)
+        ftp = ftp if ftp is not None else config.ftp
+        self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes,
+                                    ftp.upload_total_bytes)
         self._ftp = FtpServer(self._fs, ftp)
         self._intervals = MessageIntervals(default_periods_ns(link), link.min_stream_period_ns)
         builders: dict[int, Builder] = {
             _HEARTBEAT: self._heartbeat,
             mavlink.MAVLINK_MSG_ID_MISSION_CURRENT: lambda t, us: self._mission.current_message(),
             mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda t, us: sys_status_message(
-                t, us, errors_comm=self.codec.bad_packets, handler_faults=self.faults.total,
-                refused=self._refused),
+                t, us, errors_comm=self.codec.bad_packets + self.shed_datagrams,
+                handler_faults=self.faults.total, refused=self._refused),
             **TELEMETRY_BUILDERS,
         }
         self._streams = TelemetryStreams(builders, self._period_ns)
@@ -262,6 +264,8 @@ class VehicleEndpoint:
         self._link_warning = link_warning
         self._gcs_heard = False
         self._outbox: list[Message] = []
+        self.shed_datagrams = 0
+        """Datagrams the transport dropped unparsed under a flood (its owner counts them)."""
         self._messages = 0
         self._refused = 0
         self.faults = HandlerFaults(logger, "vehicle")

@@ -6,6 +6,7 @@ Tree seen by the ground station::
         manifest.json
         images/<id>.png  features/<id>.npz  thumbnails/<id>.png
     /upload/<name>    writable and flat (the goal photo), at most ``upload_limit_bytes``
+                      a file and ``upload_total_bytes`` in all
 
 Rules:
 
@@ -22,7 +23,9 @@ Rules:
    an upload's length.
 4. Refusals are ``OSError``\\ s, which the server turns into NAKs: rules 1 and 2,
    and writes or removals outside ``/upload/``, are PermissionError (FileProtected);
-   an upload too large is EFBIG (FailErrno).
+   an upload too large is EFBIG (FailErrno); an upload that would take the upload
+   area (its files, other than the one replaced, plus every upload in progress) past
+   ``upload_total_bytes`` is ENOSPC (FailErrno), and is then failed for good.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import errno
 import io
 import os
 import stat
+from collections.abc import Callable
 from pathlib import Path
 
 from shared.atomic_file import write_bytes_atomic
@@ -68,12 +72,18 @@ class Upload:
         target: where the file goes.
         exclusive: refuse at commit time if ``target`` exists by then (CreateFile).
         limit_bytes: the largest file accepted.
+        room: the bytes this upload may hold at most under the area's quota (called when
+            it grows); None: no quota.
     """
 
-    def __init__(self, target: Path, exclusive: bool, limit_bytes: int) -> None:
+    def __init__(self, target: Path, exclusive: bool, limit_bytes: int,
+                 room: Callable[[Upload], int] | None = None) -> None:
         self.target = target
         self.exclusive = exclusive
         self.limit_bytes = limit_bytes
+        self._room = room
+        self.finished = False
+        """Committed or discarded: it holds nothing any more."""
         self._data = bytearray()
         self._written: list[tuple[int, int]] = []  # [start, end) byte ranges, as written
         self._failed: str | None = None
@@ -82,12 +92,16 @@ class Upload:
         """Store ``data`` at byte ``offset``.
 
         Raises:
-            OSError: EFBIG past ``limit_bytes`` (the upload is then failed for good).
+            OSError: EFBIG past ``limit_bytes``, ENOSPC past the quota's room (the
+                upload is then failed for good).
         """
         end = offset + len(data)
         if end > self.limit_bytes:
             self._failed = f"bytes up to {end} written, limit {self.limit_bytes}"
             raise OSError(errno.EFBIG, f"upload larger than {self.limit_bytes} bytes")
+        if end > len(self._data) and self._room is not None and end > self._room(self):
+            self._failed = f"bytes up to {end} written, past the upload quota"
+            raise OSError(errno.ENOSPC, "upload area quota reached")
         if end > len(self._data):
             self._data.extend(bytes(end - len(self._data)))
         self._data[offset:end] = data
@@ -117,8 +131,14 @@ class Upload:
         except InputError as e:
             raise OSError(errno.EIO, str(e)) from None
 
+    @property
+    def held_bytes(self) -> int:
+        """Bytes held in RAM now."""
+        return len(self._data)
+
     def discard(self) -> None:
         self._data, self._written = bytearray(), []
+        self.finished = True
 
 
 class MemoryFileSystem:
@@ -128,14 +148,18 @@ class MemoryFileSystem:
         memory_dir: the visual memory directory (need not exist yet).
         upload_dir: where uploads land; created if missing.
         upload_limit_bytes: the largest upload accepted, bytes.
+        upload_total_bytes: the upload area's quota (files plus uploads in progress), bytes.
     """
 
     def __init__(self, memory_dir: str | Path, upload_dir: str | Path,
-                 upload_limit_bytes: int = FtpConfig().upload_limit_bytes) -> None:
+                 upload_limit_bytes: int = FtpConfig().upload_limit_bytes,
+                 upload_total_bytes: int = FtpConfig().upload_total_bytes) -> None:
         self.memory_dir = Path(memory_dir)
         self.upload_dir = Path(upload_dir)
         self.upload_limit_bytes = upload_limit_bytes
+        self.upload_total_bytes = upload_total_bytes
         self.upload_dir.mkdir(parents=True, exist_ok=True)
+        self._uploads: list[Upload] = []  # opened here (the finished pruned at each open)
 
     def list_directory(self, path: str) -> list[DirEntry]:
         """Entries of ``path`` sorted by name; hidden files and symlinks left out."""
@@ -166,7 +190,20 @@ class MemoryFileSystem:
 
     def open_write(self, path: str, exclusive: bool) -> Upload:
         """Start an upload to ``/upload/<name>``."""
-        return Upload(self._upload_target(path), exclusive, self.upload_limit_bytes)
+        upload = Upload(self._upload_target(path), exclusive, self.upload_limit_bytes,
+                        self._room)
+        self._uploads = [u for u in self._uploads if not u.finished]
+        self._uploads.append(upload)
+        return upload
+
+    def _room(self, upload: Upload) -> int:
+        """The bytes ``upload`` may hold under ``upload_total_bytes`` (rule 4): the quota
+        less the area's files (but the one it replaces) and the other uploads' bytes."""
+        others = sum(u.held_bytes for u in self._uploads if u is not upload)
+        with os.scandir(self.upload_dir) as it:
+            files = sum(e.stat().st_size for e in it
+                        if e.is_file(follow_symlinks=False) and e.path != str(upload.target))
+        return self.upload_total_bytes - others - files
 
     def remove(self, path: str) -> None:
         """Delete ``/upload/<name>``."""

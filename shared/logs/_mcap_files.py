@@ -11,6 +11,8 @@ Used by one thread only (the log writer's). Rules:
    of log time; a finished file has its summary and index.
 3. Numbering continues after the highest number already in the folder, so a restarted
    process never overwrites an earlier run's files.
+4. :attr:`McapFiles.size_bytes` is what the files opened here hold on disk so far (the
+   finished ones, and the open one up to its last flushed chunk): the writer's quota.
 """
 
 from __future__ import annotations
@@ -72,6 +74,17 @@ class McapFiles:
         self.errors = 0
         """OS errors met (each abandons a file or a try to open one)."""
         self.last_error: str | None = None
+        self._finished_bytes = 0  # files closed or abandoned
+
+    @property
+    def size_bytes(self) -> int:
+        """Bytes in the files opened here (rule 4)."""
+        if self._file is None:
+            return self._finished_bytes
+        try:
+            return self._finished_bytes + self._file.tell()
+        except (OSError, ValueError):
+            return self._finished_bytes
 
     def open(self, now_ns: int) -> None:
         """Open the next numbered file unless one is open or a retry is not due yet.
@@ -215,6 +228,7 @@ class McapFiles:
 
     def _close(self) -> None:
         if self._file is not None:
+            self._finished_bytes = self.size_bytes
             with contextlib.suppress(OSError):  # the error that led here was reported
                 self._file.close()
         self._file = None

@@ -12,6 +12,11 @@ waited in the queue; ``close()`` (also run at interpreter exit) finishes the fil
 with its summary and index. Entry points turn SIGTERM into ``sys.exit`` so that
 exit runs too (mcap-logging.md §1 "Exit paths").
 
+Quota (``LogConfig.max_bytes``): once the files hold that much, the writer thread stops
+writing the bulky topics (camera frames, annotations, MAVLink) and says so once, as a
+WARNING on the console and a ``foxglove.Log`` line in the file; the loop's calls for
+them are then refused at once (``False``, counted in ``over_quota``). The rest goes on.
+
 Time: ``t_ns`` is the data's time from the loop's clock, integer ns >= 0; it is the
 MCAP ``log_time`` and ``publish_time`` and the Foxglove ``timestamp``. Only the flush
 and retry periods use the wall clock, in the writer thread.
@@ -68,6 +73,8 @@ class LogStats:
         errors: file errors and failed encodings met (the first of each outage is logged).
         files: every file opened, in order.
         last_error: the last error, one line naming the file, or None.
+        over_quota: jobs of bulky topics not written because the log reached
+            ``LogConfig.max_bytes``.
     """
 
     queued: int
@@ -78,12 +85,14 @@ class LogStats:
     errors: int
     files: tuple[Path, ...]
     last_error: str | None
+    over_quota: int = 0
 
 
 class _Job(NamedTuple):
     t_ns: int
     build: Callable[..., list[Record]]
     args: tuple[Any, ...]
+    bulky: bool = False  # a frame, annotations or MAVLink: not written over the quota
 
 
 class _Metadata(NamedTuple):
@@ -112,6 +121,8 @@ class LogWriter:
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=self.config.queue_messages)
         self._lock = threading.Lock()
         self._queued = self._dropped = self._skipped = self._job_errors = self._job_lost = 0
+        self._over_quota = 0
+        self._quota_reached = False
         self._job_error: str | None = None
         self._frame_period_ns = round(NS_PER_S / self.config.frame_rate_hz)
         self._next_frame_ns: dict[str, int] = {}
@@ -140,12 +151,12 @@ class LogWriter:
             raise ValueError(f"image: expected uint8 grey, got {np.asarray(image).dtype}")
         if lossless:
             return self._put(_Job(t_ns, _image_records, (t_ns, topic, frame_id, np.array(image),
-                                                          "png", [])))
+                                                          "png", []), bulky=True))
         if not self._frame_due(t_ns, topic):
             return False
         return self._put(_Job(t_ns, _image_records, (
             t_ns, topic, frame_id, np.array(image), "jpeg",
-            [cv2.IMWRITE_JPEG_QUALITY, self.config.jpeg_quality])))
+            [cv2.IMWRITE_JPEG_QUALITY, self.config.jpeg_quality]), bulky=True))
 
     def log_points(self, t_ns: int, topic: str, pixels_xy: npt.ArrayLike, *,
                    color: messages.Rgba = GREEN, thickness_px: float = 4.0,
@@ -164,7 +175,7 @@ class LogWriter:
         pixels = np.array(pixels_xy, np.float64)
         check_shape("pixels_xy", pixels.shape, (None, 2))
         return self._put(_Job(t_ns, _one, (topic, IMAGE_ANNOTATIONS, messages.image_points,
-                                           t_ns, pixels, color, thickness_px, label)))
+                                           t_ns, pixels, color, thickness_px, label), bulky=True))
 
     def log_json(self, t_ns: int, topic: str, schema_name: str,
                  message: Mapping[str, Any]) -> bool:
@@ -214,7 +225,7 @@ class LogWriter:
             raise ValueError(f"direction must be 'in' or 'out', got {direction!r}")
         frame = msg.get_msgbuf()
         return self._put(_Job(t_ns, _mavlink_records,
-                              (direction, msg, bytes(frame) if frame else b"")))
+                              (direction, msg, bytes(frame) if frame else b""), bulky=True))
 
     def log_mavlink_packet(self, t_ns: int, packet: bytes, direction: str) -> bool:
         """Log one MAVLink packet given as its bytes, as :meth:`log_mavlink` does; the
@@ -227,7 +238,7 @@ class LogWriter:
         """
         if direction not in topics.MAVLINK_DIRECTIONS:
             raise ValueError(f"direction must be 'in' or 'out', got {direction!r}")
-        return self._put(_Job(t_ns, _packet_records, (direction, bytes(packet))))
+        return self._put(_Job(t_ns, _packet_records, (direction, bytes(packet)), bulky=True))
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> bool:
         """Store key-value metadata (e.g. ``"run"``: route, mode, git sha) in every file."""
@@ -241,7 +252,8 @@ class LogWriter:
                             written=files.written, lost=files.lost + self._job_lost,
                             errors=files.errors + self._job_errors,
                             files=tuple(files.paths),
-                            last_error=files.last_error or self._job_error)
+                            last_error=files.last_error or self._job_error,
+                            over_quota=self._over_quota)
 
     def close(self, timeout_s: float = 10.0) -> LogStats:
         """Write what is queued, finish the file (summary, index) and stop the thread.
@@ -286,6 +298,9 @@ class LogWriter:
         if isinstance(job, _Job) and job.t_ns < 0:
             raise ValueError(f"t_ns must be >= 0, got {job.t_ns}")
         with self._lock:
+            if isinstance(job, _Job) and job.bulky and self._quota_reached:
+                self._over_quota += 1
+                return False
             if not self._closed:
                 try:
                     self._queue.put_nowait(job)
@@ -322,6 +337,8 @@ class LogWriter:
         files.close(clock.now_ns())
 
     def _write(self, job: _Job, now_ns: int) -> None:
+        if job.bulky and self._over(job.t_ns, now_ns):
+            return
         try:
             self._files.write(job.t_ns, job.build(*job.args), now_ns)
         except Exception as e:  # a bad message (or a bug) must not stop the writer thread
@@ -333,6 +350,26 @@ class LogWriter:
             if first:
                 log.exception("cannot log a message (%s); counted, not logged",
                               job.build.__name__)
+
+
+    def _over(self, t_ns: int, now_ns: int) -> bool:
+        """Whether the quota is reached (the writer thread); the first time, count and say so."""
+        with self._lock:
+            if self._quota_reached:
+                self._over_quota += 1
+                return True
+        limit = self.config.max_bytes
+        if self._files.size_bytes < limit:
+            return False
+        with self._lock:
+            self._quota_reached = True
+            self._over_quota += 1
+        text = (f"log quota of {limit} bytes reached: camera frames and MAVLink are no longer "
+                f"logged (LogConfig.max_bytes)")
+        log.warning("%s in %s", text, self.config.output_dir)
+        self._files.write(t_ns, [(topics.LOG, LOG, messages.log_entry(t_ns, "WARNING", text,
+                                                                      __name__))], now_ns)
+        return True
 
 
 def _one(topic: str, schema: Schema, build: Callable[..., Mapping[str, Any]],

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import select
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from ground.station import GroundError, GroundStation
+from ground.station import STRANGER_BUDGET, GroundError, GroundStation
 from ground.teleop import drive
 from robot.config import VmnavConfig
 from robot.mission import MissionState
@@ -69,6 +70,40 @@ def test_garbage_in_one_datagram_does_not_swallow_the_next(tmp_path: Path,
             vehicle.service(0)  # its first HEARTBEAT, and no other until 1 s (never here)
             assert station.wait_vehicle(0.5).system_id == 1
     assert station.codec.bad_packets == 1  # the garbage, cut short by its datagram's end
+
+
+def test_a_flood_of_strangers_does_not_hide_the_vehicle(tmp_path: Path,
+                                                        manual_clock: ManualClock) -> None:
+    with GroundStation.open("udpin:127.0.0.1:0", WallClock()) as station:
+        url = f"udpout:127.0.0.1:{station.link.local_port}"
+        with (UdpLink.open(url) as noise,
+              make_vehicle(tmp_path, FakeApp(), manual_clock, url=url) as vehicle):
+            vehicle.service(0)
+            first_ns = station.wait_vehicle(0.5).last_heartbeat_ns
+            for i in range(300):  # more than one old 256-datagram read
+                noise.send(b"\xfd\x09garbage" + i.to_bytes(4, "little"))
+            manual_clock.sleep_until_ns(1_000_000_000)
+            vehicle.service(manual_clock.now_ns())  # its second HEARTBEAT, after the flood
+            assert select.select([station.link], [], [], 1.0)[0]
+            station.service()  # one round
+            assert station.fleet.vehicles[1].last_heartbeat_ns > first_ns
+    assert (station.codec.bad_packets, station.shed) == (STRANGER_BUDGET, 300 - STRANGER_BUDGET)
+
+
+def test_only_verified_packets_reach_the_taps(tmp_path: Path, manual_clock: ManualClock) -> None:
+    tapped: list[str] = []
+    with GroundStation.open("udpin:127.0.0.1:0", WallClock()) as station:
+        station.packet_taps.append(lambda way, packet, msg, t_ns: tapped.append(
+            f"{way} {msg.get_type()}"))
+        url = f"udpout:127.0.0.1:{station.link.local_port}"
+        with (UdpLink.open(url) as stranger,
+              make_vehicle(tmp_path, FakeApp(), manual_clock, url=url) as vehicle):
+            # A well-framed packet of an id the dialect lacks: it decodes, unverified.
+            stranger.send(bytes([0xFD, 4, 0, 0, 0, 42, 1, 0xEF, 0xCD, 0xAB]) + bytes(6))
+            vehicle.service(0)
+            station.wait_vehicle(0.5)
+    assert station.codec.unknown_packets == 1
+    assert "in HEARTBEAT" in tapped and not [t for t in tapped if "UNKNOWN" in t]
 
 
 def test_wait_mission_done_from_telemetry(station: GroundStation, app: FakeApp) -> None:

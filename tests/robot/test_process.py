@@ -182,6 +182,33 @@ class TestHoldingTheClock:
         assert stamped == {5000 * MS}
         assert any(m.topic == "/mavlink/in/COMMAND_LONG" for m in traffic)
 
+    def test_rejected_traffic_is_counted_in_the_log_not_logged(self, tmp_path) -> None:
+        from robot.vehicle.udp_vehicle import REJECT_REPORT_PERIOD_NS, Rejected
+        from shared.udp_link import UdpLink
+
+        clock = ManualClock(7000 * MS)
+        log = FieldLog(LogConfig(output_dir=str(tmp_path / "logs")), "robot",
+                       CameraMountConfig(), {"source": "test"})
+        wall = WallClock()
+        with process(tmp_path, clock, ScriptedCamera(clock, []), [], log=log) as robot:
+            # A well-framed packet of an id the dialect lacks: it decodes, unverified.
+            unknown = bytes([0xFD, 4, 0, 0, 0, 42, 1, 0xEF, 0xCD, 0xAB]) + bytes(6)
+            with UdpLink.open(f"udpout:127.0.0.1:{robot.vehicle.link.local_port}") as stranger:
+                for _ in range(3):
+                    stranger.send(unknown)
+                give_up_ns = wall.now_ns() + 10_000 * MS
+                while robot.vehicle.unverified < 3 and wall.now_ns() < give_up_ns:
+                    wall.sleep_until_ns(wall.now_ns() + 10 * MS)
+            assert robot.vehicle.unverified == 3
+            for observe in robot.vehicle.reject_observers:  # as at the end of a period
+                observe(Rejected(3, 0, REJECT_REPORT_PERIOD_NS), wall.now_ns())
+        messages = list(read_messages(log.stats().files[0], None))
+        assert not any(m.topic.startswith("/mavlink/in/") for m in messages)
+        [line] = [m for m in messages if m.topic == "/log" and m.data["name"] == "robot.vehicle"]
+        assert line.log_time_ns == 7000 * MS  # on the loop's clock
+        assert line.data["message"] == ("mavlink in: 3 datagrams rejected in 10.0 s (3 without "
+                                        "a verified message, 0 shed unparsed)")
+
     def test_only_a_lockstep_process_holds_its_clock(self, tmp_path) -> None:
         clock = ManualClock()
         with process(tmp_path, clock, ScriptedCamera(clock, [0]), []) as robot, \

@@ -141,3 +141,18 @@ class TestDatagrams:
             client.receive()
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
             probe.bind(("127.0.0.1", client.local_port))  # the port was released
+
+
+def test_drain_keeps_the_trusted_and_a_budget_of_others(pair: tuple[UdpLink, UdpLink]) -> None:
+    server, friend = pair
+    with UdpLink.open(f"udpout:127.0.0.1:{server.local_port}") as stranger:
+        for i in range(50):
+            stranger.send(b"s%d" % i)
+        friend.send(b"hello")
+        assert select.select([server], [], [], 1.0)[0]
+        friend_address = ("127.0.0.1", friend.local_port)
+        drained = server.drain({friend_address}, budget=10)
+    assert drained.trusted == [(b"hello", friend_address)]
+    assert [data for data, _ in drained.others] == [b"s%d" % i for i in range(10)]
+    assert drained.shed == 40 and server.peer is None  # the owner picks whom to answer
+    assert server.receive_buffer_bytes >= 200_000

@@ -7,9 +7,13 @@ Rules:
    also on OpenFileRO/CreateFile/OpenFileWO: MAVProxy picks the session byte and
    drops replies carrying another one (§0.6).
 2. A request byte-identical to the previous one from the same peer is a retry after
-   a lost reply: the cached replies go out again and nothing runs twice (a retried
-   CreateFile must not fail with FileExists). NoSessionsAvailable is not cached:
-   the client is meant to retry until a session frees.
+   a lost reply: the cached reply goes out again and nothing runs twice (a retried
+   CreateFile must not fail with FileExists). The cache keeps the last one-reply
+   exchange of at most ``resend_cache_peers`` peers, the least recently used
+   forgotten first, so it stays under ``resend_cache_peers`` x 2 x 251 bytes of
+   payload whatever the number of peers. Not cached: NoSessionsAvailable (the client
+   is meant to retry until a session frees) and bursts (a retried BurstReadFile
+   reads again, which is idempotent).
 3. Policy lives in the :class:`FtpFileSystem`. Its ``OSError``\\ s become NAKs:
    FileNotFoundError/NotADirectoryError -> FileNotFound, PermissionError/EROFS ->
    FileProtected, FileExistsError -> FileExists, another errno -> FailErrno.
@@ -17,12 +21,21 @@ Rules:
    get FileNotFound at once, so MAVProxy falls back to PARAM_REQUEST_LIST (§0.8).
 5. At most ``max_sessions`` sessions are open; one unused for ``session_timeout_ns``
    is closed (an upload discarded) when the next request arrives. TerminateSession
-   commits an upload; ResetSessions discards every upload in progress.
+   commits an upload; ResetSessions closes the sessions of its sender (discarding its
+   uploads in progress).
+6. A session belongs to the peer that opened it: sessions are looked up by (peer,
+   session byte), so another peer's request for the same session byte gets
+   InvalidSession (it cannot read, write, commit or close it), and an open from
+   another peer with that byte opens a session of its own.
+7. Amplification: every request gets exactly one reply, except a BurstReadFile on a
+   session its sender owns, which gets at most ``burst_packets`` (the protocol's
+   burst; fewer at the end of the file). A stranger's request costs one packet.
 """
 
 from __future__ import annotations
 
 import errno
+from collections import OrderedDict
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -144,8 +157,8 @@ def _path(request: FtpPayload) -> str:
     return path
 
 
-#: A server operation: (request, now_ns) -> replies; raises _NakError or OSError.
-_Handler = Callable[[FtpPayload, int], list[FtpPayload]]
+#: A server operation: (request, its sender, now_ns) -> replies; raises _NakError or OSError.
+_Handler = Callable[[FtpPayload, Hashable, int], list[FtpPayload]]
 
 
 class FtpServer:
@@ -159,18 +172,19 @@ class FtpServer:
     def __init__(self, fs: FtpFileSystem, config: FtpConfig | None = None) -> None:
         self.fs = fs
         self.config = config if config is not None else FtpConfig()
-        self._sessions: dict[int, _Session] = {}
-        self._last: dict[Hashable, tuple[bytes, list[bytes]]] = {}
+        self._sessions: dict[tuple[Hashable, int], _Session] = {}
+        self._last: OrderedDict[Hashable, tuple[bytes, bytes]] = OrderedDict()
         self._handlers: dict[int, _Handler] = {
-            Opcode.NONE: lambda r, _: [_reply(r)],
+            Opcode.NONE: lambda r, peer, now: [_reply(r)],
             Opcode.TERMINATE_SESSION: self._terminate,
             Opcode.RESET_SESSIONS: self._reset,
             Opcode.LIST_DIRECTORY: self._list,
             Opcode.OPEN_FILE_RO: self._open_ro,
             Opcode.READ_FILE: self._read,
             Opcode.BURST_READ_FILE: self._burst,
-            Opcode.CREATE_FILE: lambda r, now: self._open_wo(r, now, exclusive=True),
-            Opcode.OPEN_FILE_WO: lambda r, now: self._open_wo(r, now, exclusive=False),
+            Opcode.CREATE_FILE: lambda r, peer, now: self._open_wo(r, peer, now, exclusive=True),
+            Opcode.OPEN_FILE_WO: lambda r, peer, now: self._open_wo(r, peer, now,
+                                                                    exclusive=False),
             Opcode.WRITE_FILE: self._write,
             Opcode.REMOVE_FILE: self._remove,
             Opcode.CALC_FILE_CRC32: self._crc,
@@ -181,6 +195,11 @@ class FtpServer:
         """Sessions open now."""
         return len(self._sessions)
 
+    @property
+    def cached_peers(self) -> int:
+        """Peers whose last exchange the resend cache holds (rule 2)."""
+        return len(self._last)
+
     def handle(self, payload: bytes | Sequence[int], now_ns: int,
                peer: Hashable = None) -> list[bytes]:
         """Answer one request.
@@ -188,16 +207,18 @@ class FtpServer:
         Args:
             payload: the request's payload field.
             now_ns: when it arrived, ns (session time-outs).
-            peer: who sent it, e.g. ``(sysid, compid)``; keys the retry cache (rule 2).
+            peer: who sent it, e.g. ``(sysid, compid)``; keys the retry cache (rule 2)
+                and owns the sessions it opens (rule 6).
 
         Returns:
-            Reply payload fields (251 bytes each) in sending order; several for a
-            burst read, none for a payload too short to parse.
+            Reply payload fields (251 bytes each) in sending order; several only for a
+            burst read (rule 7), none for a payload too short to parse.
         """
         raw = bytes(payload)
         cached = self._last.get(peer)
         if cached is not None and cached[0] == raw:
-            return list(cached[1])
+            self._last.move_to_end(peer)
+            return [cached[1]]
         try:
             request = FtpPayload.from_bytes(raw)
         except RemoteProtocolError:
@@ -207,55 +228,67 @@ class FtpServer:
         try:
             if handler is None:
                 raise _NakError(NakCode.UNKNOWN_COMMAND)
-            replies = handler(request, now_ns)
+            replies = handler(request, peer, now_ns)
         except _NakError as e:
             replies = [_nak(request, e.code)]
         except OSError as e:
             replies = [_nak_for(request, e)]
         out = [reply.to_bytes() for reply in replies]
-        if replies[0].data != bytes([NakCode.NO_SESSIONS_AVAILABLE]):  # a retry may succeed
-            self._last[peer] = (raw, out)
+        # a retry of NoSessionsAvailable may succeed; a burst is read again (rule 2)
+        if len(out) == 1 and replies[0].data != bytes([NakCode.NO_SESSIONS_AVAILABLE]):
+            self._remember(peer, raw, out[0])
         return out
 
+    def _remember(self, peer: Hashable, request: bytes, reply: bytes) -> None:
+        """Cache ``peer``'s last exchange, forgetting the least recently used (rule 2)."""
+        self._last[peer] = (request, reply)
+        self._last.move_to_end(peer)
+        while len(self._last) > self.config.resend_cache_peers:
+            self._last.popitem(last=False)
+
     def _expire(self, now_ns: int) -> None:
-        for session_id, session in list(self._sessions.items()):
+        for key, session in list(self._sessions.items()):
             if now_ns - session.last_used_ns >= self.config.session_timeout_ns:
-                del self._sessions[session_id]
+                del self._sessions[key]
                 session.close(commit=False)
 
-    def _session(self, request: FtpPayload, now_ns: int) -> _Session:
-        session = self._sessions.get(request.session)
+    def _session(self, request: FtpPayload, peer: Hashable, now_ns: int) -> _Session:
+        """The sender's session the request names (rule 6)."""
+        session = self._sessions.get((peer, request.session))
         if session is None:
             raise _NakError(NakCode.INVALID_SESSION)
         session.last_used_ns = now_ns
         return session
 
-    def _add_session(self, request: FtpPayload, session: _Session) -> None:
-        """Give ``session`` the request's id (rule 1), replacing a stale one."""
-        old = self._sessions.pop(request.session, None)
+    def _add_session(self, request: FtpPayload, peer: Hashable, session: _Session) -> None:
+        """Give ``session`` the sender and the request's id (rules 1 and 6), replacing a
+        stale one of the same sender."""
+        old = self._sessions.pop((peer, request.session), None)
         if old is not None:
             old.close(commit=False)
         if len(self._sessions) >= self.config.max_sessions:
             session.close(commit=False)
             raise _NakError(NakCode.NO_SESSIONS_AVAILABLE)
-        self._sessions[request.session] = session
+        self._sessions[(peer, request.session)] = session
 
-    def _terminate(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        self._session(request, now_ns)
-        self._sessions.pop(request.session).close(commit=True)
+    def _terminate(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        self._session(request, peer, now_ns)
+        self._sessions.pop((peer, request.session)).close(commit=True)
         return [_reply(request)]
 
     def close(self) -> None:
-        """Close every session, discarding uploads in progress (ResetSessions; shutdown)."""
+        """Close every session, discarding uploads in progress (shutdown)."""
         sessions, self._sessions = self._sessions, {}
         for session in sessions.values():
             session.close(commit=False)
 
-    def _reset(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        self.close()
+    def _reset(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        """ResetSessions: the sender's sessions only (rule 5)."""
+        for key in [key for key in self._sessions if key[0] == peer]:
+            self._sessions.pop(key).close(commit=False)
         return [_reply(request)]
 
-    def _list(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _list(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         # Entries longer than a packet are left out before indexing, so that the
         # offset (an entry index) means the same in every reply.
         entries = [e.to_bytes() for e in self.fs.list_directory(_path(request))]
@@ -269,30 +302,31 @@ class FtpServer:
             data += entry
         return [_reply(request, data)]
 
-    def _open_ro(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _open_ro(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         reader = self.fs.open_read(_path(request))
-        self._add_session(request, _Session(now_ns, reader=reader))
+        self._add_session(request, peer, _Session(now_ns, reader=reader))
         return [_reply(request, U32.pack(reader.size))]
 
-    def _open_wo(self, request: FtpPayload, now_ns: int, exclusive: bool) -> list[FtpPayload]:
+    def _open_wo(self, request: FtpPayload, peer: Hashable, now_ns: int,
+                 exclusive: bool) -> list[FtpPayload]:
         writer = self.fs.open_write(_path(request), exclusive)
-        self._add_session(request, _Session(now_ns, writer=writer))
+        self._add_session(request, peer, _Session(now_ns, writer=writer))
         return [_reply(request)]
 
-    def _reader(self, request: FtpPayload, now_ns: int) -> FtpReader:
-        reader = self._session(request, now_ns).reader
+    def _reader(self, request: FtpPayload, peer: Hashable, now_ns: int) -> FtpReader:
+        reader = self._session(request, peer, now_ns).reader
         if reader is None:
             raise _NakError(NakCode.INVALID_SESSION)
         if request.offset >= reader.size:
             raise _NakError(NakCode.EOF)
         return reader
 
-    def _read(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        reader = self._reader(request, now_ns)
+    def _read(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        reader = self._reader(request, peer, now_ns)
         return [_reply(request, reader.read(request.offset, _chunk(request)))]
 
-    def _burst(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        reader = self._reader(request, now_ns)
+    def _burst(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        reader = self._reader(request, peer, now_ns)
         replies, offset, chunk = [], request.offset, _chunk(request)
         for nth in range(self.config.burst_packets):
             data = reader.read(offset, chunk)
@@ -303,8 +337,8 @@ class FtpServer:
                 break
         return replies
 
-    def _write(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
-        writer = self._session(request, now_ns).writer
+    def _write(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
+        writer = self._session(request, peer, now_ns).writer
         if writer is None:
             raise _NakError(NakCode.INVALID_SESSION)
         if request.size > MAX_DATA:
@@ -312,11 +346,11 @@ class FtpServer:
         writer.write(request.offset, request.data)
         return [_reply(request)]
 
-    def _remove(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _remove(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         self.fs.remove(_path(request))
         return [_reply(request)]
 
-    def _crc(self, request: FtpPayload, now_ns: int) -> list[FtpPayload]:
+    def _crc(self, request: FtpPayload, peer: Hashable, now_ns: int) -> list[FtpPayload]:
         reader, crc, offset = self.fs.open_read(_path(request)), 0, 0
         try:
             while offset < reader.size:

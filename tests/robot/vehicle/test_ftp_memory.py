@@ -139,6 +139,25 @@ class TestUpload:
             upload.commit()
         assert os.listdir(fs.upload_dir) == []
 
+    def test_the_area_quota_counts_files_and_uploads_in_progress(self, tmp_path: Path) -> None:
+        fs = MemoryFileSystem(tmp_path / "mem", tmp_path / "upload", upload_limit_bytes=1000,
+                              upload_total_bytes=2500)
+        (fs.upload_dir / "old.png").write_bytes(bytes(1000))
+        held = fs.open_write("/upload/a.png", exclusive=True)
+        held.write(0, bytes(1000))
+        late = fs.open_write("/upload/b.png", exclusive=True)
+        late.write(0, bytes(500))
+        with pytest.raises(OSError) as e:
+            late.write(500, bytes(1))
+        assert e.value.errno == errno.ENOSPC
+        with pytest.raises(OSError, match="failed earlier"):
+            late.commit()
+        held.commit()
+        replace = fs.open_write("/upload/old.png", exclusive=False)  # the old one not counted
+        replace.write(0, bytes(500))
+        replace.commit()
+        assert sorted(os.listdir(fs.upload_dir)) == ["a.png", "old.png"]
+
     def test_exclusive_create_refuses_an_existing_file(self, fs: MemoryFileSystem) -> None:
         (fs.upload_dir / "goal.png").write_bytes(b"old")
         with pytest.raises(FileExistsError):

@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from robot.vehicle.udp_vehicle import UdpVehicle
-from shared.clock import ManualClock
+from robot.vehicle.udp_vehicle import REJECT_REPORT_PERIOD_NS, STRANGER_BUDGET, Rejected, UdpVehicle
+from shared.clock import NS_PER_S, ManualClock
 from shared.errors import IllegalEventError
 from shared.mavlink.dialect import make_codec, mavlink
 from shared.mavlink.modes import Mode
@@ -108,3 +108,42 @@ def test_close_is_idempotent_and_final(tmp_path: Path, app: FakeApp,
     with pytest.raises(IllegalEventError, match="UdpVehicle: event start_thread is not "
                                                 "allowed in state CLOSED"):
         vehicle.start_thread()
+
+
+def flood(port: int, count: int) -> UdpLink:
+    """A stranger's socket that sent ``count`` datagrams of garbage to ``port``."""
+    stranger = UdpLink.open(f"udpout:127.0.0.1:{port}")
+    for i in range(count):
+        stranger.send(b"\xfd\x09garbage" + i.to_bytes(4, "little"))
+    return stranger
+
+
+def test_a_flood_of_strangers_is_shed_and_the_station_served_in_the_same_round(
+        net: Net, app: FakeApp) -> None:
+    net.advance(0.5)  # the ground's HEARTBEAT made it the trusted peer
+    taps: list[tuple[str, bytes, int]] = []
+    net.vehicle.packet_taps.append(lambda *packet: taps.append(packet))
+    count = 300  # more than one old 256-datagram read, less than any kernel's buffer
+    with flood(net.vehicle.link.local_port, count):
+        net.ground.send(mavlink.MAVLink_manual_control_message(1, 100, 0, 0, 0, 0))
+        assert select.select([net.vehicle.link], [], [], 1.0)[0]
+        net.vehicle.service(net.now_ns)  # one round
+    assert len(app.called("manual_control")) == 1  # after the flood, still in this round
+    assert net.vehicle.endpoint.codec.bad_packets == STRANGER_BUDGET
+    assert (net.vehicle.shed, net.vehicle.unverified) == (count - STRANGER_BUDGET,
+                                                          STRANGER_BUDGET)
+    assert [data[7] for way, data, _ in taps if way == "in"] == [69]  # MANUAL_CONTROL only
+    net.advance(1.0)  # SYS_STATUS errors_comm counts the corrupt and the shed
+    assert net.ground.of_type("SYS_STATUS")[-1].errors_comm == count
+
+
+def test_rejected_traffic_is_reported_once_per_period(net: Net) -> None:
+    reports: list[tuple[Rejected, int]] = []
+    net.vehicle.reject_observers.append(lambda rejected, t_ns: reports.append((rejected, t_ns)))
+    net.advance(0.5)
+    with flood(net.vehicle.link.local_port, 40):
+        net.advance(REJECT_REPORT_PERIOD_NS / NS_PER_S)
+    net.advance(2 * REJECT_REPORT_PERIOD_NS / NS_PER_S)  # quiet periods: no report
+    [(rejected, t_ns)] = reports
+    assert (rejected.unverified, rejected.shed) == (STRANGER_BUDGET, 40 - STRANGER_BUDGET)
+    assert rejected.period_ns == REJECT_REPORT_PERIOD_NS and t_ns == REJECT_REPORT_PERIOD_NS

@@ -151,6 +151,27 @@ def test_rotation_by_size_gives_several_valid_files(tmp_path: Path) -> None:
     assert sequences == list(range(1, 401))  # per-topic counter continues across files
 
 
+def test_the_quota_stops_bulky_topics_once_and_keeps_the_rest(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    config = LogConfig(output_dir=str(tmp_path), chunk_size_bytes=4096, rotate_size_bytes=16_000,
+                       compression="none", queue_messages=1000, max_bytes=30_000)
+    packet = make_codec(1, 1).pack(mavlink.MAVLink_heartbeat_message(10, 8, 0, 0, 4, 3))
+    with caplog.at_level(logging.WARNING), LogWriter(config, "robot") as writer:
+        for i in range(300):
+            writer.log_mavlink_packet(i * MS, packet, "in")
+            writer.log_json(i * MS, topics.CMD_VEL, "vmnav.Command",
+                            {"stamp_ns": i * MS, "linear_x_m_s": 0.3, "angular_z_rad_s": 0.0,
+                             "source": "servo"})
+    stats = writer.stats()
+    messages = [m for p in stats.files for m in read_messages(p)]
+    kept = sum(m.topic == topics.MAVLINK_RAW for m in messages)
+    assert sum(m.topic == topics.CMD_VEL for m in messages) == 300
+    assert 0 < kept < 300 and kept + stats.over_quota == 300 and stats.dropped == 0
+    [warning] = [m.data for m in messages if m.topic == topics.LOG]
+    assert warning["level"] == 3 and "quota of 30000 bytes reached" in warning["message"]
+    assert sum("log quota" in r.getMessage() for r in caplog.records) == 1
+
+
 def test_rotation_by_log_time_and_numbering_after_existing_files(tmp_path: Path) -> None:
     config = LogConfig(output_dir=str(tmp_path), rotate_period_ns=1_000_000_000)
     for _ in range(2):

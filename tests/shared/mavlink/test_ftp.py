@@ -11,7 +11,7 @@ from pathlib import Path
 
 import fastcrc
 import pytest
-from hypothesis import given
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from robot.vehicle.ftp_memory import MemoryFileSystem
@@ -100,6 +100,12 @@ def ask(server: FtpServer, request: FtpPayload, now_ns: int = 0) -> list[FtpPayl
             for received in relay.to_gcs(reply)]
 
 
+def ask_as(server: FtpServer, peer: tuple[int, int], request: FtpPayload,
+           now_ns: int = 0) -> list[FtpPayload]:
+    """Hand one request to the server as sent by ``peer``; its decoded replies."""
+    return [FtpPayload.from_bytes(r) for r in server.handle(request.to_bytes(), now_ns, peer)]
+
+
 def path_request(opcode: int, path: str, seq: int = 7, session: int = 0x5A,
                  offset: int = 0) -> FtpPayload:
     data = path.encode()
@@ -147,6 +153,17 @@ class TestPayload:
         theirs = FTP_OP(513, 0x5A, 15, 80, 4, 1, 123456, bytearray(b"abc")).pack()
         ours = FtpPayload(513, 0x5A, 15, 80, 4, True, 123456, b"abc").to_bytes()
         assert ours == bytes(theirs).ljust(PAYLOAD_LEN, b"\0")
+
+    @settings(derandomize=True, max_examples=300, deadline=None)
+    @given(raw=st.binary(max_size=PAYLOAD_LEN + 8))
+    def test_any_bytes_decode_or_raise_the_remote_error(self, raw: bytes) -> None:
+        try:
+            p = FtpPayload.from_bytes(raw)
+        except RemoteProtocolError:
+            assert len(raw) < 12
+            return
+        assert len(raw) >= 12 and p.data == raw[12:12 + min(p.size, MAX_DATA)]
+        assert len(p.to_bytes()) == PAYLOAD_LEN
 
     def test_short_payload_is_a_remote_error(self) -> None:
         with pytest.raises(RemoteProtocolError, match="11 bytes"):
@@ -276,6 +293,93 @@ class TestServer:
         tail = ask(server, FtpPayload(105, 2, Opcode.BURST_READ_FILE, 5, offset=23))
         assert [(r.offset, r.data, r.burst_complete) for r in tail] == [(23, b"y\"}\n", True)]
         server.close()
+
+
+class TestHostilePeers:
+    """Issue 15: sessions bound to their peer, a bounded resend cache, no amplification."""
+
+    STRANGER = (66, 66)
+
+    def test_a_stranger_cannot_use_or_close_a_session(self, server: FtpServer,
+                                                      served: MemoryFileSystem) -> None:
+        ask_as(server, GCS, path_request(Opcode.OPEN_FILE_RO, "/memory/manifest.json", session=3))
+        ask_as(server, GCS, path_request(Opcode.CREATE_FILE, "/upload/a", session=4))
+        for request in (FtpPayload(1, 3, Opcode.READ_FILE, 10),
+                        FtpPayload(2, 3, Opcode.BURST_READ_FILE, 10),
+                        FtpPayload(3, 4, Opcode.WRITE_FILE, 3, data=b"evl"),
+                        FtpPayload(4, 4, Opcode.TERMINATE_SESSION),
+                        FtpPayload(5, 3, Opcode.TERMINATE_SESSION)):
+            [reply] = ask_as(server, self.STRANGER, request)
+            assert reply.data == bytes([NakCode.INVALID_SESSION]), request
+        [reset] = ask_as(server, self.STRANGER, FtpPayload(6, 0, Opcode.RESET_SESSIONS))
+        assert reset.opcode == Opcode.ACK and server.open_sessions == 2
+        [read] = ask_as(server, GCS, FtpPayload(7, 3, Opcode.READ_FILE, 10))
+        assert read.data == b'{"format":'
+        ask_as(server, GCS, FtpPayload(8, 4, Opcode.WRITE_FILE, 2, data=b"ok"))
+        [done] = ask_as(server, GCS, FtpPayload(9, 4, Opcode.TERMINATE_SESSION))
+        assert done.opcode == Opcode.ACK
+        assert (served.upload_dir / "a").read_bytes() == b"ok"
+        server.close()
+
+    def test_the_same_session_byte_from_another_peer_is_its_own(self,
+                                                                 server: FtpServer) -> None:
+        for peer, path in ((GCS, "/memory/manifest.json"),
+                           (self.STRANGER, "/memory/thumbnails/0.png")):
+            [opened] = ask_as(server, peer, path_request(Opcode.OPEN_FILE_RO, path, session=5))
+            assert opened.opcode == Opcode.ACK
+        [mine] = ask_as(server, GCS, FtpPayload(2, 5, Opcode.READ_FILE, 2))
+        [theirs] = ask_as(server, self.STRANGER, FtpPayload(2, 5, Opcode.READ_FILE, 2))
+        assert (mine.data, theirs.data) == (b'{"', bytes(range(2)))
+        server.close()
+
+    def test_only_the_owner_gets_a_burst_and_bursts_are_not_replayed(
+            self, server: FtpServer, served: MemoryFileSystem) -> None:
+        (served.upload_dir / "big").write_bytes(bytes(100_000))
+        ask_as(server, GCS, path_request(Opcode.OPEN_FILE_RO, "/upload/big", session=1))
+        burst = FtpPayload(10, 1, Opcode.BURST_READ_FILE, 239)
+        assert len(ask_as(server, self.STRANGER, burst)) == 1
+        assert len(ask_as(server, GCS, burst)) == server.config.burst_packets
+        assert len(ask_as(server, GCS, burst)) == server.config.burst_packets  # read again
+        server.close()
+
+    def test_the_resend_cache_is_bounded(self, served: MemoryFileSystem) -> None:
+        import tracemalloc
+
+        server = FtpServer(served, FtpConfig(resend_cache_peers=16))
+        request = path_request(Opcode.LIST_DIRECTORY, "/memory")
+        tracemalloc.start()
+        try:
+            base = tracemalloc.get_traced_memory()[0]
+            for n in range(3_000):
+                server.handle(request.to_bytes(), 0, (n // 255 + 1, n % 255 + 1))
+            grown = tracemalloc.get_traced_memory()[0] - base
+        finally:
+            tracemalloc.stop()
+        assert server.cached_peers == 16 and grown < 100_000
+        # the most recent peer still gets its retry from the cache, the first does not
+        last = (3_000 // 255 + 1, 2_999 % 255 + 1)
+        assert server.handle(request.to_bytes(), 0, last) == server.handle(
+            request.to_bytes(), 0, last)
+
+    @settings(derandomize=True, max_examples=200, deadline=None,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(raw=st.one_of(st.binary(max_size=PAYLOAD_LEN), st.builds(
+        lambda opcode, size, offset, rest: struct.pack("<HBBBBBxI", 1, 7, opcode, size, 0, 0,
+                                                       offset) + rest,
+        st.sampled_from(Opcode), st.integers(0, 255), st.integers(0, 30_000),
+        st.binary(max_size=MAX_DATA))))
+    def test_a_strangers_request_gets_at_most_one_reply(self, served: MemoryFileSystem,
+                                                        raw: bytes) -> None:
+        (served.upload_dir / "big").write_bytes(bytes(20_000))
+        server = FtpServer(served)
+        session = raw[2] if len(raw) > 2 else 0
+        try:
+            ask_as(server, GCS, path_request(Opcode.OPEN_FILE_RO, "/upload/big", session=session))
+            replies = server.handle(raw, 0, self.STRANGER)
+            assert len(replies) <= 1
+            assert all(len(r) == PAYLOAD_LEN for r in replies)
+        finally:
+            server.close()
 
 
 class TestClientWithServer:
