@@ -418,8 +418,8 @@ def measure(seed: int = 0) -> dict[str, object]:
     """Every case of :data:`MEMORY_CASES` through ``vmnav memory info``, every case of
     :data:`LOG_CASES` through ``vmnav log info``, ``log plot`` and ``log recover``.
 
-    Takes about 30 s on an idle machine (29 child processes of about 1 s each, and
-    building the 1 GiB bombs).
+    Takes about 30 s on an idle machine: 19 child processes of about 1 s each (mostly
+    imports) and building the 1 GiB log bombs (2.5 min on a loaded 2-core machine).
 
     Returns:
         ``{"runs": {"<case> <command>": {peak_rss_mb, time_s, exit_code,

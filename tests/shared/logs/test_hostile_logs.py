@@ -20,7 +20,7 @@ from mcap.reader import make_reader
 from shared.config import LogConfig
 from shared.errors import InputError
 from shared.logs import topics
-from shared.logs.reader import log_info, read_messages, recover
+from shared.logs.reader import log_info, read_messages, read_metadata, recover
 from shared.logs.writer import LogWriter
 from tools.bench import hostile_files
 
@@ -161,7 +161,7 @@ def test_fuzz_mutated_logs_give_results_or_input_errors(
         data[at:at + len(payload)] = payload
     path = tmp_path / "fuzzed.mcap"
     path.write_bytes(bytes(data[:max(8, int(cut * len(data)))]))
-    for action in (log_info, lambda p: list(read_messages(p)),
+    for action in (log_info, lambda p: list(read_messages(p)), read_metadata,
                    lambda p: recover(p, tmp_path / "out.mcap")):
         try:
             action(path)
