@@ -319,27 +319,29 @@ def _mcap_with_one_chunk(chunk: Chunk) -> bytes:
     return out.end()
 
 
-def _zstd_declaring_2_63(path: Path) -> None:
-    write_valid_log_to(path, "zstd")
-    chunk_declaring(path, 2**63)
-
-
 def write_valid_log_to(path: Path, compression: str) -> None:
     """:func:`write_valid_log`, moved to ``path``."""
     with tempfile.TemporaryDirectory(dir=path.parent) as folder:
         os.replace(write_valid_log(Path(folder), compression), path)
 
 
-def _summary_opcode(path: Path) -> None:
+def zstd_log_declaring_2_63(path: Path) -> None:
+    """A valid zstd log whose first chunk declares 2^63 bytes (was: OverflowError)."""
+    write_valid_log_to(path, "zstd")
+    chunk_declaring(path, 2**63)
+
+
+def log_with_corrupt_summary(path: Path) -> None:
+    """A valid lz4 log whose summary lost its Channel record (was: KeyError)."""
     write_valid_log_to(path, "lz4")
     corrupt_summary_channel(path)
 
 
 LOG_CASES: dict[str, Callable[[Path], None]] = {
-    "zstd_chunk_declaring_2^63_bytes": _zstd_declaring_2_63,
+    "zstd_chunk_declaring_2^63_bytes": zstd_log_declaring_2_63,
     "zstd_bomb_1gib": lambda path: bomb_log(path, "zstd", 2**30, 2**30),
     "lz4_bomb_1gib_declared_1mib": lambda path: bomb_log(path, "lz4", 2**30, MIB),
-    "corrupt_summary_opcode": _summary_opcode,
+    "corrupt_summary_opcode": log_with_corrupt_summary,
 }
 """Name -> writes that hostile log at the path given."""
 

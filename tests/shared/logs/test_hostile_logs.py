@@ -29,27 +29,18 @@ MAX_TRACED_BYTES = 16 * MIB
 """What reading any of them may allocate."""
 
 
-def zstd_declaring_2_63(path: Path) -> None:
-    hostile_files.write_valid_log_to(path, "zstd")
-    hostile_files.chunk_declaring(path, 2**63)
-
-
-def summary_opcode(path: Path) -> None:
-    hostile_files.write_valid_log_to(path, "lz4")
-    hostile_files.corrupt_summary_channel(path)
-
-
 CASES: dict[str, tuple[Callable[[Path], None], str]] = {
     "zstd chunk declaring 2^63 bytes": (
-        zstd_declaring_2_63, "a chunk declares 9223372036854775808 bytes uncompressed, more "
-        "than the 67108864 allowed"),
+        hostile_files.zstd_log_declaring_2_63,
+        "a chunk declares 9223372036854775808 bytes uncompressed, more than the 67108864 allowed"),
     "zstd bomb": (lambda p: hostile_files.bomb_log(p, "zstd", 96 * MIB, 96 * MIB),
                   "a chunk declares 100663296 bytes uncompressed, more than the 67108864"),
     "zstd bomb declaring 1 MiB": (lambda p: hostile_files.bomb_log(p, "zstd", 96 * MIB, MIB),
                                   "a chunk declares 1048576 bytes uncompressed but holds more"),
     "lz4 bomb declaring 1 MiB": (lambda p: hostile_files.bomb_log(p, "lz4", 96 * MIB, MIB),
                                  "a chunk declares 1048576 bytes uncompressed but holds more"),
-    "corrupt summary opcode": (summary_opcode, "damaged summary: the summary's chunk at byte"),
+    "corrupt summary opcode": (hostile_files.log_with_corrupt_summary,
+                               "damaged summary: the summary's chunk at byte"),
 }
 
 
@@ -94,7 +85,7 @@ def test_recover_skips_the_hostile_chunk(tmp_path: Path, case: str, traced: None
 
 def test_info_and_recover_of_a_damaged_summary_use_the_data_section(tmp_path: Path) -> None:
     path = tmp_path / "hostile.mcap"
-    summary_opcode(path)
+    hostile_files.log_with_corrupt_summary(path)
     info = log_info(path)
     assert not info.complete and info.message_count == 200
     assert info.problem is not None and info.problem.startswith("damaged summary: ")
