@@ -39,6 +39,10 @@ from mcap.summary import Summary
 MAX_CHUNK_BYTES = 64 * 2**20
 """The most a chunk may hold uncompressed, bytes. vmnav's writer closes a chunk at
 ``[log] chunk_size_bytes`` (1 MiB by default) plus at most one message."""
+MAX_QUEUED_BYTES = 2 * MAX_CHUNK_BYTES
+"""The most message data :func:`messages_in_time_order` holds at once, bytes: the
+messages of chunks overlapping in log time wait in its queue. vmnav's writer logs in
+time order, so its chunks barely overlap."""
 
 
 class DamagedLogError(McapError):
@@ -163,7 +167,9 @@ def messages_in_time_order(
     """The messages of the chunks ``summary`` indexes, by log time (ties: file order).
 
     Chunks are read when the earliest message queued is not before their first
-    message, so at most the chunks overlapping in time are held at once.
+    message, so only the chunks overlapping in time are held at once; their messages'
+    data may hold at most :data:`MAX_QUEUED_BYTES` (many small zstd chunks, each
+    declaring 64 MiB at the same time, would otherwise all be held).
 
     Args:
         f: the file.
@@ -171,7 +177,8 @@ def messages_in_time_order(
         topics: only these topics (all when None).
 
     Raises:
-        DamagedLogError: a chunk is not where the summary says, or too large (above).
+        DamagedLogError: a chunk is not where the summary says, too large, or chunks
+            overlapping in time hold too much.
     """
     wanted = None if topics is None else {
         channel.id for channel in summary.channels.values() if channel.topic in topics}
@@ -182,9 +189,11 @@ def messages_in_time_order(
         if wanted is None or not index.message_index_offsets
         or not wanted.isdisjoint(index.message_index_offsets)]
     heapq.heapify(queue)
+    queued_bytes = 0
     while queue:
         _, offset, _, _, item = heapq.heappop(queue)
         if isinstance(item, Message):
+            queued_bytes -= len(item.data)
             channel = summary.channels[item.channel_id]
             yield summary.schemas.get(channel.schema_id), channel, item
             continue
@@ -196,6 +205,11 @@ def messages_in_time_order(
                 raise DamagedLogError(f"the chunk at byte {offset} holds a message on channel "
                                       f"{record.channel_id}, which the summary does not list")
             heapq.heappush(queue, (record.log_time, offset, position, next(tiebreak), record))
+            queued_bytes += len(record.data)
+        if queued_bytes > MAX_QUEUED_BYTES:
+            raise DamagedLogError(f"chunks overlapping in log time up to the one at byte "
+                                  f"{offset} hold {queued_bytes} bytes of messages at once, "
+                                  f"more than the {MAX_QUEUED_BYTES} allowed")
 
 
 def _read_chunk(f: ClampedFile, offset: int) -> list[McapRecord]:

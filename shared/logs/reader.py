@@ -7,7 +7,11 @@
 * :func:`recover`: rewrite an unfinished, truncated or damaged file into a valid,
   indexed one, keeping every message of every intact chunk; the source is only read.
 
-Bad files raise :class:`~shared.errors.InputError` with one line naming the file.
+Bad files raise :class:`~shared.errors.InputError` with one line naming the file. Crafted
+ones cannot make a reader allocate more than the file's size plus one chunk of at most
+64 MiB (:mod:`._chunks`): reads are clamped to the file, a chunk is inflated only up to
+what it declares, the summary is checked before use, and messages are parsed by
+:func:`shared.json_file.parse_json` (nesting and number limits).
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from mcap.reader import SeekingReader
-from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
+from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema, Statistics
 from mcap.summary import Summary
 from mcap.well_known import MessageEncoding
 from mcap.writer import CompressionType, Writer
@@ -165,15 +169,17 @@ def log_info(path: str | Path) -> LogInfo:
     path = Path(path)
     with _open_mcap(path) as (f, size):
         found = _checked_summary(f, size)
-        if isinstance(found, str) or found[1].statistics is None:
-            return _info_from_scan(f, path, size, found if isinstance(found, str) else None)
-        return _info_from_summary(path, size, *found)
+        if isinstance(found, str):
+            return _info_from_scan(f, path, size, found)
+        header, summary = found
+        if summary.statistics is None:
+            return _info_from_scan(f, path, size)
+        return _info_from_summary(path, size, header, summary, summary.statistics)
 
 
-def _info_from_summary(path: Path, size: int, header: Header, summary: Summary) -> LogInfo:
-    """The info of a finished file from its checked summary (with statistics)."""
-    stats = summary.statistics
-    assert stats is not None
+def _info_from_summary(path: Path, size: int, header: Header, summary: Summary,
+                       stats: Statistics) -> LogInfo:
+    """The info of a finished file from its checked summary and its statistics."""
     counts = stats.channel_message_counts
     has_messages = stats.message_count > 0
     return _log_info(path, size, header.library, True, None, summary.schemas,

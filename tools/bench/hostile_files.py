@@ -270,10 +270,13 @@ def corrupt_summary_channel(path: Path) -> None:
     path.write_bytes(bytes(data))
 
 
-def bomb_log(path: Path, compression: str, inflated_bytes: int, declared_bytes: int) -> None:
-    """A finished log whose one chunk inflates to ``inflated_bytes`` (one /servo/state
-    message of zeros) and declares ``declared_bytes``; summary and index included."""
-    message = struct.pack("<BQHIQQ", Opcode.MESSAGE, inflated_bytes - 9, 1, 1, 0, 0)
+def bomb_log(path: Path, compression: str, inflated_bytes: int, declared_bytes: int,
+             chunks: int = 1) -> None:
+    """A finished log of ``chunks`` chunks, each inflating to ``inflated_bytes`` (one
+    /servo/state message of zeros at log time 1 ns) and declaring ``declared_bytes``;
+    summary and index included. Each chunk says it starts at 0 ns, so a reader in log
+    time order reads them all before it can yield the first message."""
+    message = struct.pack("<BQHIQQ", Opcode.MESSAGE, inflated_bytes - 9, 1, 1, 1, 1)
     zeros = bytes(MIB)
     n_mib, rest = divmod(inflated_bytes - len(message), MIB)
     if compression == "zstd":
@@ -287,11 +290,11 @@ def bomb_log(path: Path, compression: str, inflated_bytes: int, declared_bytes: 
             lz4_frame.compress(zeros) for _ in range(n_mib)) + lz4_frame.compress(
             bytes(rest)) + lz4_frame.flush()
     chunk = Chunk(compression=compression, data=data, message_start_time=0,
-                  message_end_time=0, uncompressed_crc=0, uncompressed_size=declared_bytes)
-    path.write_bytes(_mcap_with_one_chunk(chunk))
+                  message_end_time=1, uncompressed_crc=0, uncompressed_size=declared_bytes)
+    path.write_bytes(_mcap_with_chunks([chunk] * chunks))
 
 
-def _mcap_with_one_chunk(chunk: Chunk) -> bytes:
+def _mcap_with_chunks(chunks: Sequence[Chunk]) -> bytes:
     schema = Schema(id=1, name="vmnav.ServoState", encoding="jsonschema", data=b"{}")
     channel = Channel(id=1, topic=topics.SERVO_STATE, message_encoding="json", schema_id=1,
                       metadata={})
@@ -300,20 +303,24 @@ def _mcap_with_one_chunk(chunk: Chunk) -> bytes:
     Header(profile="", library="tools.bench.hostile_files").write(out)
     schema.write(out)
     channel.write(out)
-    chunk_offset = out.count
-    chunk.write(out)
-    chunk_length = out.count - chunk_offset
+    indexes = []
+    for chunk in chunks:
+        offset = out.count
+        chunk.write(out)
+        indexes.append(ChunkIndex(
+            message_start_time=0, message_end_time=1, chunk_start_offset=offset,
+            chunk_length=out.count - offset, message_index_offsets={1: 0},
+            message_index_length=0, compression=chunk.compression,
+            compressed_size=len(chunk.data), uncompressed_size=chunk.uncompressed_size))
     DataEnd(0).write(out)
     summary_start = out.count
     schema.write(out)
     channel.write(out)
-    ChunkIndex(message_start_time=0, message_end_time=0, chunk_start_offset=chunk_offset,
-               chunk_length=chunk_length, message_index_offsets={1: 0}, message_index_length=0,
-               compression=chunk.compression, compressed_size=len(chunk.data),
-               uncompressed_size=chunk.uncompressed_size).write(out)
-    Statistics(message_count=1, schema_count=1, channel_count=1, attachment_count=0,
-               metadata_count=0, chunk_count=1, message_start_time=0, message_end_time=0,
-               channel_message_counts={1: 1}).write(out)
+    for index in indexes:
+        index.write(out)
+    Statistics(message_count=len(chunks), schema_count=1, channel_count=1, attachment_count=0,
+               metadata_count=0, chunk_count=len(chunks), message_start_time=1,
+               message_end_time=1, channel_message_counts={1: len(chunks)}).write(out)
     Footer(summary_start=summary_start, summary_offset_start=0, summary_crc=0).write(out)
     out.write(_MCAP_MAGIC)
     return out.end()
@@ -341,6 +348,8 @@ LOG_CASES: dict[str, Callable[[Path], None]] = {
     "zstd_chunk_declaring_2^63_bytes": zstd_log_declaring_2_63,
     "zstd_bomb_1gib": lambda path: bomb_log(path, "zstd", 2**30, 2**30),
     "lz4_bomb_1gib_declared_1mib": lambda path: bomb_log(path, "lz4", 2**30, MIB),
+    "zstd_64_chunks_of_60mib_at_one_time": lambda path: bomb_log(path, "zstd", 60 * MIB,
+                                                                 60 * MIB, chunks=64),
     "corrupt_summary_opcode": log_with_corrupt_summary,
 }
 """Name -> writes that hostile log at the path given."""
