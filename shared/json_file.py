@@ -6,8 +6,9 @@ before anything reaches the caller:
 
 * nesting deeper than ``max_depth`` arrays and objects, checked on the text before
   parsing (so a file of ``[[[[...`` gives an error, not a ``RecursionError``);
-* integers outside the signed 64-bit range (``10**400`` would overflow every float
-  conversion downstream) and numbers too large for a float (``1e400`` parses as inf);
+* integers outside [-2^63, 2^63) by default (``10**400`` would overflow every float
+  conversion downstream; log messages allow [-2^128, 2^128) for random generator
+  states) and numbers too large for a float (``1e400`` parses as inf);
 * NaN and Infinity, which are not JSON numbers.
 """
 
@@ -24,15 +25,20 @@ from shared.errors import InputError
 MAX_DEPTH = 32
 """Deepest nesting of arrays and objects accepted by default; vmnav's own files nest at
 most 4 deep."""
-INT_MIN, INT_MAX = -(2**63), 2**63 - 1
-"""The integers accepted: int64, enough for every count, id and time in ns."""
+INT_BITS = 63
+"""Integers in [-2^INT_BITS, 2^INT_BITS) are accepted by default: int64, enough for every
+count, id and time in ns."""
 
 _STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
 _BRACKET = re.compile(r"[\[\]{}]")
 
 
 def parse_json(
-    path: str | Path, text: str | bytes, error: type[InputError], max_depth: int = MAX_DEPTH
+    path: str | Path,
+    text: str | bytes,
+    error: type[InputError],
+    max_depth: int = MAX_DEPTH,
+    int_bits: int = INT_BITS,
 ) -> Any:
     """Parse ``text`` read from ``path`` under the rules of the module docstring.
 
@@ -41,6 +47,7 @@ def parse_json(
         text: the content, text or UTF-8 bytes.
         error: the :class:`InputError` subclass to raise (e.g. ``CalibrationError``).
         max_depth: the deepest nesting of arrays and objects allowed.
+        int_bits: integers must lie in [-2^int_bits, 2^int_bits).
 
     Raises:
         error: ``"<path>: not valid JSON (truncated?): <what> at line L column C"``, or
@@ -51,7 +58,8 @@ def parse_json(
         if isinstance(text, bytes | bytearray):
             text = bytes(text).decode("utf-8")
         _check_depth(text, max_depth)
-        return json.loads(text, parse_constant=_refuse_constant, parse_int=_checked_int,
+        return json.loads(text, parse_constant=_refuse_constant,
+                          parse_int=lambda literal: _checked_int(literal, int_bits),
                           parse_float=_checked_float)
     except json.JSONDecodeError as e:
         raise error(
@@ -72,11 +80,12 @@ def _check_depth(text: str, max_depth: int) -> None:
             raise ValueError(f"arrays and objects nest more than {max_depth} deep")
 
 
-def _checked_int(literal: str) -> int:
-    # int64 has at most 19 digits: longer literals are refused before int() converts them
-    value = int(literal) if len(literal) <= 20 else None
-    if value is None or not INT_MIN <= value <= INT_MAX:
-        raise ValueError(f"integer {_abridged(literal)} is outside the 64-bit range")
+def _checked_int(literal: str, bits: int) -> int:
+    limit = 2**bits
+    # longer literals than the limit's (and a sign) are refused before int() converts them
+    value = int(literal) if len(literal) <= len(str(limit)) + 1 else None
+    if value is None or not -limit <= value < limit:
+        raise ValueError(f"integer {_abridged(literal)} is outside [-2^{bits}, 2^{bits})")
     return value
 
 

@@ -37,6 +37,9 @@ from shared.logs._chunks import ClampedFile, check_summary, messages_in_time_ord
 from shared.logs._scan import MAGIC, READ_ERRORS, RecordScan, check_magic
 
 RECOVER_HINT = "`vmnav log recover {path}` rewrites what it holds into a valid file"
+MESSAGE_INT_BITS = 128
+"""A message's integers lie in [-2^128, 2^128): a random generator's state (PCG64: two
+128-bit integers) is logged with each mission."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -287,7 +290,7 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
                     raise InputError(path, f"{channel.topic}: message encoding "
                                      f"{channel.message_encoding!r} is not json")
                 where = f"{path}: {channel.topic} message {message.sequence}"
-                data = parse_json(where, message.data, InputError)
+                data = parse_json(where, message.data, InputError, int_bits=MESSAGE_INT_BITS)
                 if not isinstance(data, dict):
                     raise InputError(where, f"expected a JSON object, got {type(data).__name__}")
                 yield LogMessage(channel.topic, schema.name if schema else "", message.log_time,

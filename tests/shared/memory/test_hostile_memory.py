@@ -23,7 +23,7 @@ from tools.bench import hostile_files
 
 CASES = {
     "deep_json_manifest": (hostile_files.deep_json_manifest, "nest more than 32 deep"),
-    "huge_int_manifest": (hostile_files.huge_int_manifest, "is outside the 64-bit range"),
+    "huge_int_manifest": (hostile_files.huge_int_manifest, "is outside [-2^63, 2^63)"),
     "absurd_shape_npz": (hostile_files.absurd_shape_npz,
                          "pixels_xy: shape (1099511627776, 2) has 1099511627776 along axis 0, "
                          "more than the 480000 allowed"),
