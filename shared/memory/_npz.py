@@ -31,7 +31,7 @@ import numpy.typing as npt
 from shared.errors import MemoryFormatError, ShapeError, check_shape
 
 _NPY_MAGIC = b"\x93NUMPY"
-_ZIP_METHODS = {zipfile.ZIP_STORED: "stored", zipfile.ZIP_DEFLATED: "deflated"}
+_ZIP_METHODS = frozenset({zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED})
 _HEADER_READERS = {(1, 0): np.lib.format.read_array_header_1_0,
                    (2, 0): np.lib.format.read_array_header_2_0}
 
@@ -77,20 +77,14 @@ def read_npz(
     if data.startswith(_NPY_MAGIC):
         raise MemoryFormatError(path, "expected an .npz archive, got a single .npy array")
     try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as e:
-        raise MemoryFormatError(path, f"not a valid .npz archive (truncated?): {e}") from None
-    except NotImplementedError as e:
-        raise MemoryFormatError(path, f"unsupported zip archive: {e}") from None
-    with archive:
-        entries = _check_directory(path, archive.infolist(), specs, required, max_bytes)
-        try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            entries = _check_directory(path, archive.infolist(), specs, required, max_bytes)
             return {name: _read_entry(path, archive, info, name, specs[name])
                     for name, info in entries.items()}
-        except (zipfile.BadZipFile, OSError, EOFError) as e:
-            raise MemoryFormatError(path, f"not a valid .npz archive (truncated?): {e}") from None
-        except NotImplementedError as e:
-            raise MemoryFormatError(path, f"unsupported zip archive: {e}") from None
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as e:
+        raise MemoryFormatError(path, f"not a valid .npz archive (truncated?): {e}") from None
+    except NotImplementedError as e:  # zipfile: a version, method or flag it cannot read
+        raise MemoryFormatError(path, f"unsupported zip archive: {e}") from None
 
 
 def _check_directory(
