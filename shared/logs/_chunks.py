@@ -116,6 +116,9 @@ def open_chunk(chunk: Chunk) -> list[McapRecord]:
 def _inflate_zstd(data: bytes, limit: int) -> bytes:
     """At most ``limit`` bytes of the zstd frame ``data``, whatever size it declares."""
     decompressor = zstandard.ZstdDecompressor(max_window_size=MAX_CHUNK_BYTES)
+    if zstandard.frame_content_size(data) in range(limit):
+        # one allocation of the size the frame declares; zstd fails if it inflates to more
+        return decompressor.decompress(data)
     out = bytearray()
     with decompressor.stream_reader(data) as reader:
         while len(out) < limit:
@@ -167,9 +170,10 @@ def messages_in_time_order(
     """The messages of the chunks ``summary`` indexes, by log time (ties: file order).
 
     Chunks are read when the earliest message queued is not before their first
-    message, so only the chunks overlapping in time are held at once; their messages'
-    data may hold at most :data:`MAX_QUEUED_BYTES` (many small zstd chunks, each
-    declaring 64 MiB at the same time, would otherwise all be held).
+    message, so only the chunks overlapping in time are held at once; the data of the
+    messages queued plus the next chunk's declared size may reach at most
+    :data:`MAX_QUEUED_BYTES` (many small zstd chunks, each declaring 64 MiB at the same
+    time, would otherwise all be held).
 
     Args:
         f: the file.
@@ -197,6 +201,8 @@ def messages_in_time_order(
             channel = summary.channels[item.channel_id]
             yield summary.schemas.get(channel.schema_id), channel, item
             continue
+        if queued_bytes + item.uncompressed_size > MAX_QUEUED_BYTES:
+            raise _overlap_error(offset, queued_bytes + item.uncompressed_size)
         for position, record in enumerate(_read_chunk(f, offset)):
             if not isinstance(record, Message) or (wanted is not None
                                                    and record.channel_id not in wanted):
@@ -207,9 +213,13 @@ def messages_in_time_order(
             heapq.heappush(queue, (record.log_time, offset, position, next(tiebreak), record))
             queued_bytes += len(record.data)
         if queued_bytes > MAX_QUEUED_BYTES:
-            raise DamagedLogError(f"chunks overlapping in log time up to the one at byte "
-                                  f"{offset} hold {queued_bytes} bytes of messages at once, "
-                                  f"more than the {MAX_QUEUED_BYTES} allowed")
+            raise _overlap_error(offset, queued_bytes)
+
+
+def _overlap_error(offset: int, queued_bytes: int) -> DamagedLogError:
+    return DamagedLogError(f"chunks overlapping in log time up to the one at byte {offset} "
+                           f"hold {queued_bytes} bytes at once, more than the "
+                           f"{MAX_QUEUED_BYTES} allowed")
 
 
 def _read_chunk(f: ClampedFile, offset: int) -> list[McapRecord]:
