@@ -45,8 +45,36 @@ messages of chunks overlapping in log time wait in its queue. vmnav's writer log
 time order, so its chunks barely overlap."""
 
 
+MAX_INFLATION = 100
+"""The chunks of a file may inflate to at most this many times its size together (or one
+chunk's limit, if more): JSON logs compress about 10:1, JPEG frames not at all, while
+each 4 kB zstd frame of a crafted file can inflate to 64 MiB."""
+
+
 class DamagedLogError(McapError):
     """A record or chunk whose declared sizes or references cannot be right."""
+
+
+class InflationBudget:
+    """What the chunks of one file may still inflate to, bytes (:data:`MAX_INFLATION`).
+
+    Args:
+        size_bytes: the file's size.
+    """
+
+    def __init__(self, size_bytes: int) -> None:
+        self.left_bytes = max(MAX_CHUNK_BYTES, MAX_INFLATION * size_bytes)
+
+    def take(self, n_bytes: int) -> None:
+        """Count ``n_bytes`` about to be inflated.
+
+        Raises:
+            DamagedLogError: the budget would be exceeded (nothing is counted then).
+        """
+        if n_bytes > self.left_bytes:
+            raise DamagedLogError(f"its chunks inflate to more than {MAX_INFLATION} times the "
+                                  "file's size")
+        self.left_bytes -= n_bytes
 
 
 class ClampedFile(io.BufferedIOBase):
@@ -61,6 +89,8 @@ class ClampedFile(io.BufferedIOBase):
         super().__init__()
         self._f = f
         self._size = size_bytes
+        self.inflation = InflationBudget(size_bytes)
+        """What the file's chunks may still inflate to, shared by its readers."""
 
     def read(self, size: int | None = -1, /) -> bytes:
         """Up to ``size`` bytes (all that is left if negative or None)."""
@@ -84,12 +114,16 @@ class ClampedFile(io.BufferedIOBase):
         return True
 
 
-def open_chunk(chunk: Chunk) -> list[McapRecord]:
+def open_chunk(chunk: Chunk, budget: InflationBudget) -> list[McapRecord]:
     """The records of ``chunk`` (Schema, Channel, Message), its CRC checked.
 
+    Args:
+        chunk: the chunk.
+        budget: its file's; what it declares is taken from it before inflating.
+
     Raises:
-        DamagedLogError: it declares more than :data:`MAX_CHUNK_BYTES`, or inflates to
-            another size than it declares.
+        DamagedLogError: it declares more than :data:`MAX_CHUNK_BYTES` or than is left
+            in ``budget``, or inflates to another size than it declares.
         McapError, ValueError, RuntimeError, zstandard.ZstdError, OverflowError, struct.error:
             the bytes are damaged otherwise (as mcap's ``breakup_chunk``).
     """
@@ -97,6 +131,7 @@ def open_chunk(chunk: Chunk) -> list[McapRecord]:
     if declared > MAX_CHUNK_BYTES:
         raise DamagedLogError(f"a chunk declares {declared} bytes uncompressed, more than the "
                               f"{MAX_CHUNK_BYTES} allowed")
+    budget.take(declared)
     if chunk.compression == "zstd":
         data = _inflate_zstd(chunk.data, declared + 1)
     elif chunk.compression == "lz4":
@@ -229,4 +264,4 @@ def _read_chunk(f: ClampedFile, offset: int) -> list[McapRecord]:
         raise DamagedLogError(f"the summary places a chunk at byte {offset}, where there is "
                               "another record")
     stream.read8()  # the record's length: Chunk.read reads its fields, each clamped by f
-    return open_chunk(Chunk.read(stream))
+    return open_chunk(Chunk.read(stream), f.inflation)

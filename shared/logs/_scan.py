@@ -6,7 +6,8 @@ reads records in order until the data section ends (DataEnd) or the bytes stop
 making sense, and says where and why it stopped. A chunk whose bytes fail to
 decompress or to match their CRC is skipped and counted: its length is intact, so
 the next record can still be read (as ``mcap recover`` does); so is a chunk declaring
-more than ``_chunks.MAX_CHUNK_BYTES`` uncompressed (never inflated). A top-level record
+more than ``_chunks.MAX_CHUNK_BYTES`` uncompressed, or more than the file's inflation
+budget has left (never inflated). A top-level record
 cut short or with an impossible length ends the scan: nothing after it has a
 known start.
 """
@@ -91,7 +92,7 @@ class RecordScan:
                 return
             if isinstance(record, Chunk):
                 try:
-                    inner = open_chunk(record)
+                    inner = open_chunk(record, self._f.inflation)
                 except READ_ERRORS:
                     self.skipped_chunks += 1
                     continue

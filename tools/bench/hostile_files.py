@@ -348,8 +348,8 @@ LOG_CASES: dict[str, Callable[[Path], None]] = {
     "zstd_chunk_declaring_2^63_bytes": zstd_log_declaring_2_63,
     "zstd_bomb_1gib": lambda path: bomb_log(path, "zstd", 2**30, 2**30),
     "lz4_bomb_1gib_declared_1mib": lambda path: bomb_log(path, "lz4", 2**30, MIB),
-    "zstd_64_chunks_of_60mib_at_one_time": lambda path: bomb_log(path, "zstd", 60 * MIB,
-                                                                 60 * MIB, chunks=64),
+    "zstd_64_chunks_of_60mib": lambda path: bomb_log(path, "zstd", 60 * MIB, 60 * MIB,
+                                                     chunks=64),
     "corrupt_summary_opcode": log_with_corrupt_summary,
 }
 """Name -> writes that hostile log at the path given."""

@@ -8,7 +8,7 @@ whole (MemoryError, or hundreds of MB), and a damaged summary gave KeyError (rea
 from __future__ import annotations
 
 import tracemalloc
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -19,17 +19,14 @@ from mcap.reader import make_reader
 
 from shared.config import LogConfig
 from shared.errors import InputError
-from shared.logs import topics
-from shared.logs.reader import log_info, read_messages, read_metadata, recover
+from shared.logs import _chunks, topics
+from shared.logs.reader import RecoverReport, log_info, read_messages, read_metadata, recover
 from shared.logs.writer import LogWriter
 from tools.bench import hostile_files
 
 MIB = 2**20
 MAX_TRACED_BYTES = 16 * MIB
-"""What reading any of them may allocate, but for the chunks at one time."""
-MAX_QUEUED_TRACED_BYTES = 3 * 64 * MIB
-"""What reading chunks that overlap in time may allocate: the queue's limit (128 MiB)
-and one chunk being opened."""
+"""What reading any of them may allocate (see :func:`traced_limit`)."""
 
 
 CASES: dict[str, tuple[Callable[[Path], None], str]] = {
@@ -42,22 +39,31 @@ CASES: dict[str, tuple[Callable[[Path], None], str]] = {
                                   "a chunk declares 1048576 bytes uncompressed but holds more"),
     "lz4 bomb declaring 1 MiB": (lambda p: hostile_files.bomb_log(p, "lz4", 96 * MIB, MIB),
                                  "a chunk declares 1048576 bytes uncompressed but holds more"),
-    "chunks at one time": (
-        lambda p: hostile_files.bomb_log(p, "zstd", 48 * MIB, 48 * MIB, chunks=4),
-        "bytes at once, more than the 134217728 allowed"),
+    "chunks inflating to 100 times the file": (
+        lambda p: hostile_files.bomb_log(p, "zstd", 40 * MIB, 40 * MIB, chunks=2),
+        "its chunks inflate to more than 100 times the file's size"),
     "corrupt summary opcode": (hostile_files.log_with_corrupt_summary,
                                "damaged summary: the summary's chunk at byte"),
 }
 
 
-@pytest.fixture
-def traced() -> Iterator[None]:
+def traced(action: Callable[[], object]) -> tuple[int, InputError | None]:
+    """The most ``action`` had allocated at once, bytes (tracemalloc), and the input
+    error it raised (None if it returned)."""
     tracemalloc.start()
     try:
-        yield
-        assert tracemalloc.get_traced_memory()[1] < MAX_TRACED_BYTES
+        try:
+            action()
+        except InputError as e:
+            return tracemalloc.get_traced_memory()[1], e
+        return tracemalloc.get_traced_memory()[1], None
     finally:
         tracemalloc.stop()
+
+
+def traced_limit(case: str) -> int:
+    """The first 40 MiB chunk of the file inflating to 100 times its size is legitimate."""
+    return MAX_TRACED_BYTES + (3 * 40 * MIB if case.startswith("chunks") else 0)
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -66,29 +72,38 @@ def test_read_refuses_in_one_line_without_inflating(tmp_path: Path, case: str) -
     path = tmp_path / "hostile.mcap"
     write(path)
     before = path.read_bytes()
-    tracemalloc.start()
-    try:
-        with pytest.raises(InputError) as error:
-            list(read_messages(path))
-        peak_bytes = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    message = str(error.value)
+    peak_bytes, error = traced(lambda: list(read_messages(path)))
+    assert error is not None and peak_bytes < traced_limit(case)
+    message = str(error)
     assert "\n" not in message and message.startswith(f"{path}: ") and fragment in message
     assert f"vmnav log recover {path}" in message
-    assert peak_bytes < (MAX_QUEUED_TRACED_BYTES if case == "chunks at one time"
-                         else MAX_TRACED_BYTES)
     assert path.read_bytes() == before
 
 
-@pytest.mark.parametrize("case", [c for c in CASES if c not in ("corrupt summary opcode",
-                                                                  "chunks at one time")])
-def test_recover_skips_the_hostile_chunk(tmp_path: Path, case: str, traced: None) -> None:
+@pytest.mark.parametrize("case", [c for c in CASES if c != "corrupt summary opcode"])
+def test_recover_skips_the_hostile_chunk(tmp_path: Path, case: str) -> None:
     path = tmp_path / "hostile.mcap"
     CASES[case][0](path)
-    report = recover(path, tmp_path / "out.mcap")
+    reports: list[RecoverReport] = []
+    peak_bytes, error = traced(lambda: reports.append(recover(path, tmp_path / "out.mcap")))
+    assert error is None and peak_bytes < traced_limit(case)
+    report = reports[0]
     assert report.skipped_chunks == 1
     assert log_info(report.dst).complete
+
+
+def test_chunks_overlapping_in_time_may_queue_a_limited_size(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Chunks that all start at 0 ns but hold messages at 1 ns must all be read before
+    the first message can be yielded: the queue stops them (limit scaled down 16 times)."""
+    monkeypatch.setattr(_chunks, "MAX_QUEUED_BYTES", 8 * MIB)
+    path = tmp_path / "overlap.mcap"
+    hostile_files.bomb_log(path, "zstd", 3 * MIB, 3 * MIB, chunks=4)
+    with pytest.raises(InputError, match="chunks overlapping in log time up to the one at byte "
+                       r"\d+ hold 9437122 bytes at once, more than the 8388608 allowed"):
+        list(read_messages(path))
+    assert recover(path, tmp_path / "out.mcap").messages == 4  # one chunk at a time
 
 
 def test_info_and_recover_of_a_damaged_summary_use_the_data_section(tmp_path: Path) -> None:
