@@ -236,8 +236,10 @@ def messages_in_time_order(
             channel = summary.channels[item.channel_id]
             yield summary.schemas.get(channel.schema_id), channel, item
             continue
-        if queued_bytes + item.uncompressed_size > MAX_QUEUED_BYTES:
-            raise _overlap_error(offset, queued_bytes + item.uncompressed_size)
+        # a chunk declaring more than MAX_CHUNK_BYTES is refused as such by open_chunk
+        next_bytes = min(item.uncompressed_size, MAX_CHUNK_BYTES)
+        if queued_bytes + next_bytes > MAX_QUEUED_BYTES:
+            raise _overlap_error(offset, queued_bytes + next_bytes)
         for position, record in enumerate(_read_chunk(f, offset)):
             if not isinstance(record, Message) or (wanted is not None
                                                    and record.channel_id not in wanted):
