@@ -5,7 +5,9 @@ one, with no summary (mcap-logging.md §1 "Crash behaviour"). :class:`RecordScan
 reads records in order until the data section ends (DataEnd) or the bytes stop
 making sense, and says where and why it stopped. A chunk whose bytes fail to
 decompress or to match their CRC is skipped and counted: its length is intact, so
-the next record can still be read (as ``mcap recover`` does). A top-level record
+the next record can still be read (as ``mcap recover`` does); so is a chunk declaring
+more than ``_chunks.MAX_CHUNK_BYTES`` uncompressed, or more than the file's inflation
+budget has left (never inflated). A top-level record
 cut short or with an impossible length ends the scan: nothing after it has a
 known start.
 """
@@ -20,16 +22,19 @@ from typing import IO
 import zstandard
 from mcap.exceptions import EndOfFile, McapError, RecordLengthLimitExceeded
 from mcap.records import Chunk, DataEnd, McapRecord
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.stream_reader import StreamReader
 
 from shared.errors import InputError
+from shared.logs._chunks import ClampedFile, open_chunk
 
 MAGIC = b"\x89MCAP0\r\n"
 """The 8 bytes an MCAP file starts and ends with."""
 
-READ_ERRORS = (McapError, ValueError, RuntimeError, struct.error, zstandard.ZstdError, OSError)
+READ_ERRORS = (McapError, ValueError, RuntimeError, struct.error, zstandard.ZstdError, OSError,
+               OverflowError)
 """What the mcap readers and their decompressors (lz4: RuntimeError, zstandard:
-ZstdError) raise on bad bytes; CRCValidationError is a ValueError."""
+ZstdError) raise on bad bytes; CRCValidationError is a ValueError; a length of 2^63 or
+more inside a chunk gives OverflowError (reading past a chunk's end does not allocate)."""
 
 
 def check_magic(f: IO[bytes], path: Path) -> int:
@@ -57,11 +62,11 @@ class RecordScan:
     :attr:`skipped_chunks` how many chunks were damaged.
 
     Args:
-        f: the file, binary, seekable, at offset 0.
+        f: the file, binary, seekable, at offset 0, reads clamped to its size.
         size_bytes: its size (no record can be longer).
     """
 
-    def __init__(self, f: IO[bytes], size_bytes: int) -> None:
+    def __init__(self, f: ClampedFile, size_bytes: int) -> None:
         self._f = f
         self._size = size_bytes
         self.complete = False
@@ -87,7 +92,7 @@ class RecordScan:
                 return
             if isinstance(record, Chunk):
                 try:
-                    inner = breakup_chunk(record, validate_crc=True)
+                    inner = open_chunk(record, self._f.inflation)
                 except READ_ERRORS:
                     self.skipped_chunks += 1
                     continue

@@ -7,13 +7,16 @@
 * :func:`recover`: rewrite an unfinished, truncated or damaged file into a valid,
   indexed one, keeping every message of every intact chunk; the source is only read.
 
-Bad files raise :class:`~shared.errors.InputError` with one line naming the file.
+Bad files raise :class:`~shared.errors.InputError` with one line naming the file. Crafted
+ones cannot make a reader allocate more than the file's size plus one chunk of at most
+64 MiB (:mod:`._chunks`): reads are clamped to the file, a chunk is inflated only up to
+what it declares, the summary is checked before use, and messages are parsed by
+:func:`shared.json_file.parse_json` (nesting and number limits).
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import tempfile
 from collections import Counter
@@ -23,14 +26,20 @@ from pathlib import Path
 from typing import IO, Any
 
 from mcap.reader import SeekingReader
-from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
+from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema, Statistics
+from mcap.summary import Summary
 from mcap.well_known import MessageEncoding
 from mcap.writer import CompressionType, Writer
 
 from shared.errors import InputError
+from shared.json_file import parse_json
+from shared.logs._chunks import ClampedFile, check_summary, messages_in_time_order
 from shared.logs._scan import MAGIC, READ_ERRORS, RecordScan, check_magic
 
 RECOVER_HINT = "`vmnav log recover {path}` rewrites what it holds into a valid file"
+MESSAGE_INT_BITS = 128
+"""A message's integers lie in [-2^128, 2^128): a random generator's state (PCG64: two
+128-bit integers) is logged with each mission."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,13 +153,14 @@ class RecoverReport:
 
 
 @contextlib.contextmanager
-def _open_mcap(path: Path) -> Iterator[tuple[IO[bytes], int]]:
+def _open_mcap(path: Path) -> Iterator[tuple[ClampedFile, int]]:
     try:
         f = open(path, "rb")  # noqa: SIM115 - closed below, after the caller's block
     except OSError as e:
         raise InputError(path, f"cannot read: {e.strerror}") from None
     with f:
-        yield f, check_magic(f, path)
+        size = check_magic(f, path)
+        yield ClampedFile(f, size), size
 
 
 def log_info(path: str | Path) -> LogInfo:
@@ -161,24 +171,18 @@ def log_info(path: str | Path) -> LogInfo:
     """
     path = Path(path)
     with _open_mcap(path) as (f, size):
-        return _info_from_summary(f, path, size) or _info_from_scan(f, path, size)
+        found = _checked_summary(f, size)
+        if isinstance(found, str):
+            return _info_from_scan(f, path, size, found)
+        header, summary = found
+        if summary.statistics is None:
+            return _info_from_scan(f, path, size)
+        return _info_from_summary(path, size, header, summary, summary.statistics)
 
 
-def _info_from_summary(f: IO[bytes], path: Path, size: int) -> LogInfo | None:
-    f.seek(size - len(MAGIC))
-    finished = size >= 2 * len(MAGIC) and f.read(len(MAGIC)) == MAGIC
-    f.seek(0)
-    if not finished:
-        return None
-    try:
-        reader = SeekingReader(f, record_size_limit=size)
-        header = reader.get_header()
-        summary = reader.get_summary()
-    except READ_ERRORS:
-        return None
-    if summary is None or summary.statistics is None:
-        return None
-    stats = summary.statistics
+def _info_from_summary(path: Path, size: int, header: Header, summary: Summary,
+                       stats: Statistics) -> LogInfo:
+    """The info of a finished file from its checked summary and its statistics."""
     counts = stats.channel_message_counts
     has_messages = stats.message_count > 0
     return _log_info(path, size, header.library, True, None, summary.schemas,
@@ -188,7 +192,32 @@ def _info_from_summary(f: IO[bytes], path: Path, size: int) -> LogInfo | None:
                      [m.name for m in summary.metadata_indexes])
 
 
-def _info_from_scan(f: IO[bytes], path: Path, size: int) -> LogInfo:
+def _checked_summary(f: ClampedFile, size: int) -> tuple[Header, Summary] | str:
+    """The header and the summary of a finished file, or why there is none to trust
+    (one line): no footer, no summary, or one that does not add up
+    (:func:`~shared.logs._chunks.check_summary`)."""
+    unfinished = "no summary or index (the writer never finished the file)"
+    f.seek(size - len(MAGIC))
+    finished = size >= 2 * len(MAGIC) and f.read(len(MAGIC)) == MAGIC
+    f.seek(0)
+    if not finished:
+        return unfinished
+    try:
+        reader = SeekingReader(f, record_size_limit=size)
+        header = reader.get_header()
+        summary = reader.get_summary()
+        if summary is None:
+            return unfinished
+        check_summary(summary, size)
+    except READ_ERRORS as e:
+        return f"damaged summary: {e}"
+    return header, summary
+
+
+def _info_from_scan(f: ClampedFile, path: Path, size: int,
+                    summary_problem: str | None = None) -> LogInfo:
+    """The info of any file by reading its data section; ``summary_problem`` is why its
+    summary was not used, reported if the data section itself is whole."""
     f.seek(0)
     scan = RecordScan(f, size)
     library = ""
@@ -209,8 +238,7 @@ def _info_from_scan(f: IO[bytes], path: Path, size: int) -> LogInfo:
             times.append(record.log_time)
         elif isinstance(record, Metadata):
             metadata.append(record.name)
-    problem = scan.problem or ("no summary or index (the writer never finished the file)"
-                               if scan.complete else None)
+    problem = scan.problem or (summary_problem if scan.complete else None)
     if scan.skipped_chunks:
         problem = f"{problem}; {scan.skipped_chunks} damaged chunk(s) skipped"
     return _log_info(path, size, library, False, problem, schemas, channels.values(), counts,
@@ -246,21 +274,27 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
     """
     path = Path(path)
     with _open_mcap(path) as (f, size):
-        info = _info_from_summary(f, path, size)
-        if info is None:
-            raise InputError(path, f"{_info_from_scan(f, path, size).problem}; "
+        found = _checked_summary(f, size)
+        if isinstance(found, str):
+            raise InputError(path, f"{_info_from_scan(f, path, size, found).problem}; "
                              + RECOVER_HINT.format(path=path))
-        f.seek(0)
-        reader = SeekingReader(f, validate_crcs=True, record_size_limit=size)
-        selected = None if topics is None else list(topics)
+        summary = found[1]
+        if not summary.chunk_indexes and (summary.statistics is None
+                                          or summary.statistics.message_count):
+            raise InputError(path, "its messages are not in indexed chunks; "
+                             + RECOVER_HINT.format(path=path))
+        selected = None if topics is None else set(topics)
         try:
-            for schema, channel, message in reader.iter_messages(topics=selected):
+            for schema, channel, message in messages_in_time_order(f, summary, selected):
                 if channel.message_encoding != MessageEncoding.JSON:
                     raise InputError(path, f"{channel.topic}: message encoding "
                                      f"{channel.message_encoding!r} is not json")
+                where = f"{path}: {channel.topic} message {message.sequence}"
+                data = parse_json(where, message.data, InputError, int_bits=MESSAGE_INT_BITS)
+                if not isinstance(data, dict):
+                    raise InputError(where, f"expected a JSON object, got {type(data).__name__}")
                 yield LogMessage(channel.topic, schema.name if schema else "", message.log_time,
-                                 message.publish_time, message.sequence,
-                                 json.loads(message.data))
+                                 message.publish_time, message.sequence, data)
         except READ_ERRORS as e:
             raise InputError(path, f"damaged: {e}; " + RECOVER_HINT.format(path=path)) from None
 
@@ -274,8 +308,9 @@ def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
     """
     path = Path(path)
     with _open_mcap(path) as (f, size):
-        if _info_from_summary(f, path, size) is None:
-            raise InputError(path, f"{_info_from_scan(f, path, size).problem}; "
+        found = _checked_summary(f, size)
+        if isinstance(found, str):
+            raise InputError(path, f"{_info_from_scan(f, path, size, found).problem}; "
                              + RECOVER_HINT.format(path=path))
         f.seek(0)
         try:

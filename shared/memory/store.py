@@ -44,7 +44,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,6 +58,7 @@ from shared.camera_model import CameraModel
 from shared.errors import CalibrationError, InputError, MemoryFormatError
 from shared.image_decode import check_image
 from shared.json_file import parse_json
+from shared.memory._npz import ArraySpec, read_npz
 from shared.memory.graph import VisualMemory
 from shared.memory.keyframe import (
     THUMBNAIL_HEIGHT_PX,
@@ -85,7 +85,11 @@ _PATH_FIELDS = ("id", "name", "keyframe_ids")
 _KEYFRAME_FIELDS = ("id", "path_id", "index", "t_ns", "odom_pose", "distance_m")
 _JUNCTION_FIELDS = ("from_id", "to_id", "matches")
 _FEATURE_ARRAYS = ("pixels_xy", "patches")
-_OPTIONAL_FEATURE_ARRAYS = ("tracked_from_previous",)
+MAX_FEATURES_BYTES = 64 * 2**20
+"""The most a features file's arrays may hold together, uncompressed, bytes; one key
+image's 300 corners with 11x11 patches hold 150 kB."""
+_FILE_OVERHEAD_BYTES = 64 * 2**10
+"""Room for a file's own structure (zip directory and headers, PNG chunks), bytes."""
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: Every PNG ends with an empty IEND chunk: its type and its (constant) CRC.
 _PNG_END = b"IEND\xaeB`\x82"
@@ -315,21 +319,29 @@ def _read_keyframe(
         ) from None
 
 
-def _read_bytes(path: Path) -> bytes:
+def _read_bytes(path: Path, max_bytes: int) -> bytes:
+    """The content of ``path``, refused unread if longer than ``max_bytes``."""
     try:
-        data = path.read_bytes()
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            if size > max_bytes:
+                raise MemoryFormatError(path, f"{size} bytes, more than the {max_bytes} "
+                                        "allowed for this file")
+            data = f.read(size + 1)  # one more: to see it growing
     except FileNotFoundError:
         raise MemoryFormatError(path, "file not found") from None
     except OSError as e:
         raise MemoryFormatError(path, f"cannot read: {e.strerror}") from None
     if not data:
         raise MemoryFormatError(path, "file is empty")
+    if len(data) > size:
+        raise MemoryFormatError(path, "grew while being read (is another program writing it?)")
     return data
 
 
 def _read_png(path: Path, shape: tuple[int, int]) -> GreyImage:
     """An 8-bit grey PNG of ``shape`` (H, W)."""
-    data = _read_bytes(path)
+    data = _read_bytes(path, _max_png_bytes(shape))
     if not data.startswith(_PNG_SIGNATURE):
         raise MemoryFormatError(path, "not a PNG file")
     if not data.endswith(_PNG_END):
@@ -347,33 +359,29 @@ def _read_png(path: Path, shape: tuple[int, int]) -> GreyImage:
 def _read_features(
     path: Path, width: int, height: int, descriptor_length: int | None
 ) -> tuple[PixelsXY, Patches, Tracks]:
-    data = _read_bytes(path)
-    try:
-        archive = np.load(io.BytesIO(data), allow_pickle=False)
-        if not isinstance(archive, np.lib.npyio.NpzFile):
-            raise MemoryFormatError(path, "expected an .npz archive, got a single .npy array")
-        with archive:
-            names = set(archive.files)
-            if not set(_FEATURE_ARRAYS) <= names <= {*_FEATURE_ARRAYS, *_OPTIONAL_FEATURE_ARRAYS}:
-                raise MemoryFormatError(
-                    path,
-                    f"expected arrays {list(_FEATURE_ARRAYS)} (and optionally "
-                    f"{list(_OPTIONAL_FEATURE_ARRAYS)}), got {sorted(archive.files)}",
-                )
-            pixels_xy, patches = (archive[name] for name in _FEATURE_ARRAYS)
-            tracks = (
-                archive["tracked_from_previous"]
-                if "tracked_from_previous" in names
-                else np.zeros((0, 2), dtype=np.int64)
-            )
-    except ValueError as e:
-        problem = "holds pickled objects (refused)" if "pickle" in str(e) else f"cannot read: {e}"
-        raise MemoryFormatError(path, problem) from None
-    except (OSError, EOFError, zipfile.BadZipFile) as e:
-        raise MemoryFormatError(path, f"not a valid .npz archive (truncated?): {e}") from None
+    """The arrays of a features file, every size checked against the camera's before
+    anything is inflated (:mod:`shared.memory._npz`)."""
+    pixels = width * height  # no image has more corners than pixels
+    specs = {
+        "pixels_xy": ArraySpec(np.dtype(np.float64), (None, 2), (pixels, 2)),
+        "patches": ArraySpec(np.dtype(np.float32), (None, None),
+                             (pixels, min(width, height) ** 2)),
+        "tracked_from_previous": ArraySpec(np.dtype(np.int64), (None, 2), (pixels, 2)),
+    }
+    data = _read_bytes(path, MAX_FEATURES_BYTES + _FILE_OVERHEAD_BYTES)
+    arrays = read_npz(path, data, specs, _FEATURE_ARRAYS, MAX_FEATURES_BYTES)
+    pixels_xy, patches = arrays["pixels_xy"], arrays["patches"]
+    tracks = arrays.get("tracked_from_previous", np.zeros((0, 2), dtype=np.int64))
     check_features(str(path), pixels_xy, patches, width, height, descriptor_length)
     check_tracks(str(path), tracks, pixels_xy.shape[0])
     return pixels_xy, patches, tracks
+
+
+def _max_png_bytes(shape: tuple[int, int]) -> int:
+    """The largest PNG file accepted for an 8-bit grey image of ``shape`` (H, W), bytes:
+    twice the pixels plus 64 KiB (stored, uncompressed, it is one filter byte per row
+    more than the pixels, plus 5 bytes per 64 KiB deflate block and the chunks' 12 each)."""
+    return 2 * shape[0] * shape[1] + _FILE_OVERHEAD_BYTES
 
 
 def _encode_png(image: GreyImage) -> bytes:
