@@ -8,7 +8,8 @@ JSON reports can be made again (:func:`fuzz_input`).
 * A **crash** is any exception other than the target's ``allowed`` ones (the project's
   :class:`~shared.errors.InputError`), or the worker dying (a signal, the memory limit
   hit below Python). It is counted, its kind (exception type and the innermost frame in
-  the project) tallied, and the first few are reported with their input (hex, truncated).
+  the project) tallied, and the first of each kind is reported with its input (hex,
+  truncated).
 * A **hang** is an input still running after ``time_limit_s``. The parent watches the
   worker through shared memory (the index of the input in progress, when it began, and
   its first bytes); on a hang it kills the worker, reports the input, and starts a new
@@ -46,8 +47,8 @@ import numpy as np
 
 #: Input bytes kept for reports (hex), and by the watchdog for a hang.
 REPORT_BYTES = 96
-#: Crashing inputs reported per target (all are counted).
-REPORTED_CRASHES = 5
+#: Crashing inputs reported per target, the first of each kind (all are counted).
+REPORTED_CRASHES = 10
 #: Every target, in the order they run (the keys of ``fuzz_targets.FACTORIES``, named here
 #: so that the targets table need not import the targets).
 TARGET_NAMES = ("aria_robot", "aria_host", "mavlink_unsigned", "mavlink_signed", "memory",
@@ -104,7 +105,7 @@ class TargetReport:
         """Count a crash of input ``index`` (``data``: its first bytes, ``length`` long)."""
         self.crashes += 1
         self.crash_kinds[kind] = self.crash_kinds.get(kind, 0) + 1
-        if len(self.first_crashes) < REPORTED_CRASHES:
+        if self.crash_kinds[kind] == 1 and len(self.first_crashes) < REPORTED_CRASHES:
             self.first_crashes.append({"index": index, "kind": kind, "error": line[:300],
                                        "input_len": length, "input_hex": data.hex()})
 
