@@ -117,40 +117,40 @@ class _Shared(ctypes.Structure):
                 ("length", ctypes.c_int64), ("head", ctypes.c_ubyte * REPORT_BYTES)]
 
 
-def _worker(target: str, seed: int, first: int, end: int, memory_limit_mb: int,
+def _worker(target: str, seed: int, first: int, end: int, memory_limit_mb: int, work: Path,
             shared: Any, conn: multiprocessing.connection.Connection) -> None:
-    """Run inputs ``first`` .. ``end - 1`` of ``target``; send crashes and the end stats."""
+    """Run inputs ``first`` .. ``end - 1`` of ``target`` (built in ``work``); send crashes
+    and the end stats."""
     from tools.bench.fuzz_targets import FACTORIES
 
     logging.disable(logging.CRITICAL)  # the targets' log lines, by the thousand
-    with tempfile.TemporaryDirectory(prefix=f"vmnav-fuzz-{target}-", dir=SCRATCH) as tmp:
-        fuzz_target = FACTORIES[target](Path(tmp))
-        _silence_stderr()
-        limit = _address_space_bytes() + memory_limit_mb * 1024 * 1024
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-        max_ns = 0
-        for index in range(first, end):
-            shared.length = 0
-            shared.index = index
-            start_ns = shared.start_ns = time.monotonic_ns()
-            try:
-                data = fuzz_target.generate(input_rng(seed, target, index))
-            except Exception as error:  # a bug of the bench, not of the target
-                conn.send(("error", index, "".join(traceback.format_exception(error))))
-                return
-            head = data[:REPORT_BYTES]
-            ctypes.memmove(shared.head, head, len(head))
-            shared.length = len(data)
-            try:
-                fuzz_target.run(data)
-            except fuzz_target.allowed:
-                pass
-            except Exception as error:  # what the fuzzer is looking for
-                line = "".join(traceback.format_exception_only(error)).strip().splitlines()[-1]
-                conn.send(("crash", index, crash_kind(error), line, head, len(data)))
-            max_ns = max(max_ns, time.monotonic_ns() - start_ns)
-        shared.index = -1
-        conn.send(("done", max_ns))
+    fuzz_target = FACTORIES[target](work)
+    _silence_stderr()
+    limit = _address_space_bytes() + memory_limit_mb * 1024 * 1024
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    max_ns = 0
+    for index in range(first, end):
+        shared.length = 0
+        start_ns = shared.start_ns = time.monotonic_ns()  # before the index: read after it
+        shared.index = index
+        try:
+            data = fuzz_target.generate(input_rng(seed, target, index))
+        except Exception as error:  # a bug of the bench, not of the target
+            conn.send(("error", index, "".join(traceback.format_exception(error))))
+            return
+        head = data[:REPORT_BYTES]
+        ctypes.memmove(shared.head, head, len(head))
+        shared.length = len(data)
+        try:
+            fuzz_target.run(data)
+        except fuzz_target.allowed:
+            pass
+        except Exception as error:  # what the fuzzer is looking for
+            line = "".join(traceback.format_exception_only(error)).strip().splitlines()[-1]
+            conn.send(("crash", index, crash_kind(error), line, head, len(data)))
+        max_ns = max(max_ns, time.monotonic_ns() - start_ns)
+    shared.index = -1
+    conn.send(("done", max_ns))
 
 
 def _silence_stderr() -> None:
@@ -179,13 +179,15 @@ def fuzz_target(target: str, inputs: int, seed: int, time_limit_s: float,
     while next_index < inputs:
         shared.index = -1
         receiver, sender = context.Pipe(duplex=False)
-        worker = context.Process(target=_worker, name=f"fuzz-{target}", daemon=True, args=(
-            target, seed, next_index, inputs, memory_limit_mb, shared, sender))
-        worker.start()
-        sender.close()
-        report.worker_starts += 1
-        next_index = _watch(target, worker, receiver, shared, report, time_limit_s, inputs)
-        receiver.close()
+        # The parent owns the scratch folder: a worker killed on a hang cannot remove it.
+        with tempfile.TemporaryDirectory(prefix=f"vmnav-fuzz-{target}-", dir=SCRATCH) as tmp:
+            worker = context.Process(target=_worker, name=f"fuzz-{target}", daemon=True, args=(
+                target, seed, next_index, inputs, memory_limit_mb, Path(tmp), shared, sender))
+            worker.start()
+            sender.close()
+            report.worker_starts += 1
+            next_index = _watch(target, worker, receiver, shared, report, time_limit_s, inputs)
+            receiver.close()
     report.wall_s = round(time.perf_counter() - started, 1)
     done = resource.getrusage(resource.RUSAGE_CHILDREN)
     report.cpu_s = round(done.ru_utime + done.ru_stime - children.ru_utime - children.ru_stime, 1)
