@@ -67,7 +67,7 @@ from shared.logs import topics
 from shared.logs.reader import log_info, read_messages, recover
 from shared.logs.writer import LogWriter
 from shared.mavlink.dialect import Message, make_codec, mavlink
-from shared.mavlink.signing import timestamp_from_unix_ns
+from shared.mavlink.signing import configure_signing, timestamp_from_unix_ns
 from shared.memory import KeyframeRecord, VisualMemory, read_memory, write_memory
 from shared.memory.store import MANIFEST_NAME, features_path, image_path, thumbnail_path
 from shared.pose import Pose2
@@ -209,7 +209,7 @@ class AriaHostTarget:
         client.command(0.3, 0.2, 4 * _MS)
         for now_ns in (4 * _MS, NS_PER_S, 5 * NS_PER_S):
             client.handle_timer(now_ns)
-        _ = client.status, client.counters
+        _ = client.status, client.counters  # what the driver reads every cycle
         while client.next_event() is not None:
             pass
         client.data_to_send()
@@ -230,6 +230,7 @@ _ALL_MESSAGES: tuple[type[Message], ...] = tuple(
 #: Fuzzing key (32 bytes) and the Unix time the signed target's clocks read, ns.
 _KEY = bytes(range(32))
 _UNIX_NS = 1_750_000_000 * NS_PER_S
+_TIMESTAMP = timestamp_from_unix_ns(_UNIX_NS)
 
 
 class VehicleTarget:
@@ -242,18 +243,15 @@ class VehicleTarget:
         self.files = VehicleFiles(work / "memory", work / "upload", work / "params.json")
         self.signing = SigningSetup(_KEY, _UNIX_NS) if signed else None
         self.ground = make_codec(255, 190)
+        if signed:
+            configure_signing(self.ground, _KEY, 0, _TIMESTAMP)
         self.commands = [int(c) for c in mavlink.enums["MAV_CMD"]]
 
     def generate(self, rng: np.random.Generator) -> bytes:
         if rng.random() < 0.1:
             return rng.bytes(int(rng.integers(1, 300)))
         ground = self.ground
-        ground.seq = 0
-        if self.signing is not None:
-            ground.signing.secret_key = self.signing.key
-            ground.signing.sign_outgoing = True
-            ground.signing.link_id = 0
-            ground.signing.timestamp = timestamp_from_unix_ns(_UNIX_NS)
+        ground.seq, ground.signing.timestamp = 0, _TIMESTAMP  # each input from the same start
         packets = [ground.pack(msg) for msg in self._messages(rng)]
         if rng.random() < 0.3:
             at = int(rng.integers(len(packets)))
