@@ -218,16 +218,33 @@ def random_message(cls: type[Message], rng: np.random.Generator,
     return cls(*values)
 
 
+def _goal_fields(rng: np.random.Generator) -> dict[str, Any]:
+    """Three times in four, the fields that make an item a goal the vehicle may accept
+    (``shared.mavlink.mission.goal``: the goal command, param1 a key image id 0..7), so
+    that the other fields' values go on to the mission in force and its download."""
+    if rng.random() < 0.25:
+        return {}
+    return {"command": mavlink.MAV_CMD_WAYPOINT_USER_1, "param1": float(rng.integers(8)),
+            "param2": 0.0, "param3": 0.0, "param4": 0.0}
+
+
 def mission_upload(rng: np.random.Generator, legacy: bool) -> list[Message]:
     """MISSION_COUNT of 1..3 items then the items in order (MISSION_ITEM when ``legacy``,
-    else MISSION_ITEM_INT), target the vehicle, random fields otherwise."""
+    else MISSION_ITEM_INT), target the vehicle, random fields otherwise; half the time
+    followed by the download of the mission (MISSION_REQUEST_LIST, MISSION_REQUEST_INT
+    of each item), which sends the items back."""
     count = int(rng.integers(1, 4))
     item = mavlink.MAVLink_mission_item_message if legacy else \
         mavlink.MAVLink_mission_item_int_message
     target = {"target_system": 1, "target_component": 1, "mission_type": 0}
-    return [random_message(mavlink.MAVLink_mission_count_message, rng,
-                           {**target, "count": count}),
-            *(random_message(item, rng, {**target, "seq": seq}) for seq in range(count))]
+    upload = [random_message(mavlink.MAVLink_mission_count_message, rng,
+                             {**target, "count": count}),
+              *(random_message(item, rng, {**target, "seq": seq, **_goal_fields(rng)})
+                for seq in range(count))]
+    if rng.random() < 0.5:
+        return upload
+    return [*upload, mavlink.MAVLink_mission_request_list_message(1, 1, 0),
+            *(mavlink.MAVLink_mission_request_int_message(1, 1, seq, 0) for seq in range(count))]
 
 
 #: Paths an FTP request names: the served memory, the upload area, escapes and junk.
