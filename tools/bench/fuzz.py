@@ -56,6 +56,8 @@ TARGET_NAMES = ("aria_robot", "aria_host", "mavlink_unsigned", "mavlink_signed",
 #: Where the targets' scratch folders go: memory-backed when the machine has /dev/shm, so
 #: that 100,000 file writes (and the fsyncs of ``recover``) do not wait on a disk.
 SCRATCH = "/dev/shm" if Path("/dev/shm").is_dir() else None
+#: Longest a worker may take to build its target before its first input, s.
+SETUP_LIMIT_S = 300.0
 #: How often the parent checks on the worker, s.
 WATCH_PERIOD_S = 0.05
 #: Project folders: the innermost frame in one of them names a crash's place.
@@ -198,6 +200,7 @@ def _watch(target: str, worker: Any, receiver: multiprocessing.connection.Connec
            shared: _Shared, report: TargetReport, time_limit_s: float, inputs: int) -> int:
     """Follow one worker until it finishes, hangs or dies; returns the next input to run."""
     limit_ns = round(time_limit_s * 1e9)
+    setup_deadline_ns: int | None = time.monotonic_ns() + round(SETUP_LIMIT_S * 1e9)
     while True:
         try:
             ready = receiver.poll(WATCH_PERIOD_S)
@@ -223,6 +226,13 @@ def _watch(target: str, worker: Any, receiver: multiprocessing.connection.Connec
             worker.join()
             return inputs
         index = shared.index
+        if index >= 0:
+            setup_deadline_ns = None  # set up; index is -1 again once all inputs ran
+        elif setup_deadline_ns is not None and time.monotonic_ns() > setup_deadline_ns:
+            worker.kill()
+            worker.join()
+            raise RuntimeError(f"fuzz target {target}: the worker's setup took over "
+                               f"{SETUP_LIMIT_S:g} s")
         if index >= 0 and time.monotonic_ns() - shared.start_ns > limit_ns:
             worker.kill()
             worker.join()
