@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from shared.errors import InputError
+from tools.bench import fuzz
 from tools.bench.fuzz import REPORT_BYTES, TARGET_NAMES, fuzz_input, fuzz_target
 from tools.bench.fuzz_targets import FACTORIES
 from tools.bench.run_all import QUICK_ARGS
@@ -120,3 +121,28 @@ def test_every_target_is_registered_with_its_targets_and_a_quick_size() -> None:
     assert figures == {f"targets.{name}.{kind}" for name in TARGET_NAMES
                        for kind in ("crashes", "hangs")}
     build_parser().parse_args(["bench", "fuzz", *QUICK_ARGS["fuzz"]])
+
+
+class SlowToBuild(Scripted):
+    """A target whose setup never ends."""
+
+    def __init__(self, work: Path) -> None:
+        time.sleep(600)
+
+
+class BrokenGenerator(Scripted):
+    """A target whose input generator fails: a bug of the bench."""
+
+    def generate(self, rng: np.random.Generator) -> bytes:
+        raise KeyError("no such mutation")
+
+
+def test_a_bench_bug_fails_the_run_instead_of_counting_as_a_crash(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(FACTORIES, "slow", SlowToBuild)
+    monkeypatch.setitem(FACTORIES, "broken", BrokenGenerator)
+    monkeypatch.setattr(fuzz, "SETUP_LIMIT_S", 0.5)
+    with pytest.raises(RuntimeError, match="fuzz target slow: the worker's setup took over"):
+        fuzz_target("slow", 3, seed=0, time_limit_s=TIME_LIMIT_S, memory_limit_mb=256)
+    with pytest.raises(RuntimeError, match=r"(?s)making input 0 failed.*no such mutation"):
+        fuzz_target("broken", 3, seed=0, time_limit_s=TIME_LIMIT_S, memory_limit_mb=256)
