@@ -60,8 +60,10 @@ SCRATCH = "/dev/shm" if Path("/dev/shm").is_dir() else None
 SETUP_LIMIT_S = 300.0
 #: How often the parent checks on the worker, s.
 WATCH_PERIOD_S = 0.05
-#: Project folders: the innermost frame in one of them names a crash's place.
+#: Project folders: the innermost frame in one of them names a crash's place, unless it
+#: is generated code (the MAVLink dialect: its caller says more).
 _PROJECT = ("shared", "robot", "ground", "sim", "tools", "tests")
+_GENERATED = (Path("shared/mavlink/vmnav_dialect.py"),)
 _ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -79,12 +81,16 @@ def fuzz_input(target: str, seed: int, index: int, work: Path) -> bytes:
 
 
 def crash_kind(error: BaseException) -> str:
-    """``"ExceptionType at path/in/project.py:LINE"`` (the innermost frame of the project)."""
+    """``"ExceptionType at path/in/project.py:LINE"`` (the innermost frame of the project
+    not in generated code)."""
     place = "?"
     for frame in traceback.extract_tb(error.__traceback__):
         path = Path(frame.filename).resolve()
-        if path.is_relative_to(_ROOT) and path.relative_to(_ROOT).parts[0] in _PROJECT:
-            place = f"{path.relative_to(_ROOT)}:{frame.lineno}"
+        if not path.is_relative_to(_ROOT):
+            continue
+        where = path.relative_to(_ROOT)
+        if where.parts[0] in _PROJECT and where not in _GENERATED:
+            place = f"{where}:{frame.lineno}"
     return f"{type(error).__name__} at {place}"
 
 
