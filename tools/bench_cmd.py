@@ -119,6 +119,27 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                         help="keep every run's folder (memory, parameters, logs, the robot's "
                              "output) in DIR [default: a temporary folder, removed at the end]")
     faults.set_defaults(run=runner("faults"))
+    fuzz = bench_sub.add_parser(
+        "fuzz",
+        help="issue 15: seeded fuzzing of every decoder and loader, crashes and hangs counted",
+        description="Feed seeded, structure-aware mutated inputs to every decoder and loader "
+        "(ARIA robot and host ends, the MAVLink vehicle unsigned and signed, the memory "
+        "loader, MCAP info/read/recover, the photo goal), each target in a worker process "
+        "with a time limit per input and a memory limit; print JSON: per target inputs, "
+        "crashes (any exception but the project's input errors), hangs, the slowest "
+        "input, and the first crashing inputs with their errors (docs/fuzzing.md).",
+    )
+    fuzz.add_argument("--inputs", type=int, default=100_000, metavar="N",
+                      help="inputs per target [default: 100000]")
+    fuzz.add_argument("--targets", metavar="NAMES",
+                      help="comma-separated targets to fuzz [default: all]")
+    fuzz.add_argument("--seed", type=int, default=0, help="seed of the inputs [default: 0]")
+    fuzz.add_argument("--time-limit-s", type=float, default=10.0, metavar="S",
+                      help="an input running longer is a hang, s [default: 10]")
+    fuzz.add_argument("--memory-limit-mb", type=int, default=1024, metavar="MB",
+                      help="address space a worker may add to what it holds after setup, "
+                           "MB; beyond it an input fails as a crash [default: 1024]")
+    fuzz.set_defaults(run=runner("fuzz"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

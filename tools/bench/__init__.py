@@ -9,6 +9,8 @@
 * ``link``, ``link_load``, ``link_vehicles``: the MAVLink link, with simulated vehicles in
   other processes (``vmnav bench link``);
 * ``faults``: issue 8's fault cases (:mod:`tools.harness.fault_cases`), each repeated;
+* ``fuzz``, ``fuzz_targets``, ``fuzz_inputs``: seeded fuzzing of every decoder and loader
+  (``vmnav bench fuzz``, issue 15);
 * ``targets``: every benchmark's targets in one table; ``run_all``: ``vmnav bench all``;
 * ``cpu``: pinning a benchmark to one core; ``names``: name lists given on the command line.
 

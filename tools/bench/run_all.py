@@ -19,6 +19,8 @@ follow 20 seeds x (teach 60 s + two laws x 30 s) = 40 min, vision about 1.5 min,
 link 20 s, log 10 s, sim 5 s. Follow caches each seed's memory in ``OUT/follow``,
 so a second full run takes about 22 min. ``faults`` (issue 8) adds about 2 min per
 repetition of its cases: one with ``--quick``, ten in the full run (measured 20 min).
+``fuzz`` (issue 15) adds about 30 s with ``--quick`` (1,000 inputs per target) and
+about 25 min in the full run (100,000 per target; docs/fuzzing.md).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "log": ("--seconds", "2"),
     "link": ("--window-s", "2", "--dispatches", "50"),
     "faults": ("--repeat", "1"),
+    "fuzz": ("--inputs", "1000"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).
 EXIT_BENCH_FAILED = 1

@@ -1,9 +1,10 @@
 """Every benchmark's targets in one table, and their check against a benchmark's JSON.
 
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
-6: MAVLink link, 7: field logging, 8: every fault case passes every run; DESIGN.md
-sec. 6 gathers them). The simulator's and the vision benchmark's own modules hold
-theirs (their JSON prints them) and are read from there, not copied.
+6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
+input crashes or hangs a decoder; DESIGN.md sec. 6 gathers them). The simulator's and
+the vision benchmark's own modules hold theirs (their JSON prints them) and are read
+from there, not copied.
 
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tools.bench.faults import CASES as FAULT_CASES
+from tools.bench.fuzz import TARGET_NAMES as FUZZ_TARGETS
 from tools.bench.sim import RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
 from tools.harness.demo import DEMO_LAW
@@ -80,6 +82,8 @@ TARGETS: tuple[Target, ...] = (
     Target("link", "ground_cpu_fraction_20_vehicles", "<", 0.30, "issue 6"),
     *(Target("faults", f"{case}.passed", ">=", f"{case}.runs", "issue 8")
       for case in FAULT_CASES),
+    *(Target("fuzz", f"targets.{name}.{figure}", "<=", 0, "issue 15")
+      for name in FUZZ_TARGETS for figure in ("crashes", "hangs")),
 )
 
 
