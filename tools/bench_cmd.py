@@ -140,6 +140,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="address space a worker may add to what it holds after setup, "
                            "MB; beyond it an input fails as a crash [default: 1024]")
     fuzz.set_defaults(run=runner("fuzz"))
+    hostile = bench_sub.add_parser(
+        "hostile",
+        help="issue 15: attacks on the real parts (bad messages, signing, flood, a stalled "
+             "loop, image and file bombs, the simulator), about 3 min",
+        description="Run each attack of issue 15 against the real parts, one after the other "
+        "(processes, sockets and files; our code on both ends): hostile MAVLink messages, "
+        "wrong keys and replays, a 20 s flood and 65,025 FTP peers, a control loop stalled "
+        "while driving, image bombs, hostile memories and logs, hostile ARIA packets and "
+        "HTTP requests against the simulator. Print JSON: each part's figures, the targets "
+        "and whether each is met (tools/bench/hostile.py).",
+    )
+    hostile.add_argument("--parts", metavar="NAMES",
+                         help="comma-separated parts to run [default: all: messages, signing, "
+                              "traffic, stall, images, files, sim]")
+    hostile.add_argument("--seed", type=int, default=0, help="seed of every part [default: 0]")
+    hostile.set_defaults(run=runner("hostile"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

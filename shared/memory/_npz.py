@@ -23,6 +23,7 @@ import zipfile
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from tokenize import TokenError
 from typing import IO, Any
 
 import numpy as np
@@ -143,6 +144,8 @@ def _read_header(path: Path, member: IO[bytes], name: str) -> tuple[tuple[int, .
         if reader is None:
             raise ValueError(f".npy format version {version[0]}.{version[1]} is not supported")
         shape, fortran_order, dtype = reader(member)
+    except (SyntaxError, TokenError):  # numpy parses the header's text as Python
+        raise MemoryFormatError(path, f"{name}: its .npy header does not parse") from None
     except ValueError as e:
         problem = "holds pickled objects (refused)" if "pickle" in str(e) else str(e)
         raise MemoryFormatError(path, f"{name}: {problem}") from None

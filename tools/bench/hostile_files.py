@@ -183,6 +183,16 @@ def overflowing_shape_npz(directory: Path) -> None:
         ZipEntry("patches.npy", header, zlib.crc32(header), len(header))])
 
 
+def unparsable_npy_header(directory: Path) -> None:
+    """pixels_xy's .npy header is Python text cut short (numpy's reader parses it as Python:
+    was tokenize.TokenError)."""
+    text = b"{'descr': '<f8', 'fortran_order': False, 'shape': (12, \n"
+    header = b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text
+    _replace_features(directory, [
+        ZipEntry("pixels_xy.npy", header, zlib.crc32(header), len(header)),
+        stored_npy("patches", np.zeros((12, 25), np.float32))])
+
+
 def zip_version_npz(directory: Path) -> None:
     """A member needing zip version 6.4 (was: NotImplementedError)."""
     pixels = _valid_pixels()
@@ -211,6 +221,7 @@ MEMORY_CASES: dict[str, Callable[[Path], None]] = {
     "huge_int_manifest": huge_int_manifest,
     "absurd_shape_npz": absurd_shape_npz,
     "overflowing_shape_npz": overflowing_shape_npz,
+    "unparsable_npy_header": unparsable_npy_header,
     "zip_version_npz": zip_version_npz,
     "zip_method_npz": zip_method_npz,
     "npz_bomb": npz_bomb,

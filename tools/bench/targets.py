@@ -2,9 +2,9 @@
 
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
 6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
-input crashes or hangs a decoder; DESIGN.md sec. 6 gathers them). The simulator's and
-the vision benchmark's own modules hold theirs (their JSON prints them) and are read
-from there, not copied.
+input crashes or hangs a decoder, and every attack of ``bench hostile`` is met; DESIGN.md
+sec. 6 gathers them). The simulator's, the vision benchmark's and the hostile parts' own
+modules hold theirs (their JSON prints them) and are read from there, not copied.
 
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
@@ -23,6 +23,12 @@ from typing import Any
 
 from tools.bench.faults import CASES as FAULT_CASES
 from tools.bench.fuzz import TARGET_NAMES as FUZZ_TARGETS
+from tools.bench.hostile import PARTS as HOSTILE_PARTS
+from tools.bench.hostile_files import MAX_RSS_MB
+from tools.bench.hostile_images import PEAK_RSS_TARGET_MB
+from tools.bench.hostile_messages import MIN_HEARTBEAT_HZ
+from tools.bench.hostile_stall import DISTANCE_TARGET_M, STOP_TARGET_S
+from tools.bench.hostile_traffic import MAX_FTP_CACHE_MB, MAX_REJECTED_LOG_MB
 from tools.bench.sim import RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
 from tools.harness.demo import DEMO_LAW
@@ -84,6 +90,30 @@ TARGETS: tuple[Target, ...] = (
       for case in FAULT_CASES),
     *(Target("fuzz", f"targets.{name}.{figure}", "<=", 0, "issue 15")
       for name in FUZZ_TARGETS for figure in ("crashes", "hangs")),
+    *(Target("hostile", figure, comparison, bound, "issue 15") for figure, comparison, bound in (
+        ("messages.handler_exceptions", "<=", 0),
+        ("messages.hold_obeyed", ">=", 1),
+        ("messages.heartbeat_hz", ">=", MIN_HEARTBEAT_HZ),
+        ("signing.wrong_key_accepted", "<=", 0),
+        ("signing.replays_accepted", "<=", 0),
+        ("signing.replays_after_restart_accepted", "<=", 0),
+        ("signing.old_timestamps_accepted", "<=", 0),
+        ("signing.station_keeps_control", ">=", 1),
+        ("traffic.heartbeat_hz_at_station", ">=", MIN_HEARTBEAT_HZ),
+        ("traffic.heartbeat_hz_at_robot", ">=", MIN_HEARTBEAT_HZ),
+        ("traffic.false_gcs_failsafe", "<=", 0),
+        ("traffic.log_growth_rejected_mb", "<", MAX_REJECTED_LOG_MB),
+        ("traffic.ftp_cache_mb", "<", MAX_FTP_CACHE_MB),
+        ("stall.stop_after_stall_s", "<", STOP_TARGET_S),
+        ("stall.distance_after_stall_m", "<", DISTANCE_TARGET_M),
+        *((f"images.{bomb}.peak_rss_mb", "<", PEAK_RSS_TARGET_MB)
+          for bomb in ("header_bomb", "bogus_chunk", "large_png")),
+        ("files.max_peak_rss_mb", "<", MAX_RSS_MB),
+        ("sim.aria_handler_errors", "<=", 0),
+        ("sim.aria_server_alive_after_batch", ">=", 1),
+        ("sim.control_bad_requests_refused", ">=", "sim.control_bad_requests"),
+        *((f"{part}.targets_met", ">=", 1) for part in HOSTILE_PARTS),
+    )),
 )
 
 
@@ -105,13 +135,14 @@ class Check:
 
 
 def figure_at(result: Mapping[str, Any], path: str) -> float | None:
-    """The finite number at dotted ``path`` in ``result``; None if missing or not one."""
+    """The finite number at dotted ``path`` in ``result`` (a bool counts as 1 or 0); None
+    if missing or not one."""
     node: Any = result
     for key in path.split("."):
         if not isinstance(node, Mapping) or key not in node:
             return None
         node = node[key]
-    if isinstance(node, bool) or not isinstance(node, int | float) or not math.isfinite(node):
+    if not isinstance(node, int | float) or not math.isfinite(node):
         return None
     return float(node)
 

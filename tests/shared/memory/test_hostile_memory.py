@@ -29,6 +29,8 @@ CASES = {
                          "more than the 480000 allowed"),
     "overflowing_shape_npz": (hostile_files.overflowing_shape_npz,
                               "more than the 480000 allowed"),
+    "unparsable_npy_header": (hostile_files.unparsable_npy_header,
+                              "pixels_xy: its .npy header does not parse"),
     "zip_version_npz": (hostile_files.zip_version_npz,
                         "unsupported zip archive: zip file version 6.4"),
     "zip_method_npz": (hostile_files.zip_method_npz,

@@ -76,7 +76,8 @@ def test_a_failed_benchmark_is_reported_and_the_others_still_run(
 
 @pytest.mark.parametrize("argv, message", [
     (["--only", "link,nope"],
-     "--only: unknown benchmark nope (known: sim, vision, follow, log, link, faults, fuzz)"),
+     "--only: unknown benchmark nope "
+     "(known: sim, vision, follow, log, link, faults, fuzz, hostile)"),
     (["--only", ","], "--only: no benchmark"),
     (["--bench-args", "nope=--x"], "--bench-args: 'nope=--x' is not NAME=ARGS"),
     (["--timeout-s", "0"], "--timeout-s: must be > 0"),
@@ -147,7 +148,8 @@ def test_a_bound_may_be_another_figure() -> None:
 def test_figures_are_finite_numbers_at_a_dotted_path() -> None:
     result = {"a": {"b": 1.5, "flag": True, "nan": math.nan, "text": "x"}}
     assert figure_at(result, "a.b") == 1.5
-    for path in ("a.flag", "a.nan", "a.text", "a.missing", "a.b.c", "z"):
+    assert figure_at(result, "a.flag") == 1.0
+    for path in ("a.nan", "a.text", "a.missing", "a.b.c", "z"):
         assert figure_at(result, path) is None
     target = Target("x", "a.nan", "<", 1.0, "test")
     assert check(target, result).met is False
