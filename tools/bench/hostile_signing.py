@@ -45,7 +45,7 @@ from ground.station import GCS_ADDRESS, GroundError, GroundStation
 from robot.config import VmnavConfig
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
-from robot.vehicle.udp_vehicle import UdpVehicle
+from robot.vehicle.udp_vehicle import STRANGER_BUDGET, UdpVehicle
 from shared.clock import WallClock
 from shared.mavlink.dialect import Message, make_codec, mavlink, to_float32
 from shared.mavlink.modes import Mode
@@ -64,8 +64,10 @@ from tools.bench.link_load import LinkLoadApp
 KEY = key_from_passphrase("vmnav hostile signing bench")
 #: Parameter sets the eavesdropper captures.
 CAPTURED = 20
-#: Datagrams an attacker sends before waiting for the vehicle to parse them.
-BURST = 50
+#: Datagrams an attacker sends before waiting for the vehicle to parse them: what the
+#: vehicle handles of a stranger's in one round (more would be shed unparsed, rule 5 of
+#: :mod:`robot.vehicle.udp_vehicle`).
+BURST = STRANGER_BUDGET
 #: Longest wait for the vehicle to parse a burst, or for the station to find it, s.
 PATIENCE_S = 30.0
 #: The parameter the station sets (and the captured packets set).
