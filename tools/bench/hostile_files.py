@@ -367,7 +367,20 @@ LOG_CASES: dict[str, Callable[[Path], None]] = {
 
 # -- running the real commands ----------------------------------------------------------
 
-_CHILD = "import sys; from tools.cli import main; sys.exit(main(sys.argv[1:]))"
+#: The child: ``vmnav`` with its argv, then its peak resident memory (``VmHWM``, kB) into
+#: the file ``sys.argv[1]``. Not ``ru_maxrss`` from ``wait4``: Linux carries the parent's
+#: peak over fork and exec into the child's, so a child of a big process (a pytest worker
+#: after other tests) would report the parent's.
+_CHILD = """import re, sys
+from pathlib import Path
+from tools.cli import main
+try:
+    code = main(sys.argv[2:])
+finally:
+    status = Path("/proc/self/status").read_text()
+    Path(sys.argv[1]).write_text(re.search(r"VmHWM:\\s*(\\d+) kB", status).group(1))
+sys.exit(code)
+"""
 
 
 @dataclass(frozen=True)
@@ -375,7 +388,8 @@ class Run:
     """One command on one hostile file, in a fresh process.
 
     Attributes:
-        peak_rss_mb: the child's peak resident memory, MB (ru_maxrss).
+        peak_rss_mb: the child's peak resident memory, MB (its ``VmHWM``; ``ru_maxrss``
+            if it did not end by itself).
         time_s: wall time, s.
         exit_code: its exit code (negative: killed by that signal; None: hung).
         stderr: what it wrote on stderr.
@@ -401,13 +415,15 @@ class Run:
 
 
 def run_command(argv: Sequence[str], workdir: Path) -> Run:
-    """``vmnav *argv`` in a child process; its peak RSS from ``wait4``."""
+    """``vmnav *argv`` in a child process; its peak RSS (:data:`_CHILD`)."""
     out_path, err_path = workdir / "stdout.txt", workdir / "stderr.txt"
+    peak_path = workdir / "peak_kb.txt"
+    peak_path.unlink(missing_ok=True)
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     start = time.perf_counter()
     with open(out_path, "wb") as out, open(err_path, "wb") as err:
-        child = subprocess.Popen([sys.executable, "-c", _CHILD, *argv], stdout=out, stderr=err,
-                                 env=env, cwd=workdir)
+        child = subprocess.Popen([sys.executable, "-c", _CHILD, str(peak_path), *argv],
+                                 stdout=out, stderr=err, env=env, cwd=workdir)
     exit_code: int | None = None
     while True:
         pid, status, usage = os.wait4(child.pid, os.WNOHANG)
@@ -420,7 +436,8 @@ def run_command(argv: Sequence[str], workdir: Path) -> Run:
             break
         time.sleep(0.02)
     child.returncode = exit_code if exit_code is not None else -9
-    return Run(peak_rss_mb=usage.ru_maxrss * 1024 / MB, time_s=time.perf_counter() - start,
+    peak_kb = int(peak_path.read_text()) if peak_path.exists() else usage.ru_maxrss
+    return Run(peak_rss_mb=peak_kb * 1024 / MB, time_s=time.perf_counter() - start,
                exit_code=exit_code, stderr=err_path.read_text(errors="replace"),
                stdout=out_path.read_text(errors="replace"))
 
