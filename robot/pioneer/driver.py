@@ -23,6 +23,11 @@ Rules:
    transport hold only ``_io_lock``, so callers of :meth:`command` and :meth:`state`
    never wait for a slow open (a TCP connect can take seconds). Both are re-entrant
    so that :meth:`close` works from a signal handler whatever the main thread holds.
+5. A bug never ends the link: an exception of the client while it handles a round
+   (anything but :class:`LinkClosedError`) is counted and logged once per kind
+   (:attr:`PioneerDriver.faults`), and the link is treated as lost: closed, and
+   re-opened with a fresh session after the backoff of rule 2. Meanwhile the robot's
+   own watchdog stops it (ARCOS stops after 2 s without a packet).
 """
 
 from __future__ import annotations
@@ -55,6 +60,7 @@ from shared.aria.sip import Sip
 from shared.byte_link import ByteLink, LinkClosedError
 from shared.clock import Clock, service_loop
 from shared.errors import IllegalEventError, TransportError
+from shared.handler_faults import HandlerFaults
 from shared.interfaces import BaseState
 
 logger = logging.getLogger(__name__)
@@ -90,6 +96,8 @@ class PioneerDriver:
         self._link: ByteLink | None = None
         self._next_open_ns = 0
         self._failures = 0  # failed connections in a row
+        self.faults = HandlerFaults(logger, "pioneer")
+        """Exceptions of the client during a round (rule 5)."""
         self._events: deque[PioneerEvent] = deque(maxlen=EVENT_QUEUE_LEN)
         self._closed = False
         self._io_lock = threading.RLock()
@@ -190,6 +198,10 @@ class PioneerDriver:
             except LinkClosedError as e:
                 with self._lock:
                     self._client.transport_lost(str(e))
+            except Exception as e:  # a bug; it must not end the link (rule 5)
+                self.faults.record("ARIA round", e)
+                with self._lock:
+                    self._client.transport_lost(f"internal error ({type(e).__name__})")
             with self._lock:
                 self._collect_events()
                 lost = self._client.link_state is LinkState.DISCONNECTED

@@ -275,6 +275,24 @@ def test_reset_notice_loses_the_link() -> None:
     assert LinkLost("the robot announced a controller reset (packet 0xFF)") in rig.events()
 
 
+def test_a_client_bug_is_counted_and_the_link_rebuilt(monkeypatch: pytest.MonkeyPatch) -> None:
+    rig = Rig()
+    rig.connect()
+    client = rig.driver._client
+
+    def broken(data: bytes, now_ns: int) -> None:
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr(client, "receive_data", broken)
+    rig.step()
+    rig.step()  # the thread's next round: no exception escapes
+    assert rig.driver.faults.counts() == {"ARIA round: ZeroDivisionError": 1}
+    assert LinkLost("internal error (ZeroDivisionError)") in rig.events()
+    monkeypatch.undo()
+    rig.connect()
+    assert len(rig.links) == 2 and rig.driver.state() is not None
+
+
 def test_factory_failures_back_off_and_retry_forever() -> None:
     rig = Rig(PioneerDriverConfig(reconnect_initial_ns=100 * MS, reconnect_max_ns=400 * MS))
     failures = []
