@@ -118,7 +118,12 @@ class TestStream:
             frame_of(source.read())
         first.close()
         with source:
-            assert isinstance(source.read_within(300_000_000), FrameStall)
+            # Frames received before the close may still come (under load, late); then none.
+            for _ in range(20):
+                if isinstance(source.read_within(300_000_000), FrameStall):
+                    break
+            else:
+                pytest.fail("frames kept coming after the server closed")
             with CameraServer(port=port) as second, publishing(second):
                 resumed = [frame_of(source.read_within(2_000_000_000)) for _ in range(3)]
                 stats = source.stats()
