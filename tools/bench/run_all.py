@@ -20,7 +20,7 @@ link 20 s, log 10 s, sim 5 s. Follow caches each seed's memory in ``OUT/follow``
 so a second full run takes about 22 min. ``faults`` (issue 8) adds about 2 min per
 repetition of its cases: one with ``--quick``, ten in the full run (measured 20 min).
 ``fuzz`` (issue 15) adds about 30 s with ``--quick`` (1,000 inputs per target) and
-about 25 min in the full run (100,000 per target; docs/fuzzing.md); ``hostile``
+about 16 min in the full run (100,000 per target; docs/fuzzing.md); ``hostile``
 about 2 min in both (it has no reduced size).
 """
 
