@@ -368,17 +368,15 @@ LOG_CASES: dict[str, Callable[[Path], None]] = {
 # -- running the real commands ----------------------------------------------------------
 
 #: The child: ``vmnav`` with its argv, then its peak resident memory (``VmHWM``, kB) into
-#: the file ``sys.argv[1]``. Not ``ru_maxrss`` from ``wait4``: Linux carries the parent's
-#: peak over fork and exec into the child's, so a child of a big process (a pytest worker
-#: after other tests) would report the parent's.
-_CHILD = """import re, sys
+#: the file ``sys.argv[1]`` (:mod:`tools.bench.memory_status` says why not ``ru_maxrss``).
+_CHILD = """import sys
 from pathlib import Path
+from tools.bench.memory_status import status_kb
 from tools.cli import main
 try:
     code = main(sys.argv[2:])
 finally:
-    status = Path("/proc/self/status").read_text()
-    Path(sys.argv[1]).write_text(re.search(r"VmHWM:\\s*(\\d+) kB", status).group(1))
+    Path(sys.argv[1]).write_text(str(status_kb("VmHWM")))
 sys.exit(code)
 """
 

@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.image_header import PNG_SIGNATURE
+from tools.bench.memory_status import status_kb
 
 #: Peak resident memory of the photo path on any file, MB (issue 15: "under 400 MB").
 PEAK_RSS_TARGET_MB = 400.0
@@ -175,11 +176,11 @@ def _child(photo: Path, seed: int) -> dict[str, object]:
                                              image=image, pixels_xy=np.array(features.pixels_xy),
                                              patches=np.array(features.patches))])
     localizer = Localizer.from_memory(memory, config.features, config.localize)
-    rss_before_kb = _status_kb("VmRSS")
+    rss_before_kb = status_kb("VmRSS")
     start = time.perf_counter()
     event = find_photo(photo, localizer, camera)
     decode_s = time.perf_counter() - start
-    peak_kb = _status_kb("VmHWM")
+    peak_kb = status_kb("VmHWM")
     assert isinstance(event, PhotoFound | PhotoNotFound)
     # An unreadable or refused photo is an error notice; "not in the memory" a warning.
     refused = isinstance(event, PhotoNotFound) and event.level == logging.ERROR
@@ -187,14 +188,6 @@ def _child(photo: Path, seed: int) -> dict[str, object]:
             "rss_increase_mb": round(max(0, peak_kb - rss_before_kb) / 1024, 1),
             "decode_s": round(decode_s, 4), "refused": refused,
             "found": isinstance(event, PhotoFound), "notice": event.text}
-
-
-def _status_kb(field: str) -> int:
-    """A memory figure of this process from ``/proc/self/status`` (Linux), KiB."""
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(f"{field}:"):
-            return int(line.split()[1])
-    raise RuntimeError(f"/proc/self/status has no {field}")
 
 
 if __name__ == "__main__":
