@@ -1,13 +1,18 @@
 """The free-licensed pictures the built-in textures are made from, and how to fetch them.
 
-Two packages, each fetched with its ordinary client and pinned to one version:
+Three packages, each fetched with its ordinary client and pinned to one version:
 
 * scikit-image's wheel from PyPI (``pip download``): its ``skimage/data/`` holds
   photographs whose licences its ``skimage/data/_fetchers.py`` states, function by
   function (CC0 or public domain for the ones used here);
 * Debian's ``gimp-data`` (``apt-get download``): GIMP's patterns,
   ``usr/share/gimp/2.0/patterns/*/*.pat``, photographic tiles covered by the
-  package's ``usr/share/doc/gimp-data/copyright`` stanza ``Files: *`` (GPL-3+).
+  package's ``usr/share/doc/gimp-data/copyright`` stanza ``Files: *`` (GPL-3+);
+* Debian's ``sweethome3d-furniture`` (``apt-get download``): furniture libraries
+  (``usr/share/sweethome3d/furniture/*.sh3f``, zip files) whose models carry
+  photographic textures, licensed per library in the package's copyright file:
+  BlendSwap-CC-0 (CC0), Scopia (CC-BY-3.0, Scopia Visual Interfaces Systems, s.l.),
+  KatorLegaz (CC-BY-3.0-US, Andrew Kator & Jennifer Legaz).
 
 :func:`fetch` downloads and unpacks both into a folder; :class:`Sources` reads
 pictures from it as grey arrays.
@@ -30,12 +35,15 @@ SKIMAGE_VERSION = "0.26.0"
 GIMP_DATA_VERSION = "2.10.34-1+deb12u10"
 SKIMAGE_WHERE = f"scikit-image {SKIMAGE_VERSION} wheel (PyPI), skimage/data/"
 GIMP_WHERE = f"Debian gimp-data {GIMP_DATA_VERSION}, usr/share/gimp/2.0/patterns/"
+SWEETHOME3D_VERSION = "1.8-1"
+SWEETHOME3D_WHERE = (f"Debian sweethome3d-furniture {SWEETHOME3D_VERSION}, "
+                     "usr/share/sweethome3d/furniture/")
 
 GreyImage = npt.NDArray[np.uint8]
 
 
 def fetch(folder: Path) -> Path:
-    """Download scikit-image's wheel and Debian's gimp-data into ``folder``, unpacked.
+    """Download scikit-image's wheel, gimp-data and sweethome3d-furniture, unpacked.
 
     Needs ``pip`` (this interpreter's), ``apt-get`` (after ``apt-get update``) and
     ``dpkg-deb``. Returns ``folder``.
@@ -52,6 +60,11 @@ def fetch(folder: Path) -> Path:
                    check=True)
     (deb,) = folder.glob("gimp-data_*.deb")
     subprocess.run(["dpkg-deb", "-x", str(deb), str(folder / "gimp-data")], check=True)
+    subprocess.run(["apt-get", "download", f"sweethome3d-furniture={SWEETHOME3D_VERSION}"],
+                   cwd=folder, check=True)
+    (deb,) = folder.glob("sweethome3d-furniture_*.deb")
+    subprocess.run(["dpkg-deb", "-x", str(deb), str(folder / "sweethome3d-furniture")],
+                   check=True)
     return folder
 
 
@@ -85,3 +98,19 @@ class Sources:
         if depth <= 2:
             return np.ascontiguousarray(pixels[..., 0])
         return cv2.cvtColor(np.ascontiguousarray(pixels[..., :3]), cv2.COLOR_RGB2GRAY)
+
+    def sweethome3d(self, library: str, member: str) -> GreyImage:
+        """The picture ``member`` of Sweet Home 3D's furniture library ``library``.sh3f, grey.
+
+        Args:
+            library: ``"BlendSwap-CC-0"``, ``"Scopia"``, ``"KatorLegaz"``.
+            member: the path inside the zip (``"blendswap-cc-0/table/Wood_013_COLOR.jpg"``).
+        """
+        path = (self.folder / "sweethome3d-furniture" / "usr/share/sweethome3d/furniture"
+                / f"{library}.sh3f")
+        with zipfile.ZipFile(path) as z:
+            data = z.read(member)
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
+        if image is None:
+            raise ValueError(f"{path}: {member} does not decode")
+        return image
