@@ -30,6 +30,7 @@ entry and the problem. Nothing falls back to a plain grey.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import functools
 import math
 from collections.abc import Mapping
@@ -149,8 +150,10 @@ class TextureLibrary:
         try:
             return self._textures[name]
         except KeyError:
-            raise ConfigError(self._source, f"unknown texture '{name}' ({len(self._textures)} "
-                                            f"textures; see its names())") from None
+            close = difflib.get_close_matches(name, self._textures, n=3)
+            hint = f"did you mean {', '.join(close)}?" if close else "see its names()"
+            raise ConfigError(self._source, f"unknown texture '{name}' "
+                                            f"({len(self._textures)} textures; {hint})") from None
 
     def names(self, kind: str | None = None) -> tuple[str, ...]:
         """The textures' names, sorted; only those of ``kind`` if given.

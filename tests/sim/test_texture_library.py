@@ -66,8 +66,11 @@ class TestBuiltin:
             builtin.names("roof")
 
     def test_unknown_name_is_an_error_naming_it(self, builtin: TextureLibrary) -> None:
-        with pytest.raises(ConfigError, match=r"textures\.toml: unknown texture 'brik'"):
-            builtin.get("brik")
+        with pytest.raises(ConfigError, match=r"textures\.toml: unknown texture 'brik_wall' "
+                                              r"\(\d+ textures; did you mean brick_wall"):
+            builtin.get("brik_wall")
+        with pytest.raises(ConfigError, match=r"unknown texture 'zzz' .*see its names\(\)"):
+            builtin.get("zzz")
 
     def test_tiling_textures_have_no_seam(self, builtin: TextureLibrary) -> None:
         # The step across each wrap-around seam is no more abrupt than the most abrupt

@@ -268,9 +268,9 @@ RECIPES: tuple[Recipe, ...] = (
            _sh3d(_BS, _OAK, "four recessed panels drawn"), CC0,
            lambda s: compose.door(_oak(s), 300, 4)),
     Recipe("door_wood_glazed", "door", (1.0, 2.1), False,
-           _sh3d(_BS, _WOOD13, "two panels drawn, the upper glazed with ")
+           _sh3d(_BS, _WOOD13, "turned upright, two panels drawn, the upper glazed with ")
            + _gimp("Sky/sky.pat"), GPL,
-           lambda s: compose.door(_wood13(s), 300, 2,
+           lambda s: compose.door(np.ascontiguousarray(np.rot90(_wood13(s))), 300, 2,
                                   glass=compose.glass(_sky(s), 200, 300, 215, _rng(16)))),
     Recipe("door_painted", "door", (1.0, 2.1), False,
            _sh3d("Scopia", "scopia/chimney/OcherTexture.jpg", "as paint; two panels drawn"),

@@ -51,13 +51,14 @@ def _box(image: GreyImage, x0: int, y0: int, x1: int, y1: int, level: int,
 
 
 def _bevel(image: GreyImage, x0: int, y0: int, x1: int, y1: int, width: int,
-           light: float = 1.25, dark: float = 0.7) -> None:
-    """Shade a recessed panel's bevel: lit from above left (top, left darker inside)."""
+           light: float = 22.0, dark: float = -30.0) -> None:
+    """Shade a recessed panel's bevel, lit from above: its top and left edges in shadow,
+    its bottom and right edges lit (grey levels added)."""
     im = image.astype(np.float64)
-    im[y0:y0 + width, x0:x1] *= dark
-    im[y0:y1, x0:x0 + width] *= dark
-    im[y1 - width:y1, x0:x1] *= light
-    im[y0:y1, x1 - width:x1] *= light
+    im[y0:y0 + width, x0:x1] += dark
+    im[y0 + width:y1, x0:x0 + width] += dark * 0.6
+    im[y1 - width:y1, x0 + width:x1] += light
+    im[y0 + width:y1 - width, x1 - width:x1] += light * 0.6
     image[:] = np.clip(im, 0, 255).astype(np.uint8)
 
 
@@ -66,7 +67,7 @@ def door(wood: GreyImage, ppm: float, panels: int, paint: GreyImage | None = Non
     """A door in its frame, 1.0 x 2.1 m: a 0.86 x 2.03 m leaf with recessed panels.
 
     Args:
-        wood: seamless wood, grain along x (it is turned so that the grain runs up).
+        wood: seamless wood, its grain running up the picture (as on a door's leaf).
         ppm: pixels per metre of the result.
         panels: recessed panels up the leaf (1 to 4); 0 for a flush leaf.
         paint: if given, a painted leaf: this texture instead of the wood.
@@ -76,9 +77,8 @@ def door(wood: GreyImage, ppm: float, panels: int, paint: GreyImage | None = Non
         (round(2.1 ppm), round(1.0 ppm)) uint8; the floor is the bottom row.
     """
     w, h = round(1.0 * ppm), round(2.1 * ppm)
-    grain = np.ascontiguousarray(np.rot90(wood))
-    out = tiled(relevel(grain, 150, 25), w, h)  # the frame (architrave), lighter wood
-    surface = paint if paint is not None else relevel(grain, 105, 28)
+    out = tiled(relevel(wood, 150, 25), w, h)  # the frame (architrave), lighter wood
+    surface = paint if paint is not None else relevel(wood, 105, 28)
     leaf = tiled(surface, round(0.86 * ppm), round(2.03 * ppm))
     lh, lw = leaf.shape
     margin = round(0.12 * ppm)
@@ -92,7 +92,7 @@ def door(wood: GreyImage, ppm: float, panels: int, paint: GreyImage | None = Non
                 leaf[y0:y1, margin:lw - margin] = cv2.resize(glass, (lw - 2 * margin, panel_h))
                 _box(leaf, margin, y0, lw - margin - 1, y1 - 1, 60, max(2, round(0.015 * ppm)))
             else:
-                _bevel(leaf, margin, y0, lw - margin, y1, max(2, round(0.02 * ppm)))
+                _bevel(leaf, margin, y0, lw - margin, y1, max(2, round(0.025 * ppm)))
     x0 = (w - lw) // 2
     out[h - lh:, x0:x0 + lw] = leaf
     _box(out, x0, h - lh, x0 + lw - 1, h - 1, 45, 2)  # the gap around the leaf
@@ -110,9 +110,14 @@ def glass(sky: GreyImage, width_px: int, height_px: int, level: float,
           rng: np.random.Generator) -> GreyImage:
     """Glass seen from inside (``level`` ~ 230: daylight) or outside (~ 70: reflections).
 
-    The sky photograph, levelled and stretched, plus a diagonal sheen.
+    The sky photograph (rolled and flipped at random, so two panes differ), levelled
+    and stretched, plus a diagonal sheen.
     """
-    base = relevel(cv2.resize(sky, (width_px, height_px), interpolation=cv2.INTER_CUBIC),
+    sky = np.roll(sky, tuple(int(v) for v in rng.integers(0, sky.shape)), axis=(0, 1))
+    if rng.random() < 0.5:
+        sky = sky[:, ::-1]
+    base = relevel(cv2.resize(np.ascontiguousarray(sky), (width_px, height_px),
+                              interpolation=cv2.INTER_CUBIC),
                    level, 10 if level > 128 else 22).astype(np.float64)
     y, x = np.mgrid[0:height_px, 0:width_px]
     angle = rng.uniform(0.3, 0.6)

@@ -20,7 +20,7 @@ import numpy as np
 
 from sim.texture_library import KINDS, TextureLibrary
 
-CELL_PX = 180
+CELL_PX = 150
 LABEL_PX = 30
 COLUMNS = 10
 
