@@ -60,6 +60,9 @@ def test_measure_gives_the_figures(small_set: Path) -> None:
     assert len(figures["load_s"]) == 2 and figures["load_s_median"] > 0
     assert figures["px_per_m_min"] == 64.0  # the boards: 64 px over 1 m
     assert figures["seam_ratio_max"] <= 1.0
+    # The poster is random noise: corners all over it; the boards' rings give fewer.
+    assert figures["corners_per_m2_median_by_kind"]["picture"] > 100
+    assert set(figures["corners_per_m2_fewest"]) == {"poster", "boards"}
 
 
 def test_measure_refuses_no_repeats(capsys: pytest.CaptureFixture[str]) -> None:
