@@ -35,7 +35,6 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +49,9 @@ from sim.procedural_textures import GENERATORS
 #: What a texture is for; a world asks for textures of a kind.
 KINDS = ("wall", "floor", "ceiling", "door", "window", "furniture", "picture", "sign",
          "facade", "tree", "person", "lamp")
+
+#: The built-in set's manifest.
+BUILTIN_MANIFEST = Path(__file__).resolve().parent / "textures" / "textures.toml"
 
 #: Largest picture a manifest may name, pixels (a 4096 x 4096 texture).
 MAX_TEXTURE_PIXELS = 1 << 24
@@ -123,8 +125,9 @@ class TextureLibrary:
     @functools.cache
     def builtin(cls) -> TextureLibrary:
         """The vendored set, ``sim/textures/`` (read once per process)."""
-        with resources.as_file(resources.files("sim") / "textures" / "textures.toml") as path:
-            return cls.load(path)
+        # The folder beside this module, not importlib.resources: the manifest names
+        # pictures beside it, and as_file() may copy a single file out of its folder.
+        return cls.load(BUILTIN_MANIFEST)
 
     @classmethod
     def load(cls, manifest: Path) -> TextureLibrary:

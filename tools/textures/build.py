@@ -22,10 +22,11 @@ from pathlib import Path
 
 import cv2
 
+from sim.texture_library import BUILTIN_MANIFEST
 from tools.textures.catalogue import RECIPES, Recipe
 from tools.textures.sources import Sources, fetch
 
-DEFAULT_OUT = Path(__file__).resolve().parents[2] / "sim" / "textures"
+DEFAULT_OUT = BUILTIN_MANIFEST.parent
 JPEG_QUALITY = 90
 
 

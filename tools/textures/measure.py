@@ -26,7 +26,6 @@ import statistics
 import sys
 import time
 from collections.abc import Sequence
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,7 @@ import numpy as np
 
 from robot.config import FeatureConfig
 from robot.vision.features import detect_harris
-from sim.texture_library import KINDS, Texture, TextureLibrary
+from sim.texture_library import BUILTIN_MANIFEST, KINDS, Texture, TextureLibrary
 from tools.bench.cpu import pin_to_one_core
 from tools.textures.seamless import seam_ratio
 
@@ -106,11 +105,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"--view-px-per-m: must be > 0, got {args.view_px_per_m}", file=sys.stderr)
         return 2
     cpus = pin_to_one_core()
-    if args.manifest is not None:
-        figures = measure(args.manifest, args.repeats, args.view_px_per_m)
-    else:
-        with resources.as_file(resources.files("sim") / "textures" / "textures.toml") as path:
-            figures = measure(path, args.repeats, args.view_px_per_m)
+    manifest = args.manifest if args.manifest is not None else BUILTIN_MANIFEST
+    figures = measure(manifest, args.repeats, args.view_px_per_m)
     print(json.dumps({"cpus": cpus, **figures}))
     return 0
 
