@@ -8,6 +8,8 @@ pixels per metre (``ppm``) so that a drawn element has its real size.
 
 from __future__ import annotations
 
+import itertools
+
 import cv2
 import numpy as np
 
@@ -533,4 +535,91 @@ def metal_door(metal: GreyImage, ppm: float) -> GreyImage:
          bar_y + round(0.025 * ppm), 70, 2)
     kick = round(0.25 * ppm)
     out[h - kick:, x0 + 4:x0 + lw - 4] = relevel(out[h - kick:, x0 + 4:x0 + lw - 4], 200, 8)
+    return out
+
+
+def glass_doors(metal: GreyImage, outside: GreyImage, ppm: float) -> GreyImage:
+    """An entrance, 2.0 x 2.3 m: two glazed leaves in metal frames, a transom above.
+
+    Args:
+        metal: seamless metal, for the frames.
+        outside: the bright view through the glass (already of its final levels).
+
+    Returns:
+        (round(2.3 ppm), round(2.0 ppm)) uint8; the floor is the bottom row.
+    """
+    w, h = round(2.0 * ppm), round(2.3 * ppm)
+    frame = tiled(relevel(metal, 110, 10), w, h)
+    out = frame.copy()
+    bar = round(0.06 * ppm)
+    transom_y = round(0.22 * ppm)
+    glass_w, glass_h = w - 2 * bar, h - bar
+    out[bar:h, bar:w - bar] = cv2.resize(outside, (glass_w, glass_h - bar + bar),
+                                         interpolation=cv2.INTER_CUBIC)[:h - bar]
+    out[transom_y:transom_y + bar, :] = frame[transom_y:transom_y + bar, :]
+    mid = w // 2
+    out[:, mid - bar:mid + bar] = frame[:, mid - bar:mid + bar]  # the two leaves' stiles
+    kick = round(0.15 * ppm)
+    out[h - kick:, :] = frame[h - kick:, :]
+    for x0, x1 in ((bar, mid - bar), (mid + bar, w - bar)):
+        bar_y = h - round(1.0 * ppm)
+        _box(out, x0 + round(0.05 * ppm), bar_y - round(0.02 * ppm), x1 - round(0.05 * ppm),
+             bar_y + round(0.02 * ppm), 200)
+        _box(out, x0 + round(0.05 * ppm), bar_y - round(0.02 * ppm), x1 - round(0.05 * ppm),
+             bar_y + round(0.02 * ppm), 60, 1)
+    return out
+
+
+def whiteboard(ppm: float, rng: np.random.Generator) -> GreyImage:
+    """A whiteboard, 1.8 x 1.2 m: an aluminium frame, a pen tray, marker notes and a sketch.
+
+    Returns:
+        (round(1.2 ppm), round(1.8 ppm)) uint8.
+    """
+    w, h = round(1.8 * ppm), round(1.2 * ppm)
+    y, x = np.mgrid[0:h, 0:w]
+    board = 232 + 10 * np.sin((x + 0.6 * y) / w * 3.0)  # a broad sheen
+    out = np.clip(board, 0, 255).astype(np.uint8)
+    font = cv2.FONT_HERSHEY_SCRIPT_SIMPLEX
+    scale = ppm / 300.0
+    lines = ["Meeting 10:00", "- teach route", "- repeat x20", "TODO: lens?"]
+    for i, text in enumerate(lines):
+        cv2.putText(out, text, (round(0.08 * ppm), round((0.18 + 0.14 * i) * ppm)), font,
+                    1.3 * scale, int(rng.choice([20, 45, 70])), max(1, round(2 * scale)),
+                    cv2.LINE_AA)
+    # A sketch: boxes joined by arrows.
+    boxes = [(1.0, 0.2), (1.45, 0.2), (1.0, 0.6), (1.45, 0.6)]
+    for bx, by in boxes:
+        _box(out, round(bx * ppm), round(by * ppm), round((bx + 0.25) * ppm),
+             round((by + 0.18) * ppm), 40, max(2, round(2 * scale)))
+    for (ax, ay), (bx, by) in itertools.pairwise(boxes):
+        cv2.arrowedLine(out, (round((ax + 0.125) * ppm), round((ay + 0.18) * ppm)),
+                        (round((bx + 0.125) * ppm), round(by * ppm)), 40,
+                        max(2, round(2 * scale)), cv2.LINE_AA, tipLength=0.08)
+    frame = round(0.02 * ppm)
+    _box(out, 0, 0, w - 1, h - 1, 170, frame)
+    tray = round(0.04 * ppm)
+    out[h - tray:, :] = 150
+    out[h - tray:h - tray + 2, :] = 200
+    return out
+
+
+def radiator(metal: GreyImage, ppm: float, width_m: float, height_m: float) -> GreyImage:
+    """A column radiator, painted white: rounded vertical columns every 5 cm, a valve.
+
+    Returns:
+        (round(height_m ppm), round(width_m ppm)) uint8.
+    """
+    w, h = round(width_m * ppm), round(height_m * ppm)
+    base = relevel(tiled(metal, w, h), 215, 5).astype(np.float64)
+    pitch = 0.05 * ppm
+    x = np.arange(w)
+    phase = (x % pitch) / pitch  # 0..1 across a column
+    shade = 35.0 * np.cos(np.pi * (phase - 0.4)) - 25.0  # lit from the left, gaps in shadow
+    out = base + shade[None, :]
+    out[:round(0.03 * ppm), :] = 230  # the top rail
+    out[h - round(0.03 * ppm):, :] = 200  # the bottom rail
+    out = np.clip(out, 0, 255).astype(np.uint8)
+    r = round(0.02 * ppm)
+    cv2.circle(out, (w - 2 * r, h - 3 * r), r, 120, -1, cv2.LINE_AA)
     return out
