@@ -69,13 +69,13 @@ class TestStoredFeatures:
 
 class TestMatch:
     def test_guided_by_a_predicted_rotation(self, front_end: FrontEnd) -> None:
-        """B sees A's points turned 30 degrees about the vertical: a +-15 px window around
-        A's own pixels misses them, around the predicted ones finds them all."""
+        """B sees A's points turned 30 degrees about the vertical: a 5 degree cone around
+        A's own bearings misses them, around the predicted ones finds them all."""
         feats_a = front_end.describe(_textured(3))
         R_b_a = _rotation_y(np.radians(30.0))
         moved, valid = CAMERA.project(feats_a.bearings @ R_b_a.T)
         feats_b = front_end.features(moved[valid], feats_a.descriptors[valid])
-        matching = MatchConfig(search_radius_px=15.0)
+        matching = MatchConfig(search_radius_deg=5.0)
         assert len(front_end.match(feats_a, feats_b, matching)) < 0.2 * len(feats_b)
         guided = front_end.match(feats_a, feats_b, matching, predicted=R_b_a)
         assert len(guided) == len(feats_b)
@@ -84,5 +84,5 @@ class TestMatch:
 
     def test_predicted_must_be_a_matrix(self, front_end: FrontEnd) -> None:
         feats = front_end.describe(_textured(4))
-        with pytest.raises(ShapeError, match="predicted"):
+        with pytest.raises(ShapeError, match="R_b_a: expected shape"):
             front_end.match(feats, feats, MatchConfig(), predicted=np.eye(2))
