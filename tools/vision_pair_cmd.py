@@ -72,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
         "rotation_vector_deg": [round(float(x), 4) for x in rotation_vector_deg(fit.R_b_a)],
         "rotation_deg": round(float(np.linalg.norm(rotation_vector_deg(fit.R_b_a))), 4),
         "translation_direction": [round(float(x), 5) for x in fit.t_b_a],
+        # Near 0 the views barely moved apart and the direction means little.
+        "parallax_deg": round(float(np.degrees(fit.parallax_rad)), 3),
         "convention": "X_b = R X_a + t",
         "time_ms": round(elapsed_ns / 1e6, 2),
     }

@@ -46,6 +46,7 @@ def test_the_real_pair(calibrations: tuple[Path, Path], tmp_path: Path,
     assert report["corners_a"] >= report["matches"] >= report["inliers"] > 100
     assert report["ok"] is True and report["convention"] == "X_b = R X_a + t"
     assert report["time_ms"] > 0
+    assert report["parallax_deg"] > 0.5  # 0.12 m of baseline, points a few metres away
     rotvec = np.radians(report["rotation_vector_deg"])
     assert report["rotation_deg"] == pytest.approx(np.degrees(np.linalg.norm(rotvec)), abs=1e-3)
     direction = np.array(report["translation_direction"])
@@ -69,6 +70,7 @@ def test_one_calibration_for_both(calibrations: tuple[Path, Path],
     report = json.loads(capsys.readouterr().out)
     # The same image twice: every match is exact; no translation to recover.
     assert report["matches"] == report["corners_a"] and report["rotation_deg"] < 0.01
+    assert report["parallax_deg"] < 0.01
 
 
 def fails(capsys: pytest.CaptureFixture[str], code: int, *fragments: str) -> None:

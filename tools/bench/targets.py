@@ -3,8 +3,9 @@
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
 6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
 input crashes or hangs a decoder, and every attack of ``bench hostile`` is met, 16: real
-images in ``bench real``; DESIGN.md sec. 6 gathers them). The simulator's, the vision benchmark's and the hostile parts' own
-modules hold theirs (their JSON prints them) and are read from there, not copied.
+images in ``bench real``; DESIGN.md sec. 6 gathers them). The simulator's, the vision
+benchmark's, the real images' and the hostile parts' own modules hold theirs (their JSON
+prints them) and are read from there, not copied.
 
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
