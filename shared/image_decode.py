@@ -11,8 +11,8 @@ itself (a photo goal, a memory's key images, a log's camera frames) goes through
 2. its structure is walked (:func:`shared.image_header.read_image_header`): every
    declared length is checked against the bytes there, so a bogus chunk length cannot
    make the decoder allocate or read gigabytes. A user's own files (calibration
-   images, ``formats=FILE_FORMATS``) may also be Netpbm or BMP, walked by
-   :mod:`shared.image_header_netpbm_bmp`;
+   images, ``formats=FILE_FORMATS``) may also be Netpbm, BMP, TIFF or WebP, walked by
+   :mod:`shared.image_header_files`;
 3. the declared picture is held to the caller's pixel budget (at most
    :data:`MAX_PIXELS`, each side at most :data:`MAX_SIDE_PX`; a photo goal's budget
    comes from the camera, :func:`photo_pixel_limit`), so a decompression bomb is
@@ -50,7 +50,7 @@ from shared.image_header import (
     ImageHeader,
     read_image_header,
 )
-from shared.image_header_netpbm_bmp import BMP_MAGIC, NETPBM_MAGICS, read_netpbm_or_bmp_header
+from shared.image_header_files import MAGICS, read_file_image_header
 
 #: Largest picture decoded, pixels (~33.5 Mpx, a 6700x5000 photo).
 MAX_PIXELS = 1 << 25
@@ -66,7 +66,8 @@ GreyImage = npt.NDArray[np.uint8]  # (H, W) uint8
 
 #: What comes from a peer, an upload or a memory: PNG or JPEG only.
 WIRE_FORMATS = frozenset({ImageFormat.PNG, ImageFormat.JPEG})
-#: What a user's own files may be (calibration images): also Netpbm (PGM...) and BMP.
+#: What a user's own files may be (calibration images): also Netpbm (PGM...), BMP, TIFF
+#: and WebP.
 FILE_FORMATS = frozenset(ImageFormat)
 
 
@@ -103,8 +104,8 @@ def check_image(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
         raise error(where, f"{len(data)} bytes, more than the {MAX_FILE_BYTES} an image "
                            f"file may have")
     local = formats - WIRE_FORMATS
-    if local and data.startswith((BMP_MAGIC, *NETPBM_MAGICS)):
-        header = read_netpbm_or_bmp_header(data, where, error)
+    if local and data.startswith(MAGICS):
+        header = read_file_image_header(data, where, error)
         if header.format not in formats:
             raise error(where, f"{header.format.value} images are not accepted here")
     elif local and not data.startswith((PNG_SIGNATURE, JPEG_SOI)):

@@ -1,8 +1,8 @@
 """``vmnav calibrate``: calibrate the fisheye camera, or import a calibration.
 
 From chessboard images: reads every image of a folder in a format OpenCV reads and
-:mod:`shared.image_decode` checks (PNG, JPEG, PGM/PPM/PBM, BMP; sorted by name, numbers
-in numeric order), finds the board in each, fits the unified sphere model with
+:mod:`shared.image_decode` checks (PNG, JPEG, PGM/PPM/PBM, BMP, TIFF, WebP; sorted by
+name, numbers in numeric order), finds the board in each, fits the unified sphere model with
 ``cv2.omnidir.calibrate`` (:mod:`robot.camera_calibration`), prints what each image
 contributed, a warning for each duplicate or outlier view
 (:mod:`robot.calibration_checks`) and the result, and writes the calibration JSON
@@ -33,7 +33,8 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".jpe", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".dib")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".jpe", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".dib",
+                  ".tif", ".tiff", ".webp")
 #: What the ``source`` field of every file this command writes starts with.
 WRITER = "vmnav calibrate"
 
@@ -44,9 +45,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "calibrate",
         help="calibrate the fisheye camera from chessboard images, or import a calibration",
         description="Find a chessboard in every image of IMAGES_DIR (png, jpg, pgm, ppm, "
-        "pbm, bmp), fit the unified sphere camera model with cv2.omnidir.calibrate and write "
-        "the calibration JSON; or, with --from-equidistant, fit the unified model to an "
-        "equidistant (Kannala-Brandt) calibration and write it.",
+        "pbm, bmp, tif, webp), fit the unified sphere camera model with "
+        "cv2.omnidir.calibrate and write the calibration JSON; or, with --from-equidistant, "
+        "fit the unified model to an equidistant (Kannala-Brandt) calibration and write it.",
     )
     p.add_argument("images_dir", metavar="IMAGES_DIR", type=Path, nargs="?",
                    help="folder of board images")

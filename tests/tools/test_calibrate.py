@@ -211,18 +211,18 @@ class TestBadInput:
 
 
 @pytest.mark.slow
-def test_reads_pgm_and_bmp_and_warns_of_a_duplicate_view(
+def test_reads_pgm_bmp_tiff_and_warns_of_a_duplicate_view(
     views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     for k, path in enumerate(sorted(views.glob("*.png"))[:6]):
         image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-        cv2.imwrite(str(tmp_path / f"v{k}.{'pgm' if k % 2 else 'bmp'}"), image)
+        cv2.imwrite(str(tmp_path / f"v{k}.{('bmp', 'pgm', 'tif')[k % 3]}"), image)
     shutil.copy(tmp_path / "v1.pgm", tmp_path / "v10.pgm")
     assert calibrate(tmp_path, tmp_path / "c.json") == 0
     out = capsys.readouterr().out
     assert "7 images in" in out and "board found in 7" in out
     # Numbers in names sort by value: v10 after v5.
-    assert out.index("v5.pgm: used") < out.index("v10.pgm: used")
+    assert out.index("v5.tif: used") < out.index("v10.pgm: used")
     assert ("warning: v10.pgm: nearly the same board pose as v1.pgm (corners 0.0 px apart, "
             "RMS): a duplicate view") in out
     assert "outlier" not in out

@@ -1,4 +1,4 @@
-"""Tests of shared/image_header_netpbm_bmp.py and of decoding local files in those formats."""
+"""Tests of shared/image_header_files.py and of decoding a user's files in those formats."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from shared.errors import CalibrationError, InputError
 from shared.image_decode import FILE_FORMATS, decode_grey
 from shared.image_header import ImageFormat, ImageHeader
-from shared.image_header_netpbm_bmp import read_netpbm_or_bmp_header
+from shared.image_header_files import read_file_image_header
 
 GREY = np.random.default_rng(5).integers(0, 256, (48, 64), dtype=np.uint8)
 COLOUR = np.random.default_rng(6).integers(0, 256, (48, 64, 3), dtype=np.uint8)
@@ -23,7 +23,7 @@ def encoded(suffix: str, image: np.ndarray, params: tuple[int, ...] = ()) -> byt
 
 def refused(data: bytes) -> str:
     with pytest.raises(InputError) as info:
-        read_netpbm_or_bmp_header(data, "view.pgm")
+        read_file_image_header(data, "view.pgm")
     message = str(info.value)
     assert message.startswith("view.pgm: ") and "\n" not in message
     return message
@@ -37,11 +37,18 @@ def refused(data: bytes) -> str:
     (".pbm", GREY, (), ImageHeader(ImageFormat.NETPBM, 64, 48, 1, 1)),
     (".bmp", GREY, (), ImageHeader(ImageFormat.BMP, 64, 48, 3, 8)),
     (".bmp", COLOUR, (), ImageHeader(ImageFormat.BMP, 64, 48, 3, 24)),
-], ids=["P5", "P5-16bit", "P2", "P6", "P4", "bmp8", "bmp24"])
+    (".tif", GREY, (), ImageHeader(ImageFormat.TIFF, 64, 48, 1, 8)),
+    (".tif", COLOUR, (cv2.IMWRITE_TIFF_COMPRESSION, 1),
+     ImageHeader(ImageFormat.TIFF, 64, 48, 3, 8)),
+    (".tif", GREY.astype(np.uint16), (), ImageHeader(ImageFormat.TIFF, 64, 48, 1, 16)),
+    (".webp", GREY, (), ImageHeader(ImageFormat.WEBP, 64, 48, 3, 8)),
+    (".webp", COLOUR, (cv2.IMWRITE_WEBP_QUALITY, 80), ImageHeader(ImageFormat.WEBP, 64, 48, 3, 8)),
+], ids=["P5", "P5-16bit", "P2", "P6", "P4", "bmp8", "bmp24", "tiff-lzw", "tiff-raw-colour",
+        "tiff-16bit", "webp-lossless", "webp-lossy"])
 def test_headers_of_opencvs_files(suffix: str, image: np.ndarray, params: tuple[int, ...],
                                   header: ImageHeader) -> None:
     data = encoded(suffix, image, params)
-    assert read_netpbm_or_bmp_header(data, "view") == header
+    assert read_file_image_header(data, "view") == header
     decoded = decode_grey(data, "view", formats=FILE_FORMATS)
     assert np.array_equal(decoded, cv2.imdecode(np.frombuffer(data, np.uint8),
                                                 cv2.IMREAD_GRAYSCALE))
@@ -49,7 +56,7 @@ def test_headers_of_opencvs_files(suffix: str, image: np.ndarray, params: tuple[
 
 def test_netpbm_comments_are_skipped() -> None:
     data = b"P5\n# made by hand\n4 # width\n2\n255\n" + bytes(range(8))
-    assert read_netpbm_or_bmp_header(data, "x") == ImageHeader(ImageFormat.NETPBM, 4, 2, 1, 8)
+    assert read_file_image_header(data, "x") == ImageHeader(ImageFormat.NETPBM, 4, 2, 1, 8)
 
 
 @pytest.mark.parametrize(("data", "problem"), [
@@ -73,12 +80,31 @@ def test_broken_bmp() -> None:
     assert "shorter than its headers" in refused(b"BM" + bytes(10))
 
 
+def test_broken_tiff() -> None:
+    data = encoded(".tif", GREY)
+    assert "first IFD at byte" in refused(data[:4] + b"\xff\xff\x00\x00" + data[8:])
+    ifd = int.from_bytes(data[4:8], "little")
+    assert "entries, past the end of the file" in refused(data[:ifd + 14])
+    many = data[:ifd] + (5000).to_bytes(2, "little") + data[ifd + 2:]
+    assert "declares 5000 entries (at most 1024)" in refused(many)
+    assert "shorter than its header" in refused(b"II*\x00")
+
+
+def test_broken_webp() -> None:
+    data = encoded(".webp", COLOUR, (cv2.IMWRITE_WEBP_QUALITY, 80))
+    assert "RIFF declares" in refused(data[:-10])
+    assert "start code" in refused(data[:23] + b"\x00" + data[24:])
+    assert "first chunk b'ABCD'" in refused(data[:12] + b"ABCD" + data[16:])
+    assert "without a WEBP header" in refused(b"RIFF" + bytes(40))
+
+
 def test_other_formats_and_wire_callers() -> None:
-    assert "not a Netpbm or BMP image" in refused(b"GIF89a")
+    assert "not a Netpbm, BMP, TIFF or WebP image" in refused(b"GIF89a")
     pgm = encoded(".pgm", GREY)
     # A peer or a memory never gets past PNG and JPEG.
     with pytest.raises(InputError, match="not a PNG or JPEG image"):
         decode_grey(pgm, "photo")
-    with pytest.raises(CalibrationError, match=r"x.tif: not an image of a format read here "
-                                               r"\(PNG, JPEG, Netpbm, BMP; the file starts with"):
-        decode_grey(encoded(".tif", GREY), "x.tif", error=CalibrationError, formats=FILE_FORMATS)
+    with pytest.raises(CalibrationError, match=r"x\.jp2: not an image of a format read here "
+                                               r"\(PNG, JPEG, Netpbm, BMP, TIFF, WebP; the file "
+                                               r"starts with"):
+        decode_grey(encoded(".jp2", GREY), "x.jp2", error=CalibrationError, formats=FILE_FORMATS)
