@@ -5,11 +5,13 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shared.errors import CalibrationError, InputError
 from shared.image_decode import FILE_FORMATS, decode_grey
 from shared.image_header import ImageFormat, ImageHeader
-from shared.image_header_files import read_file_image_header
+from shared.image_header_files import MAGICS, read_file_image_header
 
 GREY = np.random.default_rng(5).integers(0, 256, (48, 64), dtype=np.uint8)
 COLOUR = np.random.default_rng(6).integers(0, 256, (48, 64, 3), dtype=np.uint8)
@@ -108,3 +110,40 @@ def test_other_formats_and_wire_callers() -> None:
                                                r"\(PNG, JPEG, Netpbm, BMP, TIFF, WebP; the file "
                                                r"starts with"):
         decode_grey(encoded(".jp2", GREY), "x.jp2", error=CalibrationError, formats=FILE_FORMATS)
+
+
+SEEDS = [encoded(".pgm", GREY[:8, :8]), encoded(".pgm", GREY[:4, :4], (cv2.IMWRITE_PXM_BINARY, 0)),
+         encoded(".pbm", GREY[:8, :8]), encoded(".bmp", COLOUR[:8, :8]),
+         encoded(".bmp", GREY[:8, :8]), encoded(".tif", GREY[:8, :8]),
+         encoded(".webp", GREY[:8, :8]), encoded(".webp", COLOUR[:16, :16],
+                                                 (cv2.IMWRITE_WEBP_QUALITY, 80))]
+
+
+@settings(derandomize=True, max_examples=400, deadline=None)
+@given(st.sampled_from(SEEDS),
+       st.lists(st.tuples(st.integers(0, 1 << 16), st.integers(0, 255)), max_size=8),
+       st.integers(0, 1 << 16))
+def test_fuzz_mutated_files_give_a_header_or_an_input_error(
+        seed: bytes, flips: list[tuple[int, int]], cut: int) -> None:
+    data = bytearray(seed)
+    for at, value in flips:
+        data[at % len(data)] = value
+    data = data[:max(1, len(data) - cut % len(data))]
+    try:
+        header = read_file_image_header(bytes(data), "fuzz")
+    except InputError as e:
+        assert "\n" not in str(e)
+    else:
+        assert header.width_px >= 1 and header.height_px >= 1
+
+
+@settings(derandomize=True, max_examples=300, deadline=None)
+@given(st.binary(max_size=300))
+def test_fuzz_random_bytes_after_a_magic(tail: bytes) -> None:
+    for start in MAGICS:
+        try:
+            header = read_file_image_header(start + tail, "fuzz")
+        except InputError as e:
+            assert "\n" not in str(e)
+        else:
+            assert header.width_px >= 1 and header.height_px >= 1
