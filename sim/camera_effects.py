@@ -63,8 +63,9 @@ FloatArray = npt.NDArray[np.float64]
 
 _BLUR_GRID_PX = 8
 """The blur field is computed on a grid this many pixels apart, then interpolated."""
-_MIN_BLUR_PX = 0.25
-"""Blur shorter than this (px, the longest in the image) is not drawn."""
+_MIN_BLUR_PX = 0.4
+"""Blur shorter than this (px) is not drawn (rows of the image where all of it is shorter
+are left as they are)."""
 _MAX_TAP_SPACING_PX = 1.5
 """Blur taps are at most this far apart, px (bilinear taps: a smooth blur)."""
 _MAX_BLUR_LEVELS = 3
@@ -249,22 +250,45 @@ class CameraEffects:
         if not rates.any():
             return light, 0.0
         field = ((rates * np.float32(exposure_s)) @ self._blur_basis).reshape(self._blur_shape)
-        length = math.sqrt(float(np.einsum("ijk,ijk->ij", field, field).max()))
+        row_length = np.sqrt(np.einsum("ijk,ijk->ij", field, field).max(axis=1))  # per grid row
+        length = float(row_length.max())
         if length < _MIN_BLUR_PX:
             return light, 0.0
-        levels = math.ceil(math.log(length / _MAX_TAP_SPACING_PX + 1.0, 3.0))
-        levels = min(max(levels, 1), _MAX_BLUR_LEVELS)
         field = cv2.resize(field, self._roi_size, interpolation=cv2.INTER_LINEAR)
-        step = 1.0 / (3**levels - 1)  # tap spacing, a fraction of the blur vector
-        side = _side_weight(length) if levels == 1 else 1.0 / 3.0
-        for level in range(levels):
-            s = step * 3**level
-            ahead = cv2.remap(light, cv2.scaleAdd(field, s, self._grid), None,
-                              cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            behind = cv2.remap(light, cv2.scaleAdd(field, -s, self._grid), None,
-                               cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            light = cv2.addWeighted(cv2.add(ahead, behind), side, light, 1.0 - 2.0 * side, 0.0)
+        for rows, span_length in self._blurred_spans(row_length):
+            levels = math.ceil(math.log(span_length / _MAX_TAP_SPACING_PX + 1.0, 3.0))
+            levels = min(max(levels, 1), _MAX_BLUR_LEVELS)
+            step = 1.0 / (3**levels - 1)  # tap spacing, a fraction of the blur vector
+            side = _side_weight(span_length) if levels == 1 else 1.0 / 3.0
+            span_field, grid = field[rows], self._grid[rows]
+            for level in range(levels):  # each level reads the previous one, in place
+                s = step * 3**level
+                ahead = cv2.remap(light, cv2.scaleAdd(span_field, s, grid), None,
+                                  cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                behind = cv2.remap(light, cv2.scaleAdd(span_field, -s, grid), None,
+                                   cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                light[rows] = cv2.addWeighted(cv2.add(ahead, behind), side, light[rows],
+                                              1.0 - 2.0 * side, 0.0)
         return light, length
+
+    def _blurred_spans(self, row_length: FloatArray) -> list[tuple[slice, float]]:
+        """Row spans of the roi whose blur is long enough to draw, with their longest blur.
+
+        Args:
+            row_length: (h,) longest blur of each row of the coarse grid, px.
+        """
+        active = row_length >= _MIN_BLUR_PX
+        # Interpolation reads the neighbouring grid rows too.
+        active[1:] |= active[:-1].copy()
+        active[:-1] |= active[1:].copy()
+        h = row_length.shape[0]
+        height = self._roi_size[1]
+        spans = []
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], active.astype(np.int8), [0]])))
+        for i0, i1 in zip(edges[::2], edges[1::2], strict=True):
+            rows = slice(math.floor(i0 * height / h), min(math.ceil(i1 * height / h), height))
+            spans.append((rows, float(row_length[i0:i1].max())))
+        return spans
 
     def _add_noise(self, signal: npt.NDArray[np.float32], gain: float) -> None:
         """Add shot and read noise to ``signal`` (grey levels) in place."""

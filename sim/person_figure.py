@@ -190,6 +190,12 @@ class PersonFigures:
             occluders: (distance along the floor from the camera, m; height, m) of each
                 wall or piece of furniture between the camera and the figure.
         """
+        distance = math.hypot(pose.x_m - float(centre_w[0]), pose.y_m - float(centre_w[1]))
+        near = max(distance - pose.radius_m, 1e-6)
+        cz = float(centre_w[2])
+        if any(top_m >= cz + along_m * (pose.height_m - cz) / near
+               for along_m, top_m in occluders):
+            return  # even the line of sight to the top of the head is blocked
         box = self._box(pose, R_cam_world, centre_w)
         if box is None:
             return
@@ -202,7 +208,6 @@ class PersonFigures:
         if sampled != size:
             rays_w = cv2.resize(rays_w, sampled, interpolation=cv2.INTER_LINEAR)
             rays_w /= np.linalg.norm(rays_w, axis=2, keepdims=True)
-        distance = math.hypot(pose.x_m - float(centre_w[0]), pose.y_m - float(centre_w[1]))
         grey, cover = self._shade(rays_w, pose, look, centre_w, occluders,
                                   self._px_per_rad * scale / distance)
         grey *= cover
