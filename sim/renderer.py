@@ -14,7 +14,8 @@ Per frame (all vectorised except the per-patch paint):
    horizontal and vertical half-sides), so patches foreshorten and turn with the
    fisheye distortion, and their centres land at sub-pixel positions.
 5. People are drawn as dark silhouettes (projected vertical cylinders).
-6. A global illumination gain (slow sinusoid) and additive Gaussian sensor noise
+6. A global illumination gain (slow sinusoid, times the scene's light change
+   ``Simulation.light_gain_at``) and additive Gaussian sensor noise
    (from a bank of pre-drawn noise images) are applied; outside the lens's image
    circle stays black.
 
@@ -161,7 +162,7 @@ class FisheyeRenderer:
         self._draw_people(sim, image, R_cam_world, centre_w)
         self._paint_all(image, ids, affines, dist)
 
-        gain = self.illumination_gain(sim.now_ns)
+        gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
         image = cv2.convertScaleAbs(image, alpha=gain)
         if self.config.noise_sigma > 0:
             j = int(self._rng.integers(_NOISE_BANK_SIZE))
