@@ -12,6 +12,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
+from tools.harness.scene_args import add_change_arguments
 from tools.harness.sim_args import add_sim_arguments
 
 
@@ -64,8 +65,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
     follow.add_argument("--goal", type=int, metavar="ID",
                         help="goal key image [default: the demo's]")
-    follow.add_argument("--landmark-dropout", type=float, default=0.0, metavar="F",
-                        help="fraction of landmarks removed before each repeat [default: 0]")
+    add_change_arguments(follow)
     follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
                         help="where the seeds' memories are cached [default: out/bench_follow]")
     follow.set_defaults(run=runner("follow"))
