@@ -52,13 +52,15 @@ class FrontEnd:
     Args:
         config: the ``[features]`` table: the method and its parameters.
         camera: the lens of every image described (size, image circle, lift).
-
+        mask: the lens's mask (:func:`robot.vision.lens_mask.lens_mask`) if the caller has
+            it already; None computes it.
     """
 
-    def __init__(self, config: FeatureConfig, camera: CameraModel) -> None:
+    def __init__(self, config: FeatureConfig, camera: CameraModel,
+                 mask: BoolImage | None = None) -> None:
         self.config = config
         self.camera = camera
-        self.mask: BoolImage = lens_mask(camera)
+        self.mask: BoolImage = lens_mask(camera) if mask is None else mask
         self.sizes = PixelSizes.for_camera(config, camera)
         self._detect: Detector = (detect_harris if config.method == "harris-zncc"
                                   else opencv_detector(config.method))
@@ -139,9 +141,11 @@ class FrontEnd:
         return match_features(feats_a, feats_b, matching, predicted)
 
 
-def make_front_end(config: FeatureConfig, camera: CameraModel) -> FrontEnd:
-    """The front end of ``config.method`` for images of ``camera`` (module docstring)."""
-    return FrontEnd(config, camera)
+def make_front_end(config: FeatureConfig, camera: CameraModel,
+                   mask: BoolImage | None = None) -> FrontEnd:
+    """The front end of ``config.method`` for images of ``camera`` (module docstring);
+    ``mask``: the lens mask if already computed."""
+    return FrontEnd(config, camera, mask)
 
 
 def stored_descriptors(features: Features) -> npt.NDArray[np.float32]:

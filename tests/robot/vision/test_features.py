@@ -207,7 +207,7 @@ class TestPixelSizes:
         assert pixels_per_radian(camera) == pytest.approx(173.8, abs=0.1)
         sizes = PixelSizes.for_camera(FeatureConfig(), camera)
         assert (sizes.patch_px, sizes.descriptor_px) == (11, 31)
-        assert sizes.min_distance_px == pytest.approx(7.9, abs=0.05)
+        assert sizes.min_distance_px == pytest.approx(8.0)
 
     def test_a_sharper_lens_gets_wider_windows(self) -> None:
         # The MYNT EYE's 366 px/rad: the same angles span twice the pixels.
