@@ -7,7 +7,9 @@ rest of the view empty; the relative pose then rests on a small part of the sphe
 Here (``fast`` methods):
 
 * corners: FAST-9 (Rosten and Drummond, ECCV 2006) with an *absolute* contrast
-  threshold ``fast_threshold`` (grey levels): a dark frame keeps the corners it has;
+  threshold ``fast_threshold`` (grey levels), and ``fast_threshold_low`` in the cells
+  that found fewer than their share: a dim part of the frame keeps its corners,
+  however bright the rest (a lamp, a window);
 * spread: the image is cut into square cells, ``grid_cells`` along its longer side,
   and each cell keeps its strongest ``ceil(max_corners / cells in the lens)`` corners
   (FAST's non-maximum suppression keeps them apart);
@@ -60,7 +62,7 @@ def detect_grid_fast(image: GreyImage, config: FeatureConfig, mask: BoolImage | 
 
     Args:
         image: (H, W) uint8, checked.
-        config: threshold, grid, cap, spacing and sub-pixel window.
+        config: thresholds, grid, cap and sub-pixel window.
         mask: (H, W) bool or None, checked.
         margin_px: corners keep this far inside the mask and the image (descriptor window).
 
@@ -70,33 +72,93 @@ def detect_grid_fast(image: GreyImage, config: FeatureConfig, mask: BoolImage | 
     allowed = allowed_centres(image.shape, margin_px + config.subpixel_half_window_px, mask)
     if allowed is None:
         return np.zeros((0, 2)), np.zeros(0, np.float32)
-    fast = cv2.FastFeatureDetector_create(config.fast_threshold, True)
-    found = fast.detect(image, allowed)
-    if not found:
-        return np.zeros((0, 2)), np.zeros(0, np.float32)
-    pixels = cv2.KeyPoint_convert(found).astype(np.float64)
-    response = np.fromiter((k.response for k in found), np.float32, len(found))
-    keep = _spread(pixels, response, image.shape, allowed, config)
+    grid = _Grid(image.shape, allowed, config)
+    pixels, response = _fast(image, allowed, config.fast_threshold, (0, 0))
+    if config.fast_threshold_low < config.fast_threshold:
+        pixels, response = _search_weak_cells(image, allowed, grid, pixels, response, config)
+    keep = grid.spread(pixels, response)
     pixels, response = pixels[keep], response[keep]
     return refine_subpixel(image, pixels, config.subpixel_half_window_px), response
 
 
-def _spread(pixels: npt.NDArray[np.float64], response: npt.NDArray[np.float32],
-            shape: tuple[int, ...], allowed: npt.NDArray[np.uint8], config: FeatureConfig
-            ) -> npt.NDArray[np.intp]:
-    """Indices of the corners each grid cell keeps (its strongest), strongest first overall."""
-    height, width = shape
-    side = max(height, width) / config.grid_cells
-    n_cols, n_rows = math.ceil(width / side), math.ceil(height / side)
-    cell = (pixels[:, 1] // side).astype(np.intp) * n_cols + (pixels[:, 0] // side).astype(np.intp)
-    # Cells that hold any allowed pixel share the budget.
-    grid = cv2.resize(allowed, (n_cols, n_rows), interpolation=cv2.INTER_AREA)
-    per_cell = math.ceil(config.max_corners / max(1, int(np.count_nonzero(grid))))
-    order = np.lexsort((-response, cell))
-    cells = cell[order]
-    first = np.searchsorted(cells, cells, side="left")
-    keep = order[np.arange(len(order)) - first < per_cell]
-    return keep[np.argsort(-response[keep], kind="stable")][: config.max_corners]
+def _fast(image: GreyImage, allowed: npt.NDArray[np.uint8], threshold: int,
+          origin_xy: tuple[int, int]) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float32]]:
+    """FAST-9 corners with non-maximum suppression, shifted by ``origin_xy`` (an ROI's)."""
+    found = cv2.FastFeatureDetector_create(threshold, True).detect(image, allowed)
+    if not found:
+        return np.zeros((0, 2)), np.zeros(0, np.float32)
+    pixels = cv2.KeyPoint_convert(found).astype(np.float64) + origin_xy
+    return pixels, np.fromiter((k.response for k in found), np.float32, len(found))
+
+
+class _Grid:
+    """Square cells, ``grid_cells`` along the image's longer side; the cells holding any
+    allowed pixel share ``max_corners``."""
+
+    def __init__(self, shape: tuple[int, ...], allowed: npt.NDArray[np.uint8],
+                 config: FeatureConfig) -> None:
+        height, width = shape
+        self.side = max(height, width) / config.grid_cells
+        self.n_cols, n_rows = math.ceil(width / self.side), math.ceil(height / self.side)
+        coverage = cv2.resize(allowed, (self.n_cols, n_rows), interpolation=cv2.INTER_AREA)
+        self.lens_cells = np.flatnonzero(coverage.ravel())
+        self.per_cell = math.ceil(config.max_corners / max(1, len(self.lens_cells)))
+        self.max_corners = config.max_corners
+        self.shape = (height, width)
+
+    def cell(self, pixels: npt.NDArray[np.float64]) -> npt.NDArray[np.intp]:
+        """(N,) the cell of each pixel, row-major."""
+        rows = (pixels[:, 1] // self.side).astype(np.intp)
+        return rows * self.n_cols + (pixels[:, 0] // self.side).astype(np.intp)
+
+    def bounds(self, cell: int) -> tuple[int, int, int, int]:
+        """The cell's pixel rectangle (x0, y0, x1, y1), x1 and y1 excluded."""
+        row, col = divmod(cell, self.n_cols)
+        height, width = self.shape
+        return (round(col * self.side), round(row * self.side),
+                min(width, round((col + 1) * self.side)), min(height, round((row + 1) * self.side)))
+
+    def spread(self, pixels: npt.NDArray[np.float64], response: npt.NDArray[np.float32]
+               ) -> npt.NDArray[np.intp]:
+        """Indices of the corners each cell keeps (its strongest ``per_cell``), strongest
+        first overall."""
+        cell = self.cell(pixels)
+        order = np.lexsort((-response, cell))
+        cells = cell[order]
+        first = np.searchsorted(cells, cells, side="left")
+        keep = order[np.arange(len(order)) - first < self.per_cell]
+        return keep[np.argsort(-response[keep], kind="stable")][: self.max_corners]
+
+
+#: FAST skips this many pixels at an image's border (its circle's radius).
+_FAST_BORDER_PX = 3
+
+
+def _search_weak_cells(image: GreyImage, allowed: npt.NDArray[np.uint8], grid: _Grid,
+                       pixels: npt.NDArray[np.float64], response: npt.NDArray[np.float32],
+                       config: FeatureConfig
+                       ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float32]]:
+    """The corners, with those of the lens cells holding fewer than their share replaced by
+    FAST's at ``fast_threshold_low``: a dim or low-contrast part of the view keeps corners
+    (a local threshold, as ORB-SLAM's per-cell FAST)."""
+    cell = grid.cell(pixels)
+    counts = np.bincount(cell, minlength=grid.lens_cells.max(initial=0) + 1)
+    weak = [int(c) for c in grid.lens_cells if counts[c] < grid.per_cell]
+    if not weak:
+        return pixels, response
+    keep = ~np.isin(cell, weak)
+    parts_xy, parts_r = [pixels[keep]], [response[keep]]
+    height, width = grid.shape
+    b = _FAST_BORDER_PX
+    for c in weak:
+        x0, y0, x1, y1 = grid.bounds(c)
+        ex0, ey0, ex1, ey1 = max(0, x0 - b), max(0, y0 - b), min(width, x1 + b), min(height, y1 + b)
+        xy, r = _fast(image[ey0:ey1, ex0:ex1], allowed[ey0:ey1, ex0:ex1],
+                      config.fast_threshold_low, (ex0, ey0))
+        inside = (xy[:, 0] >= x0) & (xy[:, 0] < x1) & (xy[:, 1] >= y0) & (xy[:, 1] < y1)
+        parts_xy.append(xy[inside])
+        parts_r.append(r[inside])
+    return np.concatenate(parts_xy), np.concatenate(parts_r)
 
 
 def _binary_on_fast(extractor: Any) -> Detector:

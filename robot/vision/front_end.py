@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, MatchConfig
-from robot.vision.descriptors import Detector, opencv_detector
+from robot.vision.descriptors import DESCRIPTOR_BYTES, SIFT_LENGTH, Detector, opencv_detector
 from robot.vision.features import (
     BoolImage,
     Descriptors,
@@ -40,7 +40,7 @@ from robot.vision.features import (
 from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import Matches, match_features
 from shared.camera_model import CameraModel
-from shared.errors import check_shape
+from shared.errors import MemoryFormatError, check_shape
 from shared.memory import Keyframe
 
 
@@ -110,8 +110,26 @@ class FrontEnd:
         return Features(pixels_xy, descriptors,
                         np.zeros(n, np.float32) if response is None else response, bearings)
 
+    @property
+    def descriptor_length(self) -> int:
+        """D: values per descriptor (bytes of a bit string, floats of a row)."""
+        if self.method == "harris-zncc":
+            return self.sizes.patch_px ** 2
+        return SIFT_LENGTH if self.method == "sift" else DESCRIPTOR_BYTES[self.method]
+
     def features_from_keyframe(self, keyframe: Keyframe) -> Features:
-        """A key image's stored points and descriptors (see :func:`stored_descriptors`)."""
+        """A key image's stored points and descriptors (see :func:`stored_descriptors`).
+
+        Raises:
+            MemoryFormatError: the key image's descriptors are not this method's (a memory
+                taught with another front end, or another lens).
+        """
+        if keyframe.descriptor_length != self.descriptor_length:
+            raise MemoryFormatError(
+                f"key image {keyframe.id}",
+                f"descriptors have {keyframe.descriptor_length} values, the front end "
+                f"{self.method!r} on this lens makes {self.descriptor_length}: the memory was "
+                f"taught with another [features] method or lens")
         return self.features(keyframe.pixels_xy, self.descriptors_from_stored(keyframe.patches))
 
     def descriptors_from_stored(self, stored: npt.NDArray[np.float32]) -> Descriptors:

@@ -73,7 +73,7 @@ def make_app(memory, base: FakeBase, count: int | None = None) -> tuple[App, Man
     clock = ManualClock()
     # Patches of the memory's side on its lens.
     patch_deg = math.degrees(PATCH_LENGTH**0.5 / pixels_per_radian(memory.camera))
-    config = VmnavConfig(features=FeatureConfig(patch_size_deg=patch_deg),
+    config = VmnavConfig(features=FeatureConfig(method="harris-zncc", patch_size_deg=patch_deg),
                          mission=MissionConfig(localize_attempts=3))
     frames = FakeFrames((memory.camera.height, memory.camera.width), clock, count)
     return App(MissionRun(memory, config, base, np.random.default_rng(0)), frames, clock), clock

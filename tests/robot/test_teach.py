@@ -16,7 +16,8 @@ from robot.teach import KeyImageSelector, select_key_images
 from shared.errors import InputError
 from tests.robot.blob_frames import blob_camera, cell_centre, frames_from_schedule, render
 
-FEATURES = FeatureConfig()
+#: The frames' points are smooth saddles, one Harris corner each: the paper's front end.
+FEATURES = FeatureConfig(method="harris-zncc")
 
 
 def staggered(frames: int, lifetime: int) -> list[list[int]]:

@@ -24,9 +24,9 @@ def _deg_on_small_camera(px: float) -> float:
     return math.degrees(px / pixels_per_radian(small_camera()))
 
 
-#: The textures are drawn in pixels of a small, very wide lens (36 px/rad): the front end's
-#: windows are set to the reference pixel sizes there (11 px patches 8 px apart).
-FEATURES = FeatureConfig(patch_size_deg=_deg_on_small_camera(11.0),
+#: The textures are drawn in pixels of a small, very wide lens (36 px/rad): the paper's front
+#: end with its reference pixel sizes there (11 px patches 8 px apart).
+FEATURES = FeatureConfig(method="harris-zncc", patch_size_deg=_deg_on_small_camera(11.0),
                          min_distance_deg=_deg_on_small_camera(8.0))
 
 
