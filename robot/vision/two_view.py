@@ -25,9 +25,9 @@ import numpy.typing as npt
 
 from robot.config import FeatureConfig, MatchConfig, RelativePoseConfig
 from robot.vision.epipolar import EpipolarFit, relative_pose
-from robot.vision.features import BoolImage, detect_harris
+from robot.vision.features import BoolImage
+from robot.vision.front_end import make_front_end
 from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
 from shared.camera_model import CameraModel
 from shared.errors import check_shape
 
@@ -48,15 +48,14 @@ class TwoViewConfig:
     """The front end and the relative pose of two views.
 
     Attributes:
-        features: corners and descriptors of each image.
-        matching: matching of the two images (the whole image: the views may differ by
+        features: the front end (the robot's default: ``[features]``'s defaults).
+        matching: matching of the two images (the whole sphere: the views may differ by
             any motion).
         relative_pose: the general model, its inlier tolerance an angle, rad.
     """
 
-    features: FeatureConfig = field(
-        default_factory=lambda: FeatureConfig(max_corners=1000, quality_level=0.001))
-    matching: MatchConfig = field(default_factory=lambda: MatchConfig(search_radius_px=None))
+    features: FeatureConfig = field(default_factory=FeatureConfig)
+    matching: MatchConfig = field(default_factory=lambda: MatchConfig(search_radius_deg=None))
     relative_pose: RelativePoseConfig = field(default_factory=_pose_config)
 
 
@@ -125,9 +124,10 @@ def two_view(image_a: GreyImage, image_b: GreyImage, cameras: TwoCameras,
     camera_a, camera_b = cameras.camera_a, cameras.camera_b
     check_shape("image_a", np.shape(image_a), (camera_a.height, camera_a.width))
     check_shape("image_b", np.shape(image_b), (camera_b.height, camera_b.width))
-    feats_a = detect_harris(image_a, config.features, cameras.mask_a)
-    feats_b = detect_harris(image_b, config.features, cameras.mask_b)
-    matches = match_zncc(feats_a, feats_b, config.matching)
+    feats_a = make_front_end(config.features, camera_a, cameras.mask_a).describe(image_a)
+    front_end_b = make_front_end(config.features, camera_b, cameras.mask_b)
+    feats_b = front_end_b.describe(image_b)
+    matches = front_end_b.match(feats_a, feats_b, config.matching)
     pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
     bearings_a, valid_a = camera_a.lift(pixels_a)
     bearings_b, valid_b = camera_b.lift(pixels_b)
