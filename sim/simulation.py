@@ -103,6 +103,16 @@ class Simulation:
             poly.friction = _WALL_FRICTION
             tag(poly, Category.FURNITURE, box.height_m)
             self.space.add(poly)
+        for obj, corners in zip(self.world.objects, self.world.object_corners(), strict=True):
+            poly = pymunk.Poly(static, [tuple(c) for c in corners])
+            poly.friction = _WALL_FRICTION
+            tag(poly, Category.FURNITURE, obj.elevation_m + obj.height_m)
+            self.space.add(poly)
+        for tree in self.world.trees:
+            trunk = pymunk.Circle(static, tree.trunk_radius_m, tree.at)
+            trunk.friction = _WALL_FRICTION
+            tag(trunk, Category.FURNITURE, tree.trunk_height_m + tree.crown_radius_m)
+            self.space.add(trunk)
 
     # -- time -------------------------------------------------------------------------
 

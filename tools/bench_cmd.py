@@ -156,6 +156,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                               "traffic, stall, images, files, sim]")
     hostile.add_argument("--seed", type=int, default=0, help="seed of every part [default: 0]")
     hostile.set_defaults(run=runner("hostile"))
+    real = bench_sub.add_parser(
+        "real",
+        help="issue 16: real images: catadioptric calibration, equidistant import, the "
+             "fisheye pair's relative pose per front end",
+        description="Calibrate OpenCV's catadioptric test set (../shared/realdata) against "
+        "its reference focal lengths and xi; fit the unified model to the vendored fisheye "
+        "pair's equidistant calibrations (residual); match the pair and fit its relative "
+        "pose with the paper's front end and the default, against the reference from the "
+        "rig's T_BS, timing each pair on one core. About 20 s.",
+    )
+    real.add_argument("--repeats", type=int, default=10, metavar="N",
+                      help="timed runs of each front end on the pair [default: 10]")
+    real.set_defaults(run=runner("real"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

@@ -12,7 +12,7 @@ import pytest
 from shared.camera_model import CameraModel
 from shared.pose import Pose2
 from sim._geometry import box_corners, point_segment_distances
-from sim.config import SimConfig
+from sim.config import SensorConfig, SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.scene_change import (
     KEEP_CLEAR_M,
@@ -79,16 +79,43 @@ class TestLighting:
             LightingChange(**fields)
 
     def test_the_rendered_scene_follows_the_step(self) -> None:
+        config = dataclasses.replace(SimConfig(), sensor=SensorConfig.ideal(),
+                                     render=dataclasses.replace(SimConfig().render,
+                                                                illumination_amplitude=0.0))
+        before, after = self.frames_around_step(config, 0.5, after_s=(0.1,))
+        lit = (before > 40) & (before < 200)
+        assert np.median(after[0][lit] / before[lit]) == pytest.approx(0.5, abs=0.05)
+
+    def test_auto_exposure_follows_the_step_late(self) -> None:
         config = dataclasses.replace(SimConfig(), render=dataclasses.replace(
-            SimConfig().render, noise_sigma=0.0, illumination_amplitude=0.0))
+            SimConfig().render, illumination_amplitude=0.0))
+        tau = config.sensor.exposure_time_constant_s
+        before, after = self.frames_around_step(config, 0.5, after_s=(0.07, 6 * tau))
+        circle = before > 0
+        first, settled = (float(np.mean(a[circle])) for a in after)
+        assert first < 0.65 * np.mean(before[circle])  # the light fell: a dark frame
+        assert settled == pytest.approx(np.mean(before[circle]), rel=0.1)  # exposure caught up
+
+    @staticmethod
+    def frames_around_step(config: SimConfig, factor: float, after_s: tuple[float, ...]
+                           ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The frame just before a light step at 2 s (auto-exposure settled) and frames
+        ``after_s`` seconds after it, rendered every frame period from the start."""
         sim = Simulation(furnished_room(), config)
-        sim.light_gain_at = LightingChange(step_factor=0.5, step_at_s=0.05).gain_at
+        step_ns = 2_000_000_000
+        sim.light_gain_at = LightingChange(step_factor=factor, step_at_s=step_ns / 1e9).gain_at
         renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
-        before = renderer.render(sim).image.astype(float)
-        sim.step_until(100_000_000)
-        after = renderer.render(sim).image.astype(float)
-        lit = before > 20
-        assert np.median(after[lit] / before[lit]) == pytest.approx(0.5, abs=0.02)
+        wanted = [step_ns + round(s * 1e9) for s in after_s]
+        before, after = None, []
+        while len(after) < len(wanted):
+            frame = renderer.render(sim)
+            if frame.t_ns < step_ns:
+                before = frame.image.astype(float)
+            elif frame.t_ns >= wanted[len(after)]:
+                after.append(frame.image.astype(float))
+            sim.step_until(sim.now_ns + config.frame_period_ns)
+        assert before is not None
+        return before, after
 
 
 class TestMovedObjects:
