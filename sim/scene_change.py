@@ -41,7 +41,9 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.config import require
+from sim._geometry import box_corners
 from sim._object_moves import placed_elsewhere
+from sim.decor import PlacedObject
 from sim.world import World
 
 TEACH_HOUR = 12.0
@@ -138,6 +140,7 @@ class ChangedWorld:
         world: the changed world (it satisfies every rule of :mod:`sim.world`).
         change: the change applied.
         moved: indices of the objects moved, in ``world.objects``.
+        moved_from: those objects as they stood when the route was taught.
         stuck: indices of the objects drawn to move that found no place (rule 2).
         lamps_off: indices of the lamps switched off, in ``world.lamps``.
         removed_pictures: how many pictures were taken away.
@@ -147,10 +150,16 @@ class ChangedWorld:
     world: World
     change: SceneChange
     moved: tuple[int, ...] = ()
+    moved_from: tuple[PlacedObject, ...] = ()
     stuck: tuple[int, ...] = ()
     lamps_off: tuple[int, ...] = ()
     removed_pictures: int = 0
     removed_objects: int = 0
+
+    def moved_footprints(self) -> list[tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]:
+        """Per moved object, its footprint's corners (4, 2) as taught and as it stands, m."""
+        return [(box_corners(*old.footprint()), box_corners(*self.world.objects[i].footprint()))
+                for i, old in zip(self.moved, self.moved_from, strict=True)]
 
 
 def change_world(world: World, change: SceneChange, rng: np.random.Generator,
@@ -174,11 +183,14 @@ def change_world(world: World, change: SceneChange, rng: np.random.Generator,
     before = world
     world = without_named(world, change.removed)
     world = without_pictures(world, change.removed_fraction, rng)
+    removed_pictures = len(before.pictures) - len(world.pictures)
+    removed_objects = len(before.objects) - len(world.objects)
     keep = np.empty((0, 2)) if keep_clear_xy is None else np.asarray(keep_clear_xy, float)
+    unmoved = world.objects
     world, moved, stuck = move_objects(world, change.moved_fraction, rng, keep.reshape(-1, 2))
-    return ChangedWorld(world, change, moved, stuck, lamps_off,
-                        len(before.pictures) - len(world.pictures),
-                        len(before.objects) - len(world.objects))
+    return ChangedWorld(world, change, moved=moved, moved_from=tuple(unmoved[i] for i in moved),
+                        stuck=stuck, lamps_off=lamps_off, removed_pictures=removed_pictures,
+                        removed_objects=removed_objects)
 
 
 def daylight_at(hour: float) -> float:

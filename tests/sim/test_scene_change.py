@@ -193,6 +193,10 @@ class TestMovedObjects:
             else:
                 assert new == old
         assert result.world.furniture == taught.furniture
+        assert result.moved_from == tuple(taught.objects[i] for i in result.moved)
+        for i, (before, now) in zip(result.moved, result.moved_footprints(), strict=True):
+            assert np.array_equal(before, box_corners(*taught.objects[i].footprint()))
+            assert np.array_equal(now, result.world.object_corners()[i])
 
     @pytest.mark.parametrize("seed", range(6))
     def test_the_route_stays_clear_and_the_world_valid(self, seed: int) -> None:
