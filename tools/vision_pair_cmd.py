@@ -33,7 +33,8 @@ def add_parser(vision_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     pair.add_argument("--calibration-b", type=Path, metavar="CAM_B",
                       help="calibration of IMG_B's camera [default: CAM_A]")
     pair.add_argument("--out", type=Path, metavar="FILE.png",
-                      help="write a picture of the matches (grey) and inliers (green)")
+                      help="write a picture of the inliers (green) and rejected matches (red); "
+                           "JPEG if FILE ends in .jpg")
     pair.add_argument("--config", type=Path, metavar="FILE",
                       help="vmnav TOML config: the front end of its [features] table and the "
                            "matching of its [localize] table [default: the defaults]")

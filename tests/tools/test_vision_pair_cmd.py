@@ -68,11 +68,13 @@ def test_the_real_pair(calibrations: tuple[Path, Path], tmp_path: Path,
     assert green.sum() > 1000
 
 
-def test_one_calibration_for_both(calibrations: tuple[Path, Path],
+def test_one_calibration_for_both(calibrations: tuple[Path, Path], tmp_path: Path,
                                   capsys: pytest.CaptureFixture[str]) -> None:
     capsys.readouterr()
+    picture = tmp_path / "same.jpg"
     assert main(["vision", "pair", str(FISHEYE_LEFT_IMAGE), str(FISHEYE_LEFT_IMAGE),
-                 "--calibration", str(calibrations[0])]) == 0
+                 "--calibration", str(calibrations[0]), "--out", str(picture)]) == 0
+    assert picture.read_bytes()[:2] == b"\xff\xd8"  # a JPEG, by the name
     report = json.loads(capsys.readouterr().out)
     # The same image twice, the default front end: every match is exact; no translation.
     assert report["method"] == FeatureConfig().method
