@@ -1,7 +1,8 @@
 """The cost of the simulated camera's flaws and of drawing people, for ``vmnav bench sim``.
 
 Drives the robot along the world's first route as the render benchmark does, with
-three people about, and times per frame, separately from the rest of the render:
+three people coming the other way along it (then walking about), and times per frame,
+separately from the rest of the render:
 
 - the sensor stage (:class:`sim.camera_effects.CameraEffects.apply`: blur, vignetting,
   exposure, noise, clipping) on the rendered frame, with the body's true motion;
@@ -13,6 +14,7 @@ The caller pins the process to one core.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from typing import Any
 
@@ -33,6 +35,20 @@ PEOPLE = 3
 """People about during the measurement."""
 
 
+def _ahead(waypoints: tuple[tuple[float, float], ...], count: int) -> list[tuple[float, float]]:
+    """``count`` points along the route's first leg, 2 m apart from 3 m ahead of its start
+    (as many as fit), each 0.5 m to alternate sides."""
+    (x0, y0), (x1, y1) = waypoints[0], waypoints[1]
+    length = math.hypot(x1 - x0, y1 - y0)
+    ux, uy = (x1 - x0) / length, (y1 - y0) / length
+    points = []
+    for k in range(count):
+        along = min(3.0 + 2.0 * k, 0.9 * length)
+        side = 0.5 if k % 2 == 0 else -0.5
+        points.append((x0 + along * ux - side * uy, y0 + along * uy + side * ux))
+    return points
+
+
 def bench_camera_effects(config: SimConfig, camera: CameraModel, frames: int = 150,
                          warmup: int = 5) -> dict[str, Any]:
     """Time the sensor stage and the people's figures per frame along the first route.
@@ -49,6 +65,8 @@ def bench_camera_effects(config: SimConfig, camera: CameraModel, frames: int = 1
     sim = Simulation(world, config)
     route = world.routes[0]
     sim.place_robot(route.start_pose())
+    for k, (x, y) in enumerate(_ahead(route.waypoints, PEOPLE)):  # coming the other way
+        sim.people.place(k, (x, y), route.waypoints[0])
     driver = PurePursuit(route.waypoints, speed_m_s=0.5)
     renderer = FisheyeRenderer.for_simulation(sim, camera)
     effects = CameraEffects(camera, config.camera_mount, config.sensor, np.random.default_rng(0))
