@@ -14,7 +14,8 @@ Per frame (all vectorised except the per-patch paint):
    horizontal and vertical half-sides), so patches foreshorten and turn with the
    fisheye distortion, and their centres land at sub-pixel positions.
 5. People are drawn as textured figures (:mod:`sim.person_figure`).
-6. A global illumination gain (slow sinusoid) is applied, then the camera's flaws
+6. A global illumination gain (slow sinusoid, times the scene's light change
+   ``Simulation.light_gain_at``) is applied, then the camera's flaws
    (:class:`sim.camera_effects.CameraEffects`: motion blur, vignetting, auto-exposure,
    noise, clipping; outside the lens's image circle stays black).
 
@@ -161,7 +162,7 @@ class FisheyeRenderer:
         self._draw_people(sim, image, R_cam_world, centre_w)
         self._paint_all(image, ids, affines, dist)
 
-        gain = self.illumination_gain(sim.now_ns)
+        gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
         image = cv2.convertScaleAbs(image, alpha=gain)
         image = self.effects.apply(image, sim.now_ns,
                                    camera_motion(sim.body.velocity_base, self.mount))

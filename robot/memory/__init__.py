@@ -8,8 +8,7 @@ from robot.memory.localize import (
     Candidate,
     Localization,
     Localizer,
-    keyframe_features,
     localize,
 )
 
-__all__ = ["Candidate", "Localization", "Localizer", "keyframe_features", "localize"]
+__all__ = ["Candidate", "Localization", "Localizer", "localize"]

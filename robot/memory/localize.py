@@ -37,14 +37,12 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, LocalizeConfig
-from robot.vision.features import Features, GreyImage, detect_harris
-from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
+from robot.vision.features import Features, GreyImage
+from robot.vision.front_end import make_front_end
 from shared.camera_model import CameraModel
 from shared.memory import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,
-    Keyframe,
     VisualMemory,
     thumbnail_from_image,
 )
@@ -129,9 +127,9 @@ class Localizer:
         self._ids = tuple(int(i) for i in keyframe_ids)
         self._features = tuple(features)
         self._camera = camera
-        self._feature_config = feature_config
+        self._front_end = make_front_end(feature_config, camera)
         self._config = config
-        self._mask = lens_mask(camera)
+        self._mask = self._front_end.mask
         self._prefilter = _Prefilter(self._mask, config)
         self._descriptors = self._prefilter.describe_all(thumbnails)
 
@@ -150,10 +148,11 @@ class Localizer:
         """
         ids = sorted(memory.keyframes) if keyframe_ids is None else list(keyframe_ids)
         keyframes = [memory.keyframe(i) for i in ids]
+        front_end = make_front_end(feature_config, memory.camera)
         return cls(
             ids,
             [k.thumbnail for k in keyframes],
-            [keyframe_features(k) for k in keyframes],
+            [front_end.features_from_keyframe(k) for k in keyframes],
             memory.camera,
             feature_config,
             config,
@@ -205,7 +204,8 @@ class Localizer:
             Candidate(
                 keyframe_id=self._ids[k],
                 similarity=float("nan") if similarity is None else float(similarity[k]),
-                matches=len(match_zncc(query, self._features[k], self._config.matching)),
+                matches=len(self._front_end.match(query, self._features[k],
+                                                  self._config.matching)),
             )
             for k in order
         )
@@ -228,7 +228,7 @@ class Localizer:
                 f"{image.shape} "
                 f"dtype {image.dtype}",
             )
-        return detect_harris(image, self._feature_config, self._mask)
+        return self._front_end.describe(image)
 
 
 class _Prefilter:
@@ -280,16 +280,6 @@ class _Prefilter:
         std = np.sqrt(np.maximum(mean_sq - mean * mean, 0.0))
         z = ((image - mean) / (std + _NORMALISE_EPS))[: self._rows]
         return np.where(self._inside, z, np.float32(0.0)).astype(np.float32)
-
-
-def keyframe_features(keyframe: Keyframe) -> Features:
-    """A key image's stored corners and patches as :class:`Features`.
-
-    The memory does not store Harris responses; they are zero here (matching ignores them).
-    """
-    return Features(
-        keyframe.pixels_xy, keyframe.patches, np.zeros(keyframe.n_features, np.float32)
-    )
 
 
 def _unit(rows: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
