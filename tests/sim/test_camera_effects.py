@@ -132,6 +132,16 @@ class TestAutoExposure:
         expected = math.log(2.0) * np.exp(-np.array(times) / tau_s)
         np.testing.assert_allclose(errors, expected, atol=0.01)
 
+    def test_more_light_than_the_scene_holds_is_not_clipped_before_the_sensor(self) -> None:
+        fx = effects(dataclasses.replace(IDEAL, auto_exposure=True, target_grey=60.0))
+        scene = uniform(150.0)
+        scene[:, 400:] = 250.0
+        for k in range(40):  # the light doubles: 300 and 500 reach the lens
+            image = fx.apply(scene, k * FRAME_NS, CameraMotion(), light_gain=2.0)
+        left, right = image[250:350, 300:380].mean(), image[250:350, 420:500].mean()
+        assert right / left == pytest.approx(500.0 / 300.0, rel=0.02)
+        assert image[250:350, 300:500].mean() == pytest.approx(60.0, abs=3.0)
+
     def test_dark_scenes_take_longer_exposures_then_gain(self) -> None:
         config = dataclasses.replace(SensorConfig(), motion_blur=False)
         fx = effects(config)

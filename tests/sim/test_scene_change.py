@@ -12,7 +12,7 @@ import pytest
 from shared.camera_model import CameraModel
 from shared.pose import Pose2
 from sim._geometry import box_corners, point_segment_distances
-from sim.config import SimConfig
+from sim.config import SensorConfig, SimConfig
 from sim.renderer import FisheyeRenderer
 from sim.scene_change import (
     KEEP_CLEAR_M,
@@ -80,7 +80,7 @@ class TestLighting:
 
     def test_the_rendered_scene_follows_the_step(self) -> None:
         config = dataclasses.replace(SimConfig(), render=dataclasses.replace(
-            SimConfig().render, noise_sigma=0.0, illumination_amplitude=0.0))
+            SimConfig().render, illumination_amplitude=0.0), sensor=SensorConfig.ideal())
         sim = Simulation(furnished_room(), config)
         sim.light_gain_at = LightingChange(step_factor=0.5, step_at_s=0.05).gain_at
         renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
