@@ -47,6 +47,8 @@ from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.texture_library import Texture, TextureLibrary
 
 FloatArray = npt.NDArray[np.float64]
+Canvas = npt.NDArray[np.uint8] | npt.NDArray[np.float32]
+"""(H, W) grey levels a figure is drawn into: a frame, or the renderer's radiance."""
 
 _REFERENCE_HEIGHT_M = 1.75
 """The figure's heights below are for a person this tall, m; others scale."""
@@ -151,15 +153,19 @@ class PersonFigures:
             self._looks[index] = draw_look(self._rng, self._library)
         return self._looks[index]
 
-    def draw_people(self, sim: Simulation, image: npt.NDArray[np.uint8],
-                    R_cam_world: FloatArray, centre_w: FloatArray) -> None:
-        """Draw every person of ``sim`` into ``image`` ((H, W) uint8, in place), far to near.
+    def draw_people(self, sim: Simulation, image: Canvas, R_cam_world: FloatArray,
+                    centre_w: FloatArray, depth_m: npt.NDArray[np.float32] | None = None,
+                    ) -> None:
+        """Draw every person of ``sim`` into ``image`` (in place), far to near.
 
         Args:
             sim: the simulation (people, and the walls and furniture that hide them).
-            image: the frame drawn so far.
+            image: (H, W) uint8 or float32 grey levels, the frame drawn so far.
             R_cam_world: (3, 3) rotation world -> camera.
             centre_w: (3,) the optical centre, world frame, m.
+            depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m
+                (inf: nothing); given, it hides the figures per pixel instead of the
+                walls and furniture met along their centre lines.
         """
         positions, radius, height = sim.people_state()
         headings, walked = sim.people.headings(), sim.people.walked_m()
@@ -169,26 +175,29 @@ class PersonFigures:
             if distances[k] <= radius + _NEAR_M:
                 continue
             px, py = float(positions[k, 0]), float(positions[k, 1])
-            occluders = [(info.alpha * distances[k], sim.occluder_height(info.shape))
-                         for info in sim.space.segment_query((cx, cy), (px, py), 0.0,
-                                                             OCCLUDER_FILTER)
-                         if info.shape is not None and not sim.is_person(info.shape)]
+            occluders = [] if depth_m is not None else [
+                (info.alpha * distances[k], sim.occluder_height(info.shape))
+                for info in sim.space.segment_query((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
+                if info.shape is not None and not sim.is_person(info.shape)]
             pose = FigurePose(px, py, float(headings[k]), float(walked[k]), height, radius)
-            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders)
+            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders, depth_m)
 
-    def draw(self, image: npt.NDArray[np.uint8], pose: FigurePose, look: PersonLook,
+    def draw(self, image: Canvas, pose: FigurePose, look: PersonLook,
              R_cam_world: FloatArray, centre_w: FloatArray,
-             occluders: list[tuple[float, float]]) -> None:
-        """Draw one figure into ``image`` ((H, W) uint8, in place).
+             occluders: list[tuple[float, float]],
+             depth_m: npt.NDArray[np.float32] | None = None) -> None:
+        """Draw one figure into ``image`` (in place).
 
         Args:
-            image: the frame drawn so far.
+            image: (H, W) uint8 or float32 grey levels, the frame drawn so far.
             pose: where the figure stands.
             look: its textures and greys.
             R_cam_world: (3, 3) rotation world -> camera.
             centre_w: (3,) the optical centre, world frame, m.
             occluders: (distance along the floor from the camera, m; height, m) of each
                 wall or piece of furniture between the camera and the figure.
+            depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m:
+                the figure shows only where it is nearer.
         """
         distance = math.hypot(pose.x_m - float(centre_w[0]), pose.y_m - float(centre_w[1]))
         near = max(distance - pose.radius_m, 1e-6)
@@ -205,15 +214,24 @@ class PersonFigures:
         scale = min(2.0, math.sqrt(_MAX_SAMPLES / (size[0] * size[1])))
         sampled = (max(round(size[0] * scale), 1), max(round(size[1] * scale), 1))
         rays_w = self._rays(box, sampled, R_cam_world)
+        depth = None
+        if depth_m is not None:
+            depth = depth_m[y0:y1, x0:x1]
+            if sampled != size:
+                depth = cv2.resize(depth, sampled, interpolation=cv2.INTER_NEAREST)
         grey, cover = self._shade(rays_w, pose, look, centre_w, occluders,
-                                  self._px_per_rad * scale / distance)
+                                  self._px_per_rad * scale / distance, depth)
         grey *= cover
         if sampled != size:
             shrink = cv2.INTER_AREA if scale > 1.0 else cv2.INTER_LINEAR
             grey = cv2.resize(grey, size, interpolation=shrink)
             cover = cv2.resize(cover, size, interpolation=shrink)
         roi = image[y0:y1, x0:x1]
-        roi[:] = np.clip(roi * (1.0 - cover) + grey + 0.5, 0, 255).astype(np.uint8)
+        blended = roi * (1.0 - cover) + grey
+        if image.dtype == np.uint8:
+            roi[:] = np.clip(blended + 0.5, 0, 255).astype(np.uint8)
+        else:
+            roi[:] = blended
 
     # -- geometry ---------------------------------------------------------------------
 
@@ -253,9 +271,11 @@ class PersonFigures:
         return bearings @ R_cam_world.astype(np.float32)
 
     def _shade(self, rays_w: npt.NDArray[np.float32], pose: FigurePose, look: PersonLook,
-               centre_w: FloatArray, occluders: list[tuple[float, float]],
-               px_per_m: float) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        """Grey (h, w) and coverage (h, w, 0 or 1) of the figure along ``rays_w``.
+               centre_w: FloatArray, occluders: list[tuple[float, float]], px_per_m: float,
+               depth: npt.NDArray[np.float32] | None,
+               ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """Grey (h, w) and coverage (h, w, 0 or 1) of the figure along ``rays_w`` (where it
+        is nearer than ``depth``, (h, w) m, if given).
 
         Two passes: each solid's distance along every ray, then the surface (part,
         texture coordinates, shade) only where a solid is the nearest.
@@ -283,6 +303,8 @@ class PersonFigures:
         nearest = np.argmin(t, axis=0)
         t_hit = t[nearest, np.arange(t.shape[1])]
         cover = np.isfinite(t_hit)
+        if depth is not None:
+            cover &= t_hit < depth.reshape(-1)[rays]
         horizontal = np.hypot(r[:, 0], r[:, 1])
         for along_m, top_m in occluders:  # the line of sight must pass above each
             with np.errstate(divide="ignore", invalid="ignore"):
