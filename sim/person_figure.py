@@ -61,6 +61,7 @@ _ARM = (0.0, 0.235, 0.05, 0.80, 1.42)
 _HAND_M = 0.10
 """Bottom of each arm drawn as skin, m."""
 _NECK = (0.0, 0.0, 0.055, 1.42, 1.54)
+"""Neck: forward, lateral, radius, bottom, top, m."""
 _HEAD = (0.01, 0.0, 1.635, 0.105)
 """Head: forward, lateral, height of the centre, radius, m."""
 _FACE_HALF_ANGLE = math.radians(70.0)
@@ -75,6 +76,7 @@ _MAX_SAMPLES = 4_000
 """Rays cast per figure at most: small figures get 2 x 2 per pixel, near ones fewer than
 one (then interpolated: softer, like a lens focused further away)."""
 _REMAP_COLUMNS = 1024
+"""Texture look-ups go through cv2.remap in rows this long (it wants maps < 32767 wide)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,8 +121,10 @@ def draw_look(rng: np.random.Generator, library: TextureLibrary) -> PersonLook:
                                                              "clothing_plain")] or clothes))
     shirt = str(rng.choice(clothes))
     skin = float(rng.uniform(0.45, 1.1))
+    # The face photograph at the skin's mean grey.
+    face = skin * float(library.get("skin").image.mean() / library.get("person_face").image.mean())
     greys = (float(rng.uniform(0.35, 1.0)), float(rng.uniform(0.5, 1.4)), skin,
-             float(rng.uniform(0.3, 2.0)), skin * 192.0 / 144.0)  # face: the skin's grey
+             float(rng.uniform(0.3, 2.0)), face)
     return PersonLook((trousers, shirt, "skin", "hair", "person_face"), greys,
                       bool(rng.random() < 0.4))
 
@@ -349,7 +353,7 @@ class PersonFigures:
         else:
             x, y = np.clip(x, 0, pw - 1), np.clip(y, 0, ph - 1)
         n = x.shape[0]
-        rows = -(-n // _REMAP_COLUMNS)  # cv2.remap wants maps narrower than 32767 px
+        rows = -(-n // _REMAP_COLUMNS)
         maps = np.zeros((2, rows * _REMAP_COLUMNS), dtype=np.float32)
         maps[0, :n], maps[1, :n] = x, y
         values = cv2.remap(picture, maps[0].reshape(rows, -1), maps[1].reshape(rows, -1),
