@@ -156,6 +156,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                               "traffic, stall, images, files, sim]")
     hostile.add_argument("--seed", type=int, default=0, help="seed of every part [default: 0]")
     hostile.set_defaults(run=runner("hostile"))
+    chance = bench_sub.add_parser(
+        "chance", help="issue 16: unrelated real images never pass localization's test",
+        description="Put every pair of real images of different places (../shared/realdata, "
+        "scikit-image's photographs) through localization's acceptance test; print JSON: "
+        "pairs tried, accepted (target: 0), the most inliers seen. About 20 s.")
+    chance.add_argument("--realdata", type=Path, metavar="DIR",
+                        help="real image sets, a sub-folder each [default: ../shared/realdata]")
+    chance.add_argument("--config", metavar="FILE", help="vmnav TOML config")
+    chance.set_defaults(run=runner("chance"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

@@ -53,7 +53,7 @@ def run_localize(args: argparse.Namespace) -> int:
     memory = read_memory(args.directory)
     image = read_query_image(args.image, memory.camera.width, memory.camera.height)
     t0 = time.perf_counter()
-    localizer = Localizer.from_memory(memory, config.features, config.localize)
+    localizer = Localizer.from_memory(memory, config.camera.mount, config.features, config.localize)
     t1 = time.perf_counter()
     result = localizer.localize(image)
     t2 = time.perf_counter()

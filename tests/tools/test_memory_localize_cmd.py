@@ -33,7 +33,7 @@ def memory_dir(tmp_path: Path, places: list[Place]) -> Path:
         {"west": [p.key_image for p in places[:3]], "east": [p.key_image for p in places[3:]]}
     )
     write_memory(tmp_path / "mem", memory)
-    (tmp_path / "vmnav.toml").write_text("[localize]\ncandidates = 3\nmin_matches = 10\n")
+    (tmp_path / "vmnav.toml").write_text("[localize]\ncandidates = 3\nmin_inliers = 10\n")
     return tmp_path / "mem"
 
 

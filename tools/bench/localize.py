@@ -186,13 +186,24 @@ def _place_near_path(
 
 
 def rate_summary(outcomes: Sequence[QueryOutcome]) -> dict[str, Any]:
-    """JSON-ready top-1 rate, times and match counts of a batch of queries."""
-    correct = [o for o in outcomes if o.correct]
-    wrong = [o for o in outcomes if not o.correct]
+    """JSON-ready top-1 rate, times, match and inlier counts of a batch of queries.
+
+    A query counts as right when the answer is one of its acceptable key images and
+    the geometric verification accepted it (``ok``): an unverified best guess is no
+    localization.
+    """
+    correct = [o for o in outcomes if o.correct and o.result.ok]
+    wrong = [o for o in outcomes if not (o.correct and o.result.ok)]
     times = np.array([o.time_ms for o in outcomes])
     return {
         "localize_queries": len(outcomes),
         "localize_top1_rate": round(len(correct) / len(outcomes), 4),
+        "localize_refused": sum(not o.result.ok for o in outcomes),
+        "localize_wrong_accepted": sum(o.result.ok and not o.correct for o in outcomes),
+        "inliers_when_right_min": min((o.result.inliers for o in correct), default=None),
+        "inliers_when_right_median": (
+            float(np.median([o.result.inliers for o in correct])) if correct else None
+        ),
         "localize_ms_median": round(float(np.median(times)), 2),
         "localize_ms_p95": round(float(np.percentile(times, 95)), 2),
         "matches_when_right_min": min((o.result.matches for o in correct), default=None),
@@ -205,6 +216,8 @@ def rate_summary(outcomes: Sequence[QueryOutcome]) -> dict[str, Any]:
                 "nearest_id": o.nearest_id,
                 "answer_id": o.result.keyframe_id,
                 "matches": o.result.matches,
+                "inliers": o.result.inliers,
+                "verdict": o.result.verdict,
             }
             for o in wrong
         ],
@@ -222,6 +235,7 @@ def replicated_localizer(
         [k.thumbnail for k in chosen],
         [keyframe_features(k) for k in chosen],
         memory.camera,
+        config.camera.mount,
         config.features,
         config.localize,
     )
@@ -301,7 +315,8 @@ def measure_localization(
     first 20 query views) of a taught memory."""
     query_sim = Simulation(world, sim_config)
     renderer = FisheyeRenderer.for_simulation(query_sim, camera)
-    localizer = Localizer.from_memory(taught.memory, config.features, config.localize)
+    localizer = Localizer.from_memory(taught.memory, config.camera.mount, config.features,
+                                      config.localize)
     rng = np.random.default_rng(seed)
     outcomes = run_queries(taught, localizer, query_sim, renderer, n_queries, rng)
     images = [_render_at(query_sim, renderer, o.pose) for o in outcomes[:20]]

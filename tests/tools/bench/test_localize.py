@@ -52,7 +52,8 @@ def test_random_views_near_the_path_find_the_nearest_key_image(
 ) -> None:
     sim = Simulation(world, SimConfig())
     renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
-    localizer = Localizer.from_memory(taught.memory, CONFIG.features, CONFIG.localize)
+    localizer = Localizer.from_memory(taught.memory, CONFIG.camera.mount, CONFIG.features,
+                                      CONFIG.localize)
     outcomes = run_queries(taught, localizer, sim, renderer, 12, np.random.default_rng(4))
     summary = rate_summary(outcomes)
     assert summary["localize_queries"] == 12
