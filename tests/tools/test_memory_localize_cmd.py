@@ -54,8 +54,9 @@ class TestLocalize:
         assert code == 0, err
         first, second = out.splitlines()
         assert first.startswith("key image 4 (path 1 'east', index 1, 0.50 m along): ")
-        assert first.endswith(" matches") and "not localized" not in first
-        assert " ms for 6 key images (3 verified; localizer built in " in second
+        assert first.endswith(" verified inliers") and "not localized" not in first
+        assert " ms for 6 key images (3 matched, " in second
+        assert " verified; localizer built in " in second
 
     def test_json_and_the_exhaustive_baseline(
         self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
@@ -69,7 +70,23 @@ class TestLocalize:
         assert report["keyframe_id"] == 1 and report["keyframes"] == 6
         assert report["exhaustive"]["keyframe_id"] == 1
         assert report["exhaustive"]["matches"] == report["matches"]
+        assert report["exhaustive"]["inliers"] == report["inliers"] > 0
+        assert report["ok"] and report["verdict"] == "accepted"
         assert report["localize_ms"] > 0 and len(report["candidates"]) == 6
+        best = report["candidates"][0]
+        assert best["keyframe_id"] == 1 and best["path"] == "west" and best["index"] == 1
+        assert best["inliers"] == report["inliers"] and best["verdict"] == "accepted"
+
+    def test_an_image_of_nowhere_is_not_localized(
+        self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        other = make_places(np.random.default_rng(99), 1, small_camera())[0].query
+        query = query_file(memory_dir.parent, other)
+        config = str(memory_dir.parent / "vmnav.toml")
+        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--config",
+                            config], capsys)
+        assert code == 0
+        assert ": not localized)" in out.splitlines()[0]
 
     def test_a_colour_image_is_read_as_grey(
         self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
