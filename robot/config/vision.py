@@ -270,8 +270,10 @@ def _localize_match_config() -> MatchConfig:
 def _localize_pose_config() -> RelativePoseConfig:
     # 224 samples (7 batches of 32) draw an all-inlier 5-point sample with probability
     # 0.999 at the lowest inlier ratio accepted, 0.5: log(0.001) / log(1 - 0.5^5) = 218.
-    # More only spends time on chance matches (17 ms per candidate at 1024).
-    return RelativePoseConfig(model="general", max_iterations_general=224)
+    # More only spends time on chance matches (17 ms per candidate at 1024). No refinement:
+    # counting inliers needs none, and it halves the time of a true candidate (2 vs 4 ms
+    # on 85 matches; the same inliers to within one).
+    return RelativePoseConfig(model="general", max_iterations_general=224, refine_passes=0)
 
 
 @dataclass(frozen=True, slots=True)

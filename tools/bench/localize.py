@@ -204,6 +204,10 @@ def rate_summary(outcomes: Sequence[QueryOutcome]) -> dict[str, Any]:
         "inliers_when_right_median": (
             float(np.median([o.result.inliers for o in correct])) if correct else None
         ),
+        "inlier_ratio_when_right_min": (
+            round(min(o.result.inliers / o.result.matches for o in correct), 3)
+            if correct else None
+        ),
         "localize_ms_median": round(float(np.median(times)), 2),
         "localize_ms_p95": round(float(np.percentile(times, 95)), 2),
         "matches_when_right_min": min((o.result.matches for o in correct), default=None),

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
@@ -19,12 +18,12 @@ from tools.bench.chance import (
     fitted_to_camera,
     load_images,
     real_sets,
-    run,
     skimage_paths,
     summary,
     try_pairs,
 )
 from tools.bench.targets import targets_of
+from tools.cli import main
 
 CAMERA = CameraModel.default()
 CONFIG = VmnavConfig()
@@ -94,8 +93,7 @@ class TestPairs:
 @needs_realdata
 @pytest.mark.slow
 def test_the_benchmark_meets_its_target(capsys: pytest.CaptureFixture[str]) -> None:
-    args = argparse.Namespace(realdata=None, config=None)
-    assert run(args) == 0
+    assert main(["bench", "chance"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["sets"]["catadioptric"] == 18 and result["sets"]["skimage"] == 11
     assert result["pairs"] > 250
