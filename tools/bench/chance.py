@@ -64,6 +64,9 @@ SKIMAGE_FILES = (
     "coffee.png", "coins.png", "grass.png", "gravel.png", "rocket.jpg", "text.png",
 )
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+#: The acceptance threshold before geometric verification, matches: the JSON counts the
+#: pairs it would have accepted (``old_rule_accepted``), for comparison.
+OLD_MIN_MATCHES = 25
 #: Pairs listed in the JSON's ``closest`` (most inliers first).
 _CLOSEST = 5
 
@@ -192,6 +195,7 @@ def summary(images: Sequence[ChanceImage], outcomes: Sequence[PairOutcome]) -> d
         "sets": dict(Counter(i.group.split("/")[0] for i in images)),
         "pairs": len(outcomes),
         "accepted": sum(x.accepted for x in v),
+        "old_rule_accepted": sum(x.matches >= OLD_MIN_MATCHES for x in v),
         "max_inliers": max((x.inliers for x in v), default=0),
         "max_inlier_ratio": round(max((x.inlier_ratio for x in v), default=0.0), 3),
         "matches_median": float(np.median(matches)),
