@@ -20,8 +20,6 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from sim._geometry import box_corners
-
 if TYPE_CHECKING:
     from sim.world import World
 
@@ -77,11 +75,13 @@ class FreeSpaceMap:
         thickness = max(2, math.ceil(2 * WALL_HALF_THICKNESS_M / resolution_m) + 1)
         for wall in world.walls:
             cv2.line(occupied, px(wall.start), px(wall.end), 1, thickness, cv2.LINE_8, 4)
-        for box in world.furniture:
-            corners = np.array(
-                [px(c) for c in box_corners(box.center, box.size, box.yaw_deg)], np.int32
-            )
-            cv2.fillConvexPoly(occupied, corners, 1, cv2.LINE_8, 4)
+        boxes = np.concatenate([world.furniture_corners(), world.object_corners()])
+        for box in boxes:
+            cv2.fillConvexPoly(occupied, np.array([px(c) for c in box], np.int32), 1,
+                               cv2.LINE_8, 4)
+        for tree in world.trees:
+            cv2.circle(occupied, px(tree.at), round(tree.trunk_radius_m * scale), 1,
+                       cv2.FILLED, cv2.LINE_8, 4)
         free = (occupied == 0).astype(np.uint8)
         clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution_m
         col = int((world.start.x_m - x0) / resolution_m)

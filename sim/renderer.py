@@ -13,10 +13,11 @@ Per frame (all vectorised except the per-patch paint):
    affine map is the local Jacobian of the projection (the images of the patch's
    horizontal and vertical half-sides), so patches foreshorten and turn with the
    fisheye distortion, and their centres land at sub-pixel positions.
-5. People are drawn as dark silhouettes (projected vertical cylinders).
-6. A global illumination gain (slow sinusoid) and additive Gaussian sensor noise
-   (from a bank of pre-drawn noise images) are applied; outside the lens's image
-   circle stays black.
+5. People are drawn as textured figures (:mod:`sim.person_figure`).
+6. A global illumination gain (slow sinusoid, times the scene's light change
+   ``Simulation.light_gain_at``) is applied, then the camera's flaws
+   (:class:`sim.camera_effects.CameraEffects`: motion blur, vignetting, auto-exposure,
+   noise, clipping; outside the lens's image circle stays black).
 
 Behind the patches, the world's walls, furniture, floor, ceilings and sky are
 shaded from the true pose (:mod:`sim.surfaces`: 2D ray casting on a coarse grid,
@@ -39,10 +40,13 @@ from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
 from shared.config import CameraMountConfig
 from shared.pose import Pose2
-from sim.config import RenderConfig
+from sim.camera_effects import CameraEffects, camera_motion
+from sim.config import RenderConfig, SensorConfig
 from sim.landmarks import LandmarkField
+from sim.person_figure import PersonFigures
 from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.surfaces import SurfaceShader
+from sim.texture_library import TextureLibrary
 from sim.world import Lighting, World
 
 FloatArray = npt.NDArray[np.float64]
@@ -53,15 +57,8 @@ _NEAR_M = 0.15
 """Landmarks closer than this to the optical centre are not drawn, m."""
 _QUERY_END_MARGIN_M = 0.12
 """A line of sight stops this short of its landmark, so the surface carrying it does not hit."""
-_NOISE_BANK_SIZE = 16
 _RENDER_STREAM = 0x52454E44
 """Mixed with the simulation seed for the renderer's own random stream."""
-_PERSON_GREY = (0.15, 0.42)
-"""Range of the grey level of people's silhouettes, as fractions of the world's brightness
-(below the shaded floor's 0.6, so people stand out against it)."""
-_PERSON_SAMPLES = 8
-"""Points per silhouette side (fisheye-curved outline)."""
-
 
 @dataclass(frozen=True, eq=False)
 class RenderedFrame:
@@ -107,11 +104,15 @@ class FisheyeRenderer:
     Args:
         camera: the simulated lens.
         mount: the camera's pose on the robot.
-        config: noise and illumination.
+        config: illumination.
+        sensor: the camera's flaws.
         world: the surfaces shaded behind the landmarks, and the lighting.
         landmarks: the landmark field to draw.
-        rng: seeds the noise bank, the per-frame noise choice and the
-            illumination phase.
+        rng: seeds the illumination phase, people's grey and the sensor's noise.
+
+    Attributes:
+        effects: the camera's flaws, applied to every frame (its ``last`` says how
+            the last frame was exposed).
     """
 
     def __init__(
@@ -119,6 +120,7 @@ class FisheyeRenderer:
         camera: CameraModel,
         mount: CameraMountConfig,
         config: RenderConfig,
+        sensor: SensorConfig,
         world: World,
         landmarks: LandmarkField,
         rng: np.random.Generator,
@@ -132,18 +134,17 @@ class FisheyeRenderer:
         self._tangents_h, self._tangents_v = _patch_axes(landmarks.normals_w)
         self._surfaces = SurfaceShader(world, camera, rotation_base_cam(mount), mount.height_m)
         self._brightness = world.lighting.brightness
-        self._circle = self._make_circle()
-        self._noise_pos, self._noise_neg = self._make_noise_bank()
+        self.effects = CameraEffects(camera, mount, sensor, rng.spawn(1)[0])
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
-        self._person_grey: dict[int, int] = {}
+        self._figures: PersonFigures | None = None
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
         """A renderer for ``sim``'s world, landmarks and config (the camera at its
         ``camera_mount``), seeded from its seed."""
         rng = np.random.default_rng([sim.config.seed, _RENDER_STREAM])
-        return cls(camera, sim.config.camera_mount, sim.config.render, sim.world, sim.landmarks,
-                   rng)
+        return cls(camera, sim.config.camera_mount, sim.config.render, sim.config.sensor,
+                   sim.world, sim.landmarks, rng)
 
     def render(self, sim: Simulation) -> RenderedFrame:
         """Render the simulation's current state from the robot's camera.
@@ -161,12 +162,10 @@ class FisheyeRenderer:
         self._draw_people(sim, image, R_cam_world, centre_w)
         self._paint_all(image, ids, affines, dist)
 
-        gain = self.illumination_gain(sim.now_ns)
+        gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
         image = cv2.convertScaleAbs(image, alpha=gain)
-        if self.config.noise_sigma > 0:
-            j = int(self._rng.integers(_NOISE_BANK_SIZE))
-            image = cv2.subtract(cv2.add(image, self._noise_pos[j]), self._noise_neg[j])
-        image = cv2.bitwise_and(image, self._circle)
+        image = self.effects.apply(image, sim.now_ns,
+                                   camera_motion(sim.body.velocity_base, self.mount))
         near = np.argsort(dist)
         return RenderedFrame(
             t_ns=sim.now_ns,
@@ -315,54 +314,13 @@ class FisheyeRenderer:
         R_cam_world: FloatArray,
         centre_w: FloatArray,
     ) -> None:
-        """Draw each person not hidden by a wall as a filled, fisheye-curved silhouette."""
-        positions, radius, height = sim.people_state()
-        cx, cy = float(centre_w[0]), float(centre_w[1])
-        heights = np.linspace(0.0, height, _PERSON_SAMPLES)
-        for k, (px, py) in enumerate(positions):
-            dx, dy = px - cx, py - cy
-            d = math.hypot(dx, dy)
-            if d <= radius + _NEAR_M:
-                continue
-            hit = sim.space.segment_query_first((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
-            if hit is not None and hit.shape is not None and not sim.is_person(hit.shape):
-                continue  # hidden behind a wall or furniture (by its centre line)
-            # The two vertical tangent lines of the cylinder seen from the camera.
-            half_angle = math.asin(min(radius / d, 1.0))
-            base = math.atan2(dy, dx)
-            reach = math.sqrt(max(d * d - radius * radius, 0.0))
-            sides = []
-            for sgn in (1.0, -1.0):
-                ang = base + sgn * half_angle
-                sides.append((cx + reach * math.cos(ang), cy + reach * math.sin(ang)))
-            left = np.column_stack(
-                [
-                    np.full(_PERSON_SAMPLES, sides[0][0]),
-                    np.full(_PERSON_SAMPLES, sides[0][1]),
-                    heights,
-                ]
-            )
-            right = np.column_stack(
-                [
-                    np.full(_PERSON_SAMPLES, sides[1][0]),
-                    np.full(_PERSON_SAMPLES, sides[1][1]),
-                    heights,
-                ]
-            )
-            outline_w = np.vstack([left, right[::-1]])
-            pix, ok = self.camera.project((outline_w - centre_w) @ R_cam_world.T)
-            if not ok.any():
-                continue
-            grey = self._person_grey.setdefault(
-                k, round(self._brightness * float(self._rng.uniform(*_PERSON_GREY)))
-            )
-            cv2.fillPoly(
-                image,
-                [np.round(pix[ok] * 16).astype(np.int32)],
-                grey,
-                lineType=cv2.LINE_AA,
-                shift=4,
-            )
+        """Draw the people as textured figures (:mod:`sim.person_figure`)."""
+        if len(sim.people) == 0:
+            return
+        if self._figures is None:
+            self._figures = PersonFigures(self.camera, TextureLibrary.builtin(),
+                                          self._brightness, self._rng.spawn(1)[0])
+        self._figures.draw_people(sim, image, R_cam_world, centre_w)
 
     # -- fixed images -------------------------------------------------------------------
 
@@ -374,24 +332,6 @@ class FisheyeRenderer:
         t = textures.astype(np.float32)
         out = lighting.brightness + lighting.contrast * (t - 128.0)
         return np.clip(out, 0, 255).round().astype(np.uint8)
-
-    def _make_circle(self) -> npt.NDArray[np.uint8]:
-        """The lens's image-circle mask: (H, W) uint8, 255 where a pixel has a valid ray, else 0."""
-        cam = self.camera
-        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height))
-        _, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
-        return np.where(valid, 255, 0).astype(np.uint8).reshape(cam.height, cam.width)
-
-    def _make_noise_bank(self) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
-        """Pre-drawn Gaussian noise images, split into positive and negative uint8 parts."""
-        shape = (_NOISE_BANK_SIZE, self.camera.height, self.camera.width)
-        if self.config.noise_sigma <= 0:
-            zeros = np.zeros(shape, dtype=np.uint8)
-            return zeros, zeros
-        noise = self._rng.normal(0.0, self.config.noise_sigma, size=shape).astype(np.float32)
-        pos = np.clip(np.round(noise), 0, 255).astype(np.uint8)
-        neg = np.clip(np.round(-noise), 0, 255).astype(np.uint8)
-        return pos, neg
 
 
 def _patch_axes(normals_w: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -63,6 +63,9 @@ class Simulation:
         landmarks: the landmark field.
         body: the robot's body.
         people: the people.
+        light_gain_at: the scene's light at a simulation time (ns), relative to the
+            world's lighting: 1 unless a scenario changes the light during the run
+            (:meth:`sim.scene_change.LightingChange.gain_at`); the renderer applies it.
     """
 
     def __init__(self, world: World, config: SimConfig) -> None:
@@ -86,6 +89,7 @@ class Simulation:
         self._now_ns = 0
         self._dt_s = config.physics_dt_ns / 1e9
         self._step_hooks: list[Callable[[int, int], None]] = []
+        self.light_gain_at: Callable[[int], float] = _steady_light
 
     def _add_walls_and_furniture(self) -> None:
         static = self.space.static_body
@@ -99,6 +103,16 @@ class Simulation:
             poly.friction = _WALL_FRICTION
             tag(poly, Category.FURNITURE, box.height_m)
             self.space.add(poly)
+        for obj, corners in zip(self.world.objects, self.world.object_corners(), strict=True):
+            poly = pymunk.Poly(static, [tuple(c) for c in corners])
+            poly.friction = _WALL_FRICTION
+            tag(poly, Category.FURNITURE, obj.elevation_m + obj.height_m)
+            self.space.add(poly)
+        for tree in self.world.trees:
+            trunk = pymunk.Circle(static, tree.trunk_radius_m, tree.at)
+            trunk.friction = _WALL_FRICTION
+            tag(trunk, Category.FURNITURE, tree.trunk_height_m + tree.crown_radius_m)
+            self.space.add(trunk)
 
     # -- time -------------------------------------------------------------------------
 
@@ -185,3 +199,8 @@ class Simulation:
             )
         self.body.place(pose)
         self.people.clear_robot_start()
+
+
+def _steady_light(t_ns: int) -> float:
+    """The world's light, unchanged at every time."""
+    return 1.0

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -32,14 +32,20 @@ import numpy as np
 from shared.config import from_mapping, load_toml, require
 from shared.errors import ConfigError
 from shared.pose import Pose2
-from sim._geometry import (
-    box_corners,
-    point_segment_distances,
-    points_in_polygons,
-    polygon_edges,
-    segment_segment_distance,
+from sim._geometry import box_corners
+from sim._world_checks import CLEARANCE_M, Obstacles, check_decor, textures_for
+from sim.decor import (
+    FURNITURE_KINDS,
+    FloorPlan,
+    Lamp,
+    Picture,
+    PlacedObject,
+    Sky,
+    Tree,
+    check_scale,
 )
 from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
+from sim.texture_library import TextureLibrary
 
 __all__ = [
     "CLEARANCE_M",
@@ -55,8 +61,6 @@ __all__ = [
     "load_world",
 ]
 
-CLEARANCE_M = 0.4
-"""Least free distance from the start pose and routes to any wall or furniture surface, m."""
 
 _MIN_WALL_LENGTH_M = 0.01
 
@@ -84,9 +88,18 @@ class Wall:
     """Height, m."""
     patch_size_m: float | None = None
     """Side of the landmark patches on both faces, m; None = ``landmarks.patch_size_m``."""
+    texture: str = ""
+    """Texture of both faces; "" = the default wall texture."""
+    left: str = ""
+    """Texture of the face on the left walking from ``start`` to ``end``; "" = ``texture``."""
+    right: str = ""
+    """Texture of the face on the right; "" = ``texture``."""
+    scale_m: float | None = None
+    """Width one copy of the texture covers, m; None = the texture's own size."""
 
     def __post_init__(self) -> None:
         _finite("wall ends", *self.start, *self.end)
+        check_scale(self.scale_m)
         length = math.dist(self.start, self.end)
         require(length >= _MIN_WALL_LENGTH_M, f"wall has zero length ({self.start} to {self.end})")
         require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
@@ -112,8 +125,21 @@ class Box:
     """Height, m."""
     patch_size_m: float | None = None
     """Side of the landmark patches on its sides, m; None = ``landmarks.patch_size_m``."""
+    kind: str = "desk"
+    """One of :data:`sim.decor.FURNITURE_KINDS`; it gives the default textures."""
+    top: str = ""
+    """Texture of the top; "" = the kind's default."""
+    front: str = ""
+    """Texture of the two long faces; "" = the kind's default."""
+    sides: str = ""
+    """Texture of the two short ends; "" = the kind's default."""
+    scale_m: float | None = None
+    """Width one copy of a tiling texture covers, m; None = the texture's own size."""
 
     def __post_init__(self) -> None:
+        require(self.kind in FURNITURE_KINDS,
+                f"unknown furniture kind '{self.kind}' (known: {', '.join(FURNITURE_KINDS)})")
+        check_scale(self.scale_m)
         _finite("box center, size and yaw", *self.center, *self.size, self.yaw_deg)
         require(min(self.size) > 0, f"size must be > 0 in both directions, got {self.size}")
         require(self.height_m > 0, f"height_m must be > 0, got {self.height_m}")
@@ -132,8 +158,13 @@ class Ceiling:
     """Height of the ceiling above the floor, m."""
     patch_size_m: float | None = None
     """Side of the landmark patches on it, m; None = ``landmarks.patch_size_m``."""
+    texture: str = ""
+    """Texture; "" = the default ceiling texture."""
+    scale_m: float | None = None
+    """Width one copy of the texture covers, m; None = the texture's own size."""
 
     def __post_init__(self) -> None:
+        check_scale(self.scale_m)
         _finite("ceiling corners", *self.min_corner, *self.max_corner)
         require(
             self.min_corner[0] < self.max_corner[0] and self.min_corner[1] < self.max_corner[1],
@@ -175,10 +206,18 @@ class Lighting:
     """Mean grey level of plain surfaces, 0..255."""
     contrast: float = 1.0
     """Scale of the landmark patches' contrast around that level (1 = as generated)."""
+    ambient: float = 0.45
+    """Light indoors far from any lamp or window, relative to under a lit lamp (>= 0)."""
+    daylight: float = 1.0
+    """Daylight outdoors and through windows, relative to a bright overcast day (0 = night)."""
 
     def __post_init__(self) -> None:
         require(0 < self.brightness < 255, f"brightness must be in (0, 255), got {self.brightness}")
         require(0 < self.contrast <= 4, f"contrast must be in (0, 4], got {self.contrast}")
+        for name in ("ambient", "daylight"):
+            value = getattr(self, name)
+            require(math.isfinite(value) and 0 <= value <= 4,
+                    f"{name} must be in [0, 4], got {value}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -226,6 +265,20 @@ class World:
     """Scene brightness and landmark contrast."""
     routes: tuple[Route, ...] = ()
     """Named routes through free space."""
+    floor: FloorPlan = field(default_factory=FloorPlan)
+    """The floor's textures."""
+    lamps: tuple[Lamp, ...] = ()
+    """Lamps set in the ceilings."""
+    pictures: tuple[Picture, ...] = ()
+    """Posters, pictures, signs, switches, windows and doors on walls."""
+    objects: tuple[PlacedObject, ...] = ()
+    """Boxes, boards and door leaves on the floor plan (obstacles like furniture)."""
+    trees: tuple[Tree, ...] = ()
+    """Trees (their trunks are obstacles)."""
+    sky: Sky = field(default_factory=Sky)
+    """The sky where no ceiling is."""
+    texture_set: str = ""
+    """Manifest of extra textures (a user's own set) beside the built-in ones; "" = none."""
 
     def __post_init__(self) -> None:
         require(bool(self.name.strip()), "name must not be empty")
@@ -234,7 +287,8 @@ class World:
         for name in names:
             require(names.count(name) == 1, f"route name '{name}' is used twice")
         _finite("start pose", *self.start)
-        obstacles = _Obstacles.of(self)
+        check_decor(self)
+        obstacles = Obstacles.of(self)
         obstacles.check_point("start pose", (self.start.x_m, self.start.y_m))
         for route in self.routes:
             for i, p in enumerate(route.waypoints):
@@ -263,64 +317,19 @@ class World:
             [box_corners(b.center, b.size, b.yaw_deg) for b in self.furniture], dtype=float
         ).reshape(-1, 4, 2)
 
+    def object_corners(self) -> np.ndarray:
+        """(O, 4, 2) footprint corners of the placed objects as they stand, counter-clockwise, m."""
+        return np.array(
+            [box_corners(*o.footprint()) for o in self.objects], dtype=float
+        ).reshape(-1, 4, 2)
 
-@dataclass(frozen=True)
-class _Obstacles:
-    """Walls (with thickness) and furniture edges as one set of segments: the clearance rules."""
+    def textures(self) -> TextureLibrary:
+        """The world's texture set: the built-in one, plus :attr:`texture_set` if named.
 
-    world: World
-    a: np.ndarray  # (S, 2) segment starts: walls, then 4 edges per box
-    b: np.ndarray  # (S, 2) segment ends
-    radius: np.ndarray  # (S,) half thickness: walls' for walls, 0 for furniture edges
-    corners: np.ndarray  # (F, 4, 2) furniture footprints
-
-    @classmethod
-    def of(cls, world: World) -> _Obstacles:
-        corners = world.furniture_corners()
-        edge_a, edge_b = polygon_edges(corners)
-        a = np.concatenate([np.array([w.start for w in world.walls], dtype=float), edge_a])
-        b = np.concatenate([np.array([w.end for w in world.walls], dtype=float), edge_b])
-        radius = np.concatenate(
-            [np.full(len(world.walls), WALL_HALF_THICKNESS_M), np.zeros(len(edge_a))]
-        )
-        return cls(world, a, b, radius, corners)
-
-    def _name(self, segment: int) -> str:
-        walls = self.world.walls
-        if segment < len(walls):
-            return f"wall {segment} ({walls[segment].start} to {walls[segment].end})"
-        box = (segment - len(walls)) // 4
-        return f"furniture {box} at {self.world.furniture[box].center}"
-
-    def _require_gap(self, what: str, gaps: np.ndarray) -> None:
-        i = int(np.argmin(gaps))
-        require(
-            gaps[i] >= CLEARANCE_M,
-            f"{what} is {max(float(gaps[i]), 0.0):.2f} m from {self._name(i)}; "
-            f"need >= {CLEARANCE_M} m",
-        )
-
-    def check_point(self, what: str, xy: tuple[float, float]) -> None:
-        lo, hi = self.world.extent()
-        require(
-            lo[0] <= xy[0] <= hi[0] and lo[1] <= xy[1] <= hi[1],
-            f"{what} {tuple(xy)} is outside the walls' extent {lo}..{hi}",
-        )
-        point = np.asarray([xy], dtype=float)
-        gaps = point_segment_distances(point, self.a, self.b)[0] - self.radius
-        inside = points_in_polygons(point, self.corners)[0]
-        if inside.any():
-            gaps[len(self.world.walls) + 4 * int(np.argmax(inside))] = 0.0
-        self._require_gap(f"{what} {tuple(xy)}", gaps)
-
-    def check_leg(self, what: str, p: tuple[float, float], q: tuple[float, float]) -> None:
-        gaps = (
-            segment_segment_distance(
-                np.asarray(p, dtype=float), np.asarray(q, dtype=float), self.a, self.b
-            )
-            - self.radius
-        )
-        self._require_gap(what, gaps)
+        Raises:
+            ConfigError: the extra set's manifest or a picture in it is bad.
+        """
+        return textures_for(self.texture_set)
 
 
 def builtin_world_names() -> tuple[str, ...]:
@@ -386,7 +395,7 @@ def load_world(name_or_path: str | Path) -> World:
     text = str(name_or_path)
     if text in builtin_world_names():
         with resources.as_file(resources.files("sim") / "worlds" / f"{text}.toml") as path:
-            return from_mapping(_WorldFile, load_toml(path), str(path)).world(str(path))
+            return _read(path)
     path = Path(text)
     if path.suffix != ".toml" and not path.exists():
         raise ConfigError(
@@ -394,4 +403,12 @@ def load_world(name_or_path: str | Path) -> World:
             f"unknown world (built-in: {', '.join(builtin_world_names())}; "
             "or the path of a .toml world file)",
         )
-    return from_mapping(_WorldFile, load_toml(path), str(path)).world(str(path))
+    return _read(path)
+
+
+def _read(path: Path) -> World:
+    """The world of file ``path`` (its ``texture_set`` taken relative to the file)."""
+    data = load_toml(path)
+    if isinstance(data.get("texture_set"), str) and data["texture_set"]:
+        data["texture_set"] = str(path.parent / data["texture_set"])
+    return from_mapping(_WorldFile, data, str(path)).world(str(path))

@@ -41,6 +41,7 @@ from robot.config.driving import (
     TeleopConfig,
 )
 from robot.config.vision import (
+    FRONT_END_METHODS,
     RELATIVE_POSE_MODELS,
     FeatureConfig,
     LocalizeConfig,
@@ -62,6 +63,7 @@ from shared.errors import ConfigError
 __all__ = [
     "BASE_LOST_ACTIONS",
     "CONTROL_LAWS",
+    "FRONT_END_METHODS",
     "POLE_DOMAINS",
     "RELATIVE_POSE_MODELS",
     "CameraSourceConfig",

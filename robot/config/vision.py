@@ -11,15 +11,22 @@ from dataclasses import dataclass, field
 
 from shared.config import require
 
+#: Front-end methods (:mod:`robot.vision.front_end`): the paper's Harris corners with ZNCC
+#: patches, and OpenCV's descriptors (TEBLID and BEBLID from opencv-contrib).
+FRONT_END_METHODS = ("harris-zncc", "orb", "akaze", "sift", "teblid", "beblid")
+
 
 @dataclass(frozen=True, slots=True)
 class FeatureConfig:
-    """Harris corners and their ZNCC patch descriptors (Courbon et al. 2008, sec. III-A).
+    """The vision front end: its method, and the paper's Harris corners and ZNCC patches
+    (Courbon et al. 2008, sec. III-A).
 
     Defaults follow OpenCV's Harris (``k`` = 0.04, 3x3 block, 3x3 Sobel) and the
     reference benchmark (300 corners, 11x11 patches).
     """
 
+    method: str = "harris-zncc"
+    """One of ``FRONT_END_METHODS``: how points are detected and described (docs/front-end.md)."""
     max_corners: int = 300
     """Keep at most this many corners, strongest Harris response first."""
     quality_level: float = 0.01
@@ -36,6 +43,8 @@ class FeatureConfig:
     """Half side of the cv2.cornerSubPix window, px; 0 keeps integer corner positions."""
 
     def __post_init__(self) -> None:
+        require(self.method in FRONT_END_METHODS,
+                f"method must be one of {', '.join(FRONT_END_METHODS)}, got {self.method!r}")
         require(self.max_corners >= 1, f"max_corners must be >= 1, got {self.max_corners}")
         require(
             0 < self.quality_level < 1, f"quality_level must be in (0, 1), got {self.quality_level}"

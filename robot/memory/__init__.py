@@ -9,7 +9,6 @@ from robot.memory.localize import (
     Candidate,
     Localization,
     Localizer,
-    keyframe_features,
     localize,
     verify_matches,
 )
@@ -20,7 +19,6 @@ __all__ = [
     "Localization",
     "Localizer",
     "Verification",
-    "keyframe_features",
     "localize",
     "verify_matches",
 ]

@@ -19,10 +19,10 @@ each is verified geometrically:
    unit-normalised. The query's descriptor is compared shifted sideways by up to
    ``prefilter_max_shift_px`` (a turn of the robot shifts the view): similarity =
    the best cosine over the shifts, one (S, D) x (D, N) product.
-2. **Verification**: Harris corners of the query matched by ZNCC with the
-   mutual-best check (no search window by default) against the
-   ``candidates`` most similar key images' stored corners; the matches are lifted
-   to bearings in the mount's level frame and a relative pose is fitted
+2. **Verification**: the query's features (:mod:`robot.vision.front_end`, the
+   ``[features]`` method) matched with the mutual-best check (no search window by
+   default) against the ``candidates`` most similar key images' stored features; the
+   matched bearings are rotated into the mount's level frame and a relative pose is fitted
    (:mod:`robot.memory.verification`). A candidate is accepted on enough inliers,
    a high enough inlier ratio and a motion a ground robot can make. The accepted
    candidate with the most inliers wins (ties: the more similar thumbnail); the
@@ -44,17 +44,15 @@ import numpy.typing as npt
 
 from robot.config import FeatureConfig, LocalizeConfig
 from robot.memory.verification import Verification, verify_bearings
-from robot.vision.bearings import level_bearings
-from robot.vision.features import Features, GreyImage, detect_harris
-from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import Matches, match_zncc
+from robot.vision.features import Features, GreyImage
+from robot.vision.front_end import make_front_end
+from robot.vision.matching import Matches
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig
 from shared.memory import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,
-    Keyframe,
     VisualMemory,
     thumbnail_from_image,
 )
@@ -177,10 +175,10 @@ class Localizer:
         self._features = tuple(features)
         self._camera = camera
         self._R_level_cam = rotation_level_cam(mount)
-        self._feature_config = feature_config
+        self._front_end = make_front_end(feature_config, camera)
         self._config = config
         self._seed = seed
-        self._mask = lens_mask(camera)
+        self._mask = self._front_end.mask
         self._prefilter = _Prefilter(self._mask, config)
         self._descriptors = self._prefilter.describe_all(thumbnails)
 
@@ -200,10 +198,11 @@ class Localizer:
         """
         ids = sorted(memory.keyframes) if keyframe_ids is None else list(keyframe_ids)
         keyframes = [memory.keyframe(i) for i in ids]
+        front_end = make_front_end(feature_config, memory.camera)
         return cls(
             ids,
             [k.thumbnail for k in keyframes],
-            [keyframe_features(k) for k in keyframes],
+            [front_end.features_from_keyframe(k) for k in keyframes],
             memory.camera,
             mount,
             feature_config,
@@ -237,7 +236,8 @@ class Localizer:
         # argpartition picks the best `count` in O(N); only those are sorted.
         best = np.argpartition(-similarity, count - 1)[:count]
         best = best[np.argsort(-similarity[best], kind="stable")]
-        matches = [match_zncc(query, self._features[k], self._config.matching) for k in best]
+        matches = [self._front_end.match(query, self._features[k], self._config.matching)
+                   for k in best]
         verifications: list[Verification | None] = [None] * count
         rng = np.random.default_rng(self._seed)
         winner_inliers = -1
@@ -264,7 +264,7 @@ class Localizer:
         query = self._query_features(image)
         if not self._ids:
             return Localization(None, 0, 0, False, (), len(query))
-        matches = [match_zncc(query, f, self._config.matching) for f in self._features]
+        matches = [self._front_end.match(query, f, self._config.matching) for f in self._features]
         # argmax keeps the first of equals: ties go to the lower id.
         k = int(np.argmax([len(m) for m in matches]))
         verification = self._verify(query, k, matches[k], np.random.default_rng(self._seed))
@@ -280,8 +280,8 @@ class Localizer:
         self, query: Features, k: int, matches: Matches, rng: np.random.Generator
     ) -> Verification:
         """Verify ``matches`` of ``query`` with the key image at position ``k``."""
-        return verify_matches(query, self._features[k], matches, self._camera,
-                              self._R_level_cam, self._config, rng)
+        return verify_matches(query, self._features[k], matches, self._R_level_cam,
+                              self._config, rng)
 
     def _query_features(self, image: GreyImage) -> Features:
         image = np.asarray(image)
@@ -292,35 +292,32 @@ class Localizer:
                 f"{image.shape} "
                 f"dtype {image.dtype}",
             )
-        return detect_harris(image, self._feature_config, self._mask)
+        return self._front_end.describe(image)
 
 
 def verify_matches(
     query: Features,
     key: Features,
     matches: Matches,
-    camera: CameraModel,
     R_level_cam: npt.NDArray[np.float64],
     config: LocalizeConfig,
     rng: np.random.Generator,
 ) -> Verification:
     """Localization's acceptance test of one query / key image pair (step 2 of the module
-    docstring): lift the matched corners to level bearings, fit and judge a relative pose.
+    docstring): the matched points' bearings in the level frame, a relative pose judged.
 
     Args:
-        query: the query's corners.
-        key: the key image's corners (same camera).
+        query: the query's features (bearings through the camera model).
+        key: the key image's features (same camera).
         matches: their matches (``idx_a`` into ``query``, ``idx_b`` into ``key``).
-        camera: the lens of both images.
         R_level_cam: (3, 3) camera -> level frame of the mount
             (:func:`shared.camera_mount.rotation_level_cam`).
         config: the acceptance thresholds.
         rng: draws RANSAC's samples.
     """
-    lifted_q = level_bearings(camera, query.pixels_xy[matches.idx_a], R_level_cam)
-    lifted_k = level_bearings(camera, key.pixels_xy[matches.idx_b], R_level_cam)
-    valid = lifted_q.valid & lifted_k.valid
-    return verify_bearings(lifted_q.bearings[valid], lifted_k.bearings[valid], rng, config)
+    R = np.asarray(R_level_cam, dtype=np.float64)
+    return verify_bearings(query.bearings[matches.idx_a] @ R.T,
+                           key.bearings[matches.idx_b] @ R.T, rng, config)
 
 
 def _ranked(candidates: Sequence[Candidate], query_features: int) -> Localization:
@@ -381,16 +378,6 @@ class _Prefilter:
         std = np.sqrt(np.maximum(mean_sq - mean * mean, 0.0))
         z = ((image - mean) / (std + _NORMALISE_EPS))[: self._rows]
         return np.where(self._inside, z, np.float32(0.0)).astype(np.float32)
-
-
-def keyframe_features(keyframe: Keyframe) -> Features:
-    """A key image's stored corners and patches as :class:`Features`.
-
-    The memory does not store Harris responses; they are zero here (matching ignores them).
-    """
-    return Features(
-        keyframe.pixels_xy, keyframe.patches, np.zeros(keyframe.n_features, np.float32)
-    )
 
 
 def _unit(rows: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:

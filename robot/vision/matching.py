@@ -1,4 +1,9 @@
-"""ZNCC matching of two feature sets in a search window, with the unicity constraint.
+"""Matching of two feature sets in a search window, with the unicity constraint.
+
+Every front-end method's descriptors are compared as a *similarity* in [-1, 1]:
+the dot product of unit rows (ZNCC for the paper's patches, cosine for SIFT), or
+1 - 2 d / bits for packed bit strings at Hamming distance d (ORB, AKAZE, TEBLID,
+BEBLID). The paper's ZNCC matching below is the same procedure with that score.
 
 Courbon et al. (ICARCV 2008, sec. III-A): "For an interest point P1 at coordinates
 (x y) in image Ii, we define a search region in image Ii+1. The search region is a
@@ -23,6 +28,7 @@ Measured on one core with a +-40 px window: 0.3-0.6 ms for 300 x 300 features,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -34,19 +40,21 @@ from shared.errors import ShapeError, check_shape
 Indices = npt.NDArray[np.intp]
 """(K,) feature indices."""
 Scores = npt.NDArray[np.float32]
-"""(K,) float32 ZNCC scores in [-1, 1]."""
+"""(K,) float32 similarities in [-1, 1] (ZNCC for the paper's patches)."""
 ScoreMatrix = npt.NDArray[np.float32]
-"""(N, M) float32 ZNCC scores, -inf where (i, j) is not a candidate."""
+"""(N, M) float32 similarities, -inf where (i, j) is not a candidate."""
+
+
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Matches:
-    """Mutually best ZNCC matches between features A and B, in A's order (read-only arrays).
+    """Mutually best matches between features A and B, in A's order (read-only arrays).
 
     Attributes:
         idx_a: (K,) indices into features A, increasing, each at most once.
         idx_b: (K,) indices into features B, each at most once.
-        score: (K,) float32 ZNCC scores of the pairs, in [-1, 1].
+        score: (K,) float32 similarities of the pairs, in [-1, 1] (module docstring).
     """
 
     idx_a: Indices
@@ -81,14 +89,17 @@ class Matches:
         return feats_a.pixels_xy[self.idx_a], feats_b.pixels_xy[self.idx_b]
 
 
-def match_zncc(feats_a: Features, feats_b: Features, config: MatchConfig) -> Matches:
-    """Match features A to features B by ZNCC, window, threshold and mutual best.
+def match_features(feats_a: Features, feats_b: Features, config: MatchConfig,
+                   centres_a_xy: PixelsXY | None = None) -> Matches:
+    """Match features A to features B by similarity, window, threshold and mutual best.
 
     Args:
         feats_a: N features of image A.
-        feats_b: M features of image B, with patches of the same size.
-        config: search radius (px, or None for the whole image), minimum ZNCC and
+        feats_b: M features of image B, with descriptors of the same length and kind.
+        config: search radius (px, or None for the whole image), minimum similarity and
             optional ratio test.
+        centres_a_xy: (N, 2) px, the centre of each of A's search windows in image B
+            (a guided search); None = A's own pixels.
 
     Returns:
         The K <= min(N, M) pairs (i, j) such that B's j lies in A's i search window,
@@ -97,20 +108,24 @@ def match_zncc(feats_a: Features, feats_b: Features, config: MatchConfig) -> Mat
         the lower index. Empty when either side has no features.
 
     Raises:
-        ShapeError: the two feature sets have different patch sizes.
+        ShapeError: the two feature sets have descriptors of different lengths or kinds.
     """
-    if feats_a.patches.shape[1] != feats_b.patches.shape[1]:
+    da, db = feats_a.descriptors, feats_b.descriptors
+    if da.shape[1] != db.shape[1] or da.dtype != db.dtype:
         raise ShapeError(
-            f"feats_a/feats_b: patch sizes differ, {feats_a.patch_size_px} px "
-            f"and {feats_b.patch_size_px} px"
+            f"feats_a/feats_b: descriptors differ, {da.shape[1]} x {da.dtype} "
+            f"and {db.shape[1]} x {db.dtype}"
         )
     n, m = len(feats_a), len(feats_b)
     if n == 0 or m == 0:
         return Matches(np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0, np.float32))
     if config.search_radius_px is None:
-        scores = feats_a.patches @ feats_b.patches.T
+        scores = _all_scores(feats_a, feats_b)
     else:
-        scores = _windowed_scores(feats_a, feats_b, config.search_radius_px)
+        centres = feats_a.pixels_xy if centres_a_xy is None else np.asarray(centres_a_xy,
+                                                                             dtype=np.float64)
+        check_shape("centres_a_xy", centres.shape, (n, 2))
+        scores = _windowed_scores(feats_a, feats_b, centres, config.search_radius_px)
 
     rows = np.arange(n)
     best_b = scores.argmax(axis=1)
@@ -122,9 +137,11 @@ def match_zncc(feats_a: Features, feats_b: Features, config: MatchConfig) -> Mat
     return Matches(rows[keep], best_b[keep], best_score[keep])
 
 
-def _windowed_scores(feats_a: Features, feats_b: Features, radius_px: float) -> ScoreMatrix:
-    """ZNCC of every (i, j) with |x_j - x_i| <= r and |y_j - y_i| <= r; -inf elsewhere."""
-    xy_a, xy_b = feats_a.pixels_xy, feats_b.pixels_xy
+def _windowed_scores(feats_a: Features, feats_b: Features, xy_a: PixelsXY,
+                     radius_px: float) -> ScoreMatrix:
+    """Similarity of every (i, j) with |x_j - x_i| <= r and |y_j - y_i| <= r, where (x_i, y_i)
+    is row i of ``xy_a`` (A's window centres); -inf elsewhere."""
+    xy_b = feats_b.pixels_xy
     order_b = np.argsort(xy_b[:, 0], kind="stable")
     x_b_sorted = xy_b[order_b, 0]
     lo = np.searchsorted(x_b_sorted, xy_a[:, 0] - radius_px, side="left")
@@ -137,18 +154,49 @@ def _windowed_scores(feats_a: Features, feats_b: Features, radius_px: float) -> 
     in_window = np.abs(xy_b[cand_b, 1] - xy_a[cand_a, 1]) <= radius_px
     cand_a, cand_b = cand_a[in_window], cand_b[in_window]
     scores = np.full((len(feats_a), len(feats_b)), -np.inf, dtype=np.float32)
-    scores[cand_a, cand_b] = np.einsum(
-        "kd,kd->k", feats_a.patches[cand_a], feats_b.patches[cand_b]
-    )
+    scores[cand_a, cand_b] = _pair_scores(feats_a, feats_b, cand_a, cand_b)
     return scores
+
+
+def _all_scores(feats_a: Features, feats_b: Features) -> ScoreMatrix:
+    """(N, M) similarity of every pair (module docstring)."""
+    if not feats_a.binary:
+        return feats_a.descriptors @ feats_b.descriptors.T
+    da, db = _words(feats_a.descriptors), _words(feats_b.descriptors)
+    hamming = np.bitwise_count(da[:, None, :] ^ db[None, :, :]).sum(axis=2, dtype=np.int32)
+    return _from_hamming(hamming, feats_a.descriptors.shape[1])
+
+
+def _pair_scores(feats_a: Features, feats_b: Features, idx_a: Indices, idx_b: Indices) -> Scores:
+    """(K,) similarity of the pairs (idx_a[k], idx_b[k])."""
+    da, db = feats_a.descriptors, feats_b.descriptors
+    if not feats_a.binary:
+        return np.einsum("kd,kd->k", da[idx_a], db[idx_b]).astype(np.float32)
+    wa, wb = _words(da), _words(db)
+    hamming = np.bitwise_count(wa[idx_a] ^ wb[idx_b]).sum(axis=1, dtype=np.int32)
+    return _from_hamming(hamming, da.shape[1])
+
+
+def _words(bits: npt.NDArray[np.uint8]) -> npt.NDArray[Any]:
+    """(N, D) packed bytes as (N, D / 8) uint64 words (or (N, D) bytes if D is not a multiple
+    of 8), for a popcount per word."""
+    if bits.shape[1] % 8 == 0:
+        return np.ascontiguousarray(bits).view(np.uint64)
+    return bits
+
+
+def _from_hamming(hamming: npt.NDArray[np.int32], n_bytes: int) -> npt.NDArray[np.float32]:
+    """Similarity 1 - 2 d / bits of bit strings of ``n_bytes`` bytes at Hamming distance d."""
+    return (1.0 - hamming.astype(np.float32) * np.float32(2.0 / (8 * n_bytes))).astype(np.float32)
 
 
 def _passes_ratio_test(
     scores: ScoreMatrix, best_score: Scores, max_ratio: float
 ) -> npt.NDArray[np.bool_]:
-    """Lowe's ratio test (IJCV 2004, sec. 7.1) on A's side, with patch distances.
+    """Lowe's ratio test (IJCV 2004, sec. 7.1) on A's side, with descriptor distances.
 
-    For unit-norm patches |p - q| = sqrt(2 - 2 ZNCC); a match passes when its
+    For unit rows |p - q| = sqrt(2 - 2 similarity) (for bit strings the same
+    monotone map of the Hamming distance); a match passes when its
     distance is below ``max_ratio`` times that of A's second-best candidate
     (always, when there is none).
     """

@@ -16,7 +16,7 @@ from shared.config import CameraMountConfig
 from shared.errors import ShapeError
 from shared.pose import Pose2
 from sim._geometry import point_segment_distances, points_in_polygons
-from sim.config import RenderConfig, SimConfig
+from sim.config import RenderConfig, SensorConfig, SimConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
@@ -158,9 +158,8 @@ class TestImage:
     def test_edges_make_weak_corners_next_to_landmarks(self) -> None:
         # Harris responses of the shaded surfaces alone stay far below those of the landmark
         # patches' corners, so the detector keeps finding landmarks.
-        config = dataclasses.replace(
-            SimConfig(), render=RenderConfig(noise_sigma=0.0, illumination_amplitude=0.0)
-        )
+        config = dataclasses.replace(SimConfig(), render=RenderConfig(illumination_amplitude=0.0),
+                                     sensor=SensorConfig.ideal())
         sim = Simulation(load_world("lab"), config)
         pose = Pose2(8.0, 10.0, 0.0)
         sim.place_robot(pose)

@@ -17,16 +17,7 @@ from tests.tools.short_routes import teach_east_a
 from tools.bench.chance import fitted_to_camera, skimage_paths
 from tools.cli import main
 
-
-def _has_vision_group() -> bool:
-    from tools import cli
-
-    return "vision" in [m.__name__.rsplit(".", 1)[-1] for m in cli.COMMANDS] or any(
-        getattr(m, "__name__", "").endswith("vision_cmd") for m in cli.COMMANDS)
-
-
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not _has_vision_group(), reason="vmnav vision not registered yet")]
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,8 @@ The images:
 Each image is made what the robot's camera delivers: grey, centre-cropped to the
 camera's aspect and resized to its size (the default lens), and
 goes through exactly what a query and a key image go through in
-:class:`robot.memory.Localizer`: corners in the lens circle, matching with
+:class:`robot.memory.Localizer`: the front end's features in the lens circle
+(``[features] method``), matching with
 ``[localize] matching``, lifting through the camera and the mount, the relative
 pose and the tests (:func:`robot.memory.verify_matches`). Every unordered pair of
 images from different sets is tried once.
@@ -45,9 +46,7 @@ import numpy.typing as npt
 
 from robot.config import VmnavConfig
 from robot.memory import Verification, verify_matches
-from robot.vision.features import Features, detect_harris
-from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
+from robot.vision.front_end import make_front_end
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.errors import InputError
@@ -169,8 +168,8 @@ def try_pairs(
     images: Sequence[ChanceImage], camera: CameraModel, config: VmnavConfig, seed: int = 0
 ) -> list[PairOutcome]:
     """Every unordered pair of images from different sets through localization's test."""
-    mask = lens_mask(camera)
-    features: list[Features] = [detect_harris(i.image, config.features, mask) for i in images]
+    front_end = make_front_end(config.features, camera)
+    features = [front_end.describe(i.image) for i in images]
     R_level_cam = rotation_level_cam(config.camera.mount)
     outcomes = []
     for a in range(len(images)):
@@ -178,8 +177,8 @@ def try_pairs(
             if images[a].group == images[b].group:
                 continue
             t0 = time.thread_time_ns()
-            matches = match_zncc(features[a], features[b], config.localize.matching)
-            verification = verify_matches(features[a], features[b], matches, camera, R_level_cam,
+            matches = front_end.match(features[a], features[b], config.localize.matching)
+            verification = verify_matches(features[a], features[b], matches, R_level_cam,
                                           config.localize, np.random.default_rng(seed))
             time_ms = (time.thread_time_ns() - t0) / 1e6
             outcomes.append(PairOutcome(images[a].name, images[b].name, verification, time_ms))

@@ -303,7 +303,7 @@ def _tiny_memory(folder: Path) -> VisualMemory:
         records.append(KeyframeRecord(t_ns=i * NS_PER_S, odom_pose=Pose2(0.5 * i, 0.0, 0.0),
                                       distance_m=0.5 * i, image=image,
                                       pixels_xy=np.array(features.pixels_xy),
-                                      patches=np.array(features.patches)))
+                                      patches=np.array(features.descriptors)))
     memory = VisualMemory(camera)
     memory.add_path("fuzz", records)
     write_memory(folder, memory)

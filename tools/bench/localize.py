@@ -39,7 +39,8 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import VmnavConfig
-from robot.memory import Localization, Localizer, keyframe_features
+from robot.memory import Localization, Localizer
+from robot.vision.front_end import make_front_end
 from shared.camera_model import CameraModel
 from shared.errors import ConfigError
 from shared.memory import VisualMemory
@@ -234,10 +235,11 @@ def replicated_localizer(
     """A localizer over ``size`` key images: the memory's, repeated under new ids."""
     keyframes = [memory.keyframes[i] for i in sorted(memory.keyframes)]
     chosen = [keyframes[k % len(keyframes)] for k in range(size)]
+    front_end = make_front_end(config.features, memory.camera)
     return Localizer(
         list(range(size)),
         [k.thumbnail for k in chosen],
-        [keyframe_features(k) for k in chosen],
+        [front_end.features_from_keyframe(k) for k in chosen],
         memory.camera,
         config.camera.mount,
         config.features,

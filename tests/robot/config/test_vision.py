@@ -18,6 +18,8 @@ class TestFeatureConfig:
     @pytest.mark.parametrize(
         ("key", "value", "message"),
         [
+            ("method", "surf", "method must be one of harris-zncc, orb, akaze, sift, teblid, "
+             "beblid, got 'surf'"),
             ("max_corners", 0, "max_corners must be >= 1, got 0"),
             ("quality_level", 1.0, "quality_level must be in \\(0, 1\\), got 1.0"),
             ("min_distance_px", -1.0, "min_distance_px must be >= 0"),

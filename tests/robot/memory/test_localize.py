@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from robot.config import LocalizeConfig
-from robot.memory import Localizer, keyframe_features, localize
+from robot.memory import Localizer, localize
+from robot.vision.front_end import make_front_end
 from shared.config import CameraMountConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
@@ -146,7 +147,7 @@ class TestBadInput:
         keyframe = memory.keyframe(0)
         with pytest.raises(ValueError, match="2 key image ids, 1 thumbnails"):
             Localizer([0, 1], [keyframe.thumbnail], [], memory.camera, MOUNT, FEATURES, CONFIG)
-        features = [keyframe_features(keyframe)]
+        features = [make_front_end(FEATURES, memory.camera).features_from_keyframe(keyframe)]
         with pytest.raises(ValueError, match="thumbnail 0: expected 80x60 uint8, got shape"):
             Localizer([0], [keyframe.image], features, memory.camera, MOUNT, FEATURES, CONFIG)
 

@@ -50,7 +50,7 @@ def record_of(image: np.ndarray, camera: CameraModel, index: int) -> KeyframeRec
         distance_m=0.5 * index,
         image=image,
         pixels_xy=np.array(features.pixels_xy),
-        patches=np.array(features.patches),
+        patches=np.array(features.descriptors),
     )
 
 
