@@ -63,6 +63,8 @@ SKIMAGE_FILES = (
     "coffee.png", "coins.png", "grass.png", "gravel.png", "rocket.jpg", "text.png",
 )
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+#: The paper's front end (Harris corners, ZNCC), tried beside the config's.
+PAPER_METHOD = "harris-zncc"
 #: The acceptance threshold before geometric verification, matches: the JSON counts the
 #: pairs it would have accepted (``old_rule_accepted``), for comparison.
 OLD_MIN_MATCHES = 25
@@ -220,7 +222,11 @@ def _pair_json(outcome: PairOutcome) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the benchmark's JSON (one core)."""
+    """Print the benchmark's JSON (one core): the config's front end, and the paper's
+    (``harris-zncc``) beside it under ``paper_front_end`` (the same figures when the
+    config's is the paper's)."""
+    import dataclasses
+
     from robot.config import load_config
     from tools.bench.cpu import pin_to_one_core
     from tools.bench.targets import target_summary
@@ -230,10 +236,14 @@ def run(args: argparse.Namespace) -> int:
     cpus = pin_to_one_core()
     realdata = DEFAULT_REALDATA if args.realdata is None else args.realdata
     images = load_images([realdata, VENDORED_REALDATA], camera)
-    outcomes = try_pairs(images, camera, config)
+    row = summary(images, try_pairs(images, camera, config))
+    paper = dataclasses.replace(
+        config, features=dataclasses.replace(config.features, method=PAPER_METHOD))
+    paper_row = row if paper == config else summary(images, try_pairs(images, camera, paper))
     result: dict[str, Any] = {"benchmark": "chance", "cpus": cpus,
                               "camera_px": [camera.width, camera.height],
-                              **summary(images, outcomes)}
+                              "front_end": config.features.method, **row,
+                              "paper_front_end": {"front_end": PAPER_METHOD, **paper_row}}
     result.update(target_summary("chance", result))
     print(json.dumps(result, indent=2))
     return 0

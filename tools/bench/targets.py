@@ -88,6 +88,7 @@ TARGETS: tuple[Target, ...] = (
     _follow("loop_ms_p50_median", "<", 20.0),
     Target("log", "log_overhead_core_fraction", "<", 0.10, "issue 7"),
     Target("chance", "accepted", "<=", 0, "issue 16"),
+    Target("chance", "paper_front_end.accepted", "<=", 0, "issue 16"),
     Target("vision", "localize_relit_top1_rate", ">=", 0.90, "issue 16"),
     Target("link", "dispatch_ack_ms_p95", "<", 50.0, "issue 6"),
     Target("link", "ground_cpu_fraction_20_vehicles", "<", 0.30, "issue 6"),
