@@ -71,7 +71,7 @@ class Candidate:
     Attributes:
         keyframe_id: the key image.
         similarity: the prefilter's score, cosine in [-1, 1] (nan when not prefiltered).
-        matches: ZNCC matches with the query.
+        matches: matches with the query (the front end's method).
         verification: the relative pose's inliers and the verdict; None when not
             verified (the exhaustive baseline verifies only its winner).
     """
@@ -105,7 +105,7 @@ class Localization:
         candidates: the key images matched, best first: accepted ones, then by
             inliers, then by matches (equal ones in prefilter order; all key images
             in id order for the exhaustive baseline).
-        query_features: corners found in the query.
+        query_features: features found in the query.
     """
 
     keyframe_id: int | None
@@ -118,9 +118,10 @@ class Localization:
     @property
     def verdict(self) -> str:
         """The winner's verdict (:mod:`robot.memory.verification`), or why there is none."""
-        if not self.candidates or self.candidates[0].verification is None:
+        winner = next((c for c in self.candidates if c.keyframe_id == self.keyframe_id), None)
+        if winner is None or winner.verification is None:
             return "no key images"
-        return self.candidates[0].verification.verdict
+        return winner.verification.verdict
 
     @property
     def detail(self) -> str:

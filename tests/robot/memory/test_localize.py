@@ -81,6 +81,7 @@ class TestLocalize:
         assert [c.keyframe_id for c in result.candidates] == list(range(12))
         assert all(math.isnan(c.similarity) for c in result.candidates)
         assert [c.verification is not None for c in result.candidates].count(True) == 1
+        assert result.verdict == "accepted"
         fast = localizer.localize(places[9].query)
         assert fast.matches == result.matches and fast.inliers == result.inliers
         assert result.ok
