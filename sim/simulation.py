@@ -54,6 +54,10 @@ class Simulation:
     Args:
         world: the place.
         config: seed, physics step, body, odometry, people and landmark settings.
+        landmark_world: the world the landmark patches are placed in; None: ``world``.
+            A repeat after a scene change (:mod:`sim.scene_change`) passes the taught
+            world, so that the patches stay where they were taught (moving an object
+            would otherwise redraw the whole field).
 
     Attributes:
         world: the world.
@@ -68,7 +72,8 @@ class Simulation:
             (:meth:`sim.scene_change.LightingChange.gain_at`); the renderer applies it.
     """
 
-    def __init__(self, world: World, config: SimConfig) -> None:
+    def __init__(self, world: World, config: SimConfig,
+                 landmark_world: World | None = None) -> None:
         self.world = world
         self.config = config
         landmark_rng, odometry_rng, people_rng = np.random.default_rng(config.seed).spawn(3)
@@ -77,10 +82,10 @@ class Simulation:
         self._add_walls_and_furniture()
         self.free_space = FreeSpaceMap.from_world(world)
         self.landmarks: LandmarkField = generate_landmarks(
-            world,
+            world if landmark_world is None else landmark_world,
             landmark_rng,
             config.landmark_density_scale,
-            self.free_space,
+            self.free_space if landmark_world is None else None,
         )
         self.body = PioneerBody(self.space, config.body, config.odometry, world.start, odometry_rng)
         self.people = People(

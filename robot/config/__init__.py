@@ -49,6 +49,8 @@ from robot.config.vision import (
     PathStateConfig,
     RelativePoseConfig,
     TeachConfig,
+    migrate_vision_keys,
+    renamed_vision_key,
 )
 from shared.config import (
     SIM_TABLE,
@@ -126,7 +128,8 @@ def load_config(path: str | Path | None) -> VmnavConfig:
 
     Raises:
         ConfigError: naming the file, table and key at fault; a table of
-            :data:`MOVED_TABLES` names where it lives now, a key of
+            :data:`MOVED_TABLES` names where it lives now, a pixel-valued vision key
+            (:data:`robot.config.vision.RENAMED_VISION_KEYS`) its angle, a key of
             :data:`REPLACED_KEYS` what replaced it.
     """
     if path is None:
@@ -135,6 +138,10 @@ def load_config(path: str | Path | None) -> VmnavConfig:
     for old, new, why in MOVED_TABLES:
         if _lookup(data, old) is not None:
             raise ConfigError(path, f"{old}: moved to [{new}] ({why})")
+    renamed = renamed_vision_key(data)
+    if renamed is not None:
+        raise ConfigError(path, f"{renamed[0]}: renamed to {renamed[1]} (vision windows are "
+                                "angles on the sphere now, docs/front-end.md)")
     for old, new in REPLACED_KEYS:
         if _lookup(data, old) is not None:
             raise ConfigError(path, f"{old}: no longer exists, replaced by {new}")
@@ -148,8 +155,9 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
     A log written before the simulator's tables left the robot's config holds them
     too (``sim``, ``teach_driver``) and the camera mount in ``sim.camera``: the mount
     becomes ``camera.mount`` and the simulator's tables, which the robot never used,
-    are dropped, so such a log replays as it ran. Keys of :data:`REPLACED_KEYS` are
-    dropped too: their replacements take their defaults.
+    are dropped, so such a log replays as it ran. Vision windows logged in pixels
+    become the angles they were on the default lens (:func:`migrate_vision_keys`). Keys
+    of :data:`REPLACED_KEYS` are dropped: their replacements take their defaults.
 
     Raises:
         ConfigError: a key unknown in both layouts, a bad value (at ``key_path``).
@@ -164,7 +172,7 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
         data = old
     for dotted, _ in REPLACED_KEYS:
         data = _without(data, dotted)
-    return from_mapping(VmnavConfig, data, source, key_path)
+    return from_mapping(VmnavConfig, migrate_vision_keys(data), source, key_path)
 
 
 def _without(data: Mapping[str, Any], dotted: str) -> Mapping[str, Any]:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from shared.memory import write_memory
-from tests.robot.memory.textured import Place, make_places, memory_of
+from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
 from tools.cli import main
 
@@ -33,7 +33,13 @@ def memory_dir(tmp_path: Path, places: list[Place]) -> Path:
         {"west": [p.key_image for p in places[:3]], "east": [p.key_image for p in places[3:]]}
     )
     write_memory(tmp_path / "mem", memory)
-    (tmp_path / "vmnav.toml").write_text("[localize]\ncandidates = 3\nmin_inliers = 10\n")
+    # The memory's front end (the paper's, sized for the small lens), and a localization.
+    features = (f'[features]\nmethod = "{FEATURES.method}"\n'
+                f"patch_size_deg = {FEATURES.patch_size_deg!r}\n"
+                f"min_distance_deg = {FEATURES.min_distance_deg!r}\n")
+    (tmp_path / "features.toml").write_text(features)
+    (tmp_path / "vmnav.toml").write_text(
+        features + "[localize]\ncandidates = 3\nmin_inliers = 10\n")
     return tmp_path / "mem"
 
 
@@ -63,7 +69,8 @@ class TestLocalize:
     ) -> None:
         query = query_file(memory_dir.parent, places[1].query)
         code, out, _ = run(
-            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json"], capsys
+            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json",
+             "--config", str(memory_dir.parent / "features.toml")], capsys
         )
         assert code == 0
         report = json.loads(out)
@@ -93,7 +100,8 @@ class TestLocalize:
     ) -> None:
         colour = cv2.cvtColor(places[2].query, cv2.COLOR_GRAY2BGR)
         query = query_file(memory_dir.parent, colour)
-        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json"], capsys)
+        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json",
+                            "--config", str(memory_dir.parent / "features.toml")], capsys)
         assert code == 0 and json.loads(out)["keyframe_id"] == 2
 
 

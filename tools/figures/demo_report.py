@@ -173,14 +173,20 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
 
 def scene_change_report(changed: ChangedWorld) -> dict[str, object]:
     """What changed since the teach (:mod:`sim.scene_change`), for ``report.json``."""
-    lighting = changed.change.lighting
+    change = changed.change
+    lighting = change.lighting
     return {
         "light_scale": lighting.scale,
+        "lamps_switched_off": len(changed.lamps_off),
+        "daylight_hour": lighting.hour,
         "light_step": ({"factor": lighting.step_factor, "at_s": lighting.step_at_s}
                        if lighting.has_step else None),
-        "moved_fraction": changed.change.moved_fraction,
+        "moved_fraction": change.moved_fraction,
         "objects_moved": len(changed.moved),
         "objects_left_in_place": len(changed.stuck),
+        "pictures_removed": changed.removed_pictures,
+        "objects_removed": changed.removed_objects,
+        "doors": {name: opening for name, opening in change.doors},
     }
 
 

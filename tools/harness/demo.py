@@ -208,13 +208,14 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                                    f"(ids 0..{max(memory.keyframes)})")
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
     start = start_pose(taught)
+    taught_world = load_world(sim_config.world)
     try:
-        changed = change_world(load_world(sim_config.world), change,
+        changed = change_world(taught_world, change,
                                np.random.default_rng([sim_config.seed, _CHANGE_STREAM]),
                                np.array([[start.x_m, start.y_m]]))
     except ValueError as e:
         raise InputError("scene change", str(e)) from None
-    sim = Simulation(changed.world, sim_config)
+    sim = Simulation(changed.world, sim_config, landmark_world=taught_world)
     sim.light_gain_at = change.lighting.gain_at
     sim.place_robot(start)
     clock = SimClock(sim)

@@ -32,9 +32,10 @@ def test_the_repeat_runs_with_people_and_the_light_changed(short_demo, capsys) -
                  "--lighting", "scale=0.8,step=0.6@6"])
     (row,) = json.loads(capsys.readouterr().out)["seeds"]
     assert code == 0 and row["reached_goal"] and row["lateral_rms_m"] < 0.05
-    assert row["scene_change"] == {"light_scale": 0.8, "light_step": {"factor": 0.6, "at_s": 6.0},
-                                   "moved_fraction": 0.0, "objects_moved": 0,
-                                   "objects_left_in_place": 0}
+    assert row["scene_change"] == {
+        "light_scale": 0.8, "lamps_switched_off": 0, "daylight_hour": None,
+        "light_step": {"factor": 0.6, "at_s": 6.0}, "moved_fraction": 0.0, "objects_moved": 0,
+        "objects_left_in_place": 0, "pictures_removed": 0, "objects_removed": 0, "doors": {}}
 
 
 @pytest.mark.parametrize(("args", "message"), [
