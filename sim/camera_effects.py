@@ -169,7 +169,7 @@ class CameraEffects:
         self.last: SensorReading | None = None
 
     def apply(self, scene: npt.NDArray[np.uint8] | npt.NDArray[np.float32], t_ns: int,
-              motion: CameraMotion) -> npt.NDArray[np.uint8]:
+              motion: CameraMotion, light_gain: float = 1.0) -> npt.NDArray[np.uint8]:
         """Record one frame of ``scene``.
 
         Args:
@@ -177,6 +177,8 @@ class CameraEffects:
                 may exceed 255: light the sensor then clips), the camera's image size.
             t_ns: the exposure's time stamp (its middle), ns.
             motion: the camera's velocity during the exposure.
+            light_gain: the scene's light relative to ``scene``'s grey levels (a lamp
+                switched off, a cloud); not clipped before the sensor.
 
         Returns:
             (H, W) uint8 grey image as the camera records it.
@@ -192,7 +194,8 @@ class CameraEffects:
         light = scene[self._roi].astype(np.float32)
         step = _METER_STEP_PX
         if self._log_e is None:  # metered before the first exposure
-            seen = cv2.multiply(light[::step, ::step], self._vignette[::step, ::step])
+            seen = cv2.multiply(light[::step, ::step], self._vignette[::step, ::step],
+                                scale=light_gain)
             mean = cv2.mean(seen, mask=self._meter_mask)[0]
             self._log_e = self._clamped(math.log(cfg.target_grey / max(mean, 1e-3)))
         exposure_s, gain = self._split(math.exp(self._log_e))
@@ -201,7 +204,7 @@ class CameraEffects:
             light, blur_px = self._blur(light, motion, exposure_s)
         # Blur first: the scene moves over the sensor; the lens's falloff is fixed to it.
         signal = cv2.multiply(light, self._vignette,
-                              scale=exposure_s / cfg.reference_exposure_s * gain)
+                              scale=light_gain * exposure_s / cfg.reference_exposure_s * gain)
         self._add_noise(signal, gain)
         recorded = cv2.convertScaleAbs(cv2.max(signal, 0.0))  # rounds; clips at 255
         image = np.zeros((h, w), dtype=np.uint8)

@@ -47,6 +47,8 @@ from sim.simulation import OCCLUDER_FILTER, Simulation
 from sim.texture_library import Texture, TextureLibrary
 
 FloatArray = npt.NDArray[np.float64]
+Canvas = npt.NDArray[np.uint8] | npt.NDArray[np.float32]
+"""(H, W) grey levels a figure is drawn into: a frame, or the renderer's radiance."""
 
 _REFERENCE_HEIGHT_M = 1.75
 """The figure's heights below are for a person this tall, m; others scale."""
@@ -59,6 +61,7 @@ _ARM = (0.0, 0.235, 0.05, 0.80, 1.42)
 _HAND_M = 0.10
 """Bottom of each arm drawn as skin, m."""
 _NECK = (0.0, 0.0, 0.055, 1.42, 1.54)
+"""Neck: forward, lateral, radius, bottom, top, m."""
 _HEAD = (0.01, 0.0, 1.635, 0.105)
 """Head: forward, lateral, height of the centre, radius, m."""
 _FACE_HALF_ANGLE = math.radians(70.0)
@@ -69,10 +72,11 @@ _SWING_M = 0.12
 """Peak forward swing of a foot or hand, m."""
 _NEAR_M = 0.15
 """People whose body comes nearer than this to the optical centre are not drawn, m."""
-_MAX_SAMPLES = 6_000
+_MAX_SAMPLES = 4_000
 """Rays cast per figure at most: small figures get 2 x 2 per pixel, near ones fewer than
 one (then interpolated: softer, like a lens focused further away)."""
 _REMAP_COLUMNS = 1024
+"""Texture look-ups go through cv2.remap in rows this long (it wants maps < 32767 wide)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,8 +121,10 @@ def draw_look(rng: np.random.Generator, library: TextureLibrary) -> PersonLook:
                                                              "clothing_plain")] or clothes))
     shirt = str(rng.choice(clothes))
     skin = float(rng.uniform(0.45, 1.1))
+    # The face photograph at the skin's mean grey.
+    face = skin * float(library.get("skin").image.mean() / library.get("person_face").image.mean())
     greys = (float(rng.uniform(0.35, 1.0)), float(rng.uniform(0.5, 1.4)), skin,
-             float(rng.uniform(0.3, 2.0)), skin * 192.0 / 144.0)  # face: the skin's grey
+             float(rng.uniform(0.3, 2.0)), face)
     return PersonLook((trousers, shirt, "skin", "hair", "person_face"), greys,
                       bool(rng.random() < 0.4))
 
@@ -151,15 +157,19 @@ class PersonFigures:
             self._looks[index] = draw_look(self._rng, self._library)
         return self._looks[index]
 
-    def draw_people(self, sim: Simulation, image: npt.NDArray[np.uint8],
-                    R_cam_world: FloatArray, centre_w: FloatArray) -> None:
-        """Draw every person of ``sim`` into ``image`` ((H, W) uint8, in place), far to near.
+    def draw_people(self, sim: Simulation, image: Canvas, R_cam_world: FloatArray,
+                    centre_w: FloatArray, depth_m: npt.NDArray[np.float32] | None = None,
+                    ) -> None:
+        """Draw every person of ``sim`` into ``image`` (in place), far to near.
 
         Args:
             sim: the simulation (people, and the walls and furniture that hide them).
-            image: the frame drawn so far.
+            image: (H, W) uint8 or float32 grey levels, the frame drawn so far.
             R_cam_world: (3, 3) rotation world -> camera.
             centre_w: (3,) the optical centre, world frame, m.
+            depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m
+                (inf: nothing); given, it hides the figures per pixel instead of the
+                walls and furniture met along their centre lines.
         """
         positions, radius, height = sim.people_state()
         headings, walked = sim.people.headings(), sim.people.walked_m()
@@ -169,26 +179,29 @@ class PersonFigures:
             if distances[k] <= radius + _NEAR_M:
                 continue
             px, py = float(positions[k, 0]), float(positions[k, 1])
-            occluders = [(info.alpha * distances[k], sim.occluder_height(info.shape))
-                         for info in sim.space.segment_query((cx, cy), (px, py), 0.0,
-                                                             OCCLUDER_FILTER)
-                         if info.shape is not None and not sim.is_person(info.shape)]
+            occluders = [] if depth_m is not None else [
+                (info.alpha * distances[k], sim.occluder_height(info.shape))
+                for info in sim.space.segment_query((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
+                if info.shape is not None and not sim.is_person(info.shape)]
             pose = FigurePose(px, py, float(headings[k]), float(walked[k]), height, radius)
-            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders)
+            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders, depth_m)
 
-    def draw(self, image: npt.NDArray[np.uint8], pose: FigurePose, look: PersonLook,
+    def draw(self, image: Canvas, pose: FigurePose, look: PersonLook,
              R_cam_world: FloatArray, centre_w: FloatArray,
-             occluders: list[tuple[float, float]]) -> None:
-        """Draw one figure into ``image`` ((H, W) uint8, in place).
+             occluders: list[tuple[float, float]],
+             depth_m: npt.NDArray[np.float32] | None = None) -> None:
+        """Draw one figure into ``image`` (in place).
 
         Args:
-            image: the frame drawn so far.
+            image: (H, W) uint8 or float32 grey levels, the frame drawn so far.
             pose: where the figure stands.
             look: its textures and greys.
             R_cam_world: (3, 3) rotation world -> camera.
             centre_w: (3,) the optical centre, world frame, m.
             occluders: (distance along the floor from the camera, m; height, m) of each
                 wall or piece of furniture between the camera and the figure.
+            depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m:
+                the figure shows only where it is nearer.
         """
         distance = math.hypot(pose.x_m - float(centre_w[0]), pose.y_m - float(centre_w[1]))
         near = max(distance - pose.radius_m, 1e-6)
@@ -201,22 +214,28 @@ class PersonFigures:
             return
         x0, y0, x1, y1 = box
         size = (x1 - x0, y1 - y0)
-        rays_w = self._rays(x0, y0, x1, y1, R_cam_world)
         # Samples per pixel side: 2 for small figures (anti-aliased), fewer for near ones.
         scale = min(2.0, math.sqrt(_MAX_SAMPLES / (size[0] * size[1])))
         sampled = (max(round(size[0] * scale), 1), max(round(size[1] * scale), 1))
-        if sampled != size:
-            rays_w = cv2.resize(rays_w, sampled, interpolation=cv2.INTER_LINEAR)
-            rays_w /= np.linalg.norm(rays_w, axis=2, keepdims=True)
+        rays_w = self._rays(box, sampled, R_cam_world)
+        depth = None
+        if depth_m is not None:
+            depth = depth_m[y0:y1, x0:x1]
+            if sampled != size:
+                depth = cv2.resize(depth, sampled, interpolation=cv2.INTER_NEAREST)
         grey, cover = self._shade(rays_w, pose, look, centre_w, occluders,
-                                  self._px_per_rad * scale / distance)
+                                  self._px_per_rad * scale / distance, depth)
         grey *= cover
         if sampled != size:
             shrink = cv2.INTER_AREA if scale > 1.0 else cv2.INTER_LINEAR
             grey = cv2.resize(grey, size, interpolation=shrink)
             cover = cv2.resize(cover, size, interpolation=shrink)
         roi = image[y0:y1, x0:x1]
-        roi[:] = np.clip(roi * (1.0 - cover) + grey + 0.5, 0, 255).astype(np.uint8)
+        blended = roi * (1.0 - cover) + grey
+        if image.dtype == np.uint8:
+            roi[:] = np.clip(blended + 0.5, 0, 255).astype(np.uint8)
+        else:
+            roi[:] = blended
 
     # -- geometry ---------------------------------------------------------------------
 
@@ -237,9 +256,11 @@ class PersonFigures:
         x1, y1 = min(int(hi[0]), self.camera.width), min(int(hi[1]), self.camera.height)
         return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
-    def _rays(self, x0: int, y0: int, x1: int, y1: int,
+    def _rays(self, box: tuple[int, int, int, int], sampled: tuple[int, int],
               R_cam_world: FloatArray) -> npt.NDArray[np.float32]:
-        """Unit rays of the pixels in the box, world frame: (h, w, 3) float32."""
+        """Unit rays over the box (x0, y0, x1, y1) on a ``sampled`` (width, height) grid,
+        world frame: (height, width, 3) float32."""
+        x0, y0, x1, y1 = box
         if self._bearings is None:
             cam = self.camera
             u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64),
@@ -247,12 +268,22 @@ class PersonFigures:
             b, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
             b[~valid] = (0.0, 0.0, -1.0)  # never meets a figure in front
             self._bearings = b.reshape(cam.height, cam.width, 3).astype(np.float32)
-        return (self._bearings[y0:y1, x0:x1] @ R_cam_world.astype(np.float32)).astype(np.float32)
+        bearings = self._bearings[y0:y1, x0:x1]
+        if sampled != (x1 - x0, y1 - y0):
+            bearings = cv2.resize(bearings, sampled, interpolation=cv2.INTER_LINEAR)
+            bearings /= np.linalg.norm(bearings, axis=2, keepdims=True)
+        return bearings @ R_cam_world.astype(np.float32)
 
     def _shade(self, rays_w: npt.NDArray[np.float32], pose: FigurePose, look: PersonLook,
-               centre_w: FloatArray, occluders: list[tuple[float, float]],
-               px_per_m: float) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        """Grey (h, w) and coverage (h, w, 0 or 1) of the figure along ``rays_w``."""
+               centre_w: FloatArray, occluders: list[tuple[float, float]], px_per_m: float,
+               depth: npt.NDArray[np.float32] | None,
+               ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """Grey (h, w) and coverage (h, w, 0 or 1) of the figure along ``rays_w`` (where it
+        is nearer than ``depth``, (h, w) m, if given).
+
+        Two passes: each solid's distance along every ray, then the surface (part,
+        texture coordinates, shade) only where a solid is the nearest.
+        """
         h, w, _ = rays_w.shape
         grey_all = np.zeros(h * w, dtype=np.float32)
         cover_all = np.zeros(h * w, dtype=np.float32)
@@ -271,111 +302,37 @@ class PersonFigures:
         # Camera and rays in the person's frame (forward, left, up).
         c = np.array([rel @ fwd, rel @ left, float(centre_w[2])])
         r = np.column_stack([d[:, :2] @ fwd, d[:, :2] @ left, d[:, 2]])
-        s = pose.height_m / _REFERENCE_HEIGHT_M
-        swing = _SWING_M * math.sin(2.0 * math.pi * pose.walked_m / _STRIDE_M)
-        hits = []  # (t, piece index, u_m, v_m, shade) per solid
-        for side in (1.0, -1.0):
-            f, lat, rad, z0, z1 = _LEG
-            hits.append(self._cylinder(c, r, (f + side * swing, side * lat), (rad, rad),
-                                       z0 * s, z1 * s, 0))
-            f, lat, rad, z0, z1 = _ARM
-            hits.append(self._cylinder(c, r, (f - side * swing, side * lat), (rad, rad),
-                                       z0 * s, z1 * s, 1, skin_below=(z0 + _HAND_M) * s))
-        f, lat, af, al, z0, z1 = _TORSO
-        hits.append(self._cylinder(c, r, (f, lat), (af, al), z0 * s, z1 * s, 1))
-        f, lat, rad, z0, z1 = _NECK
-        hits.append(self._cylinder(c, r, (f, lat), (rad, rad), z0 * s, z1 * s, 2))
-        hits.append(self._head(c, r, s, look.long_hair))
-        t = np.stack([hit[0] for hit in hits])
+        cylinders, head = _solids(pose)
+        t = np.vstack([cylinders.distances(c, r), head.distances(c, r)[None, :]])
         nearest = np.argmin(t, axis=0)
-        pick = np.arange(t.shape[1])
-        t_hit = t[nearest, pick]
-        piece, u_m, v_m, shade = (np.stack([hit[i] for hit in hits])[nearest, pick]
-                                  for i in range(1, 5))
+        t_hit = t[nearest, np.arange(t.shape[1])]
         cover = np.isfinite(t_hit)
+        if depth is not None:
+            cover &= t_hit < depth.reshape(-1)[rays]
         horizontal = np.hypot(r[:, 0], r[:, 1])
         for along_m, top_m in occluders:  # the line of sight must pass above each
             with np.errstate(divide="ignore", invalid="ignore"):
                 rise = c[2] + along_m * r[:, 2] / horizontal
             cover &= rise > top_m
+        piece = np.full(t.shape[1], -1)
+        u_m, v_m, shade = np.zeros((3, t.shape[1]))
+        on_head = cover & (nearest == t.shape[0] - 1)
+        on_body = cover & ~on_head
+        if on_body.any():
+            piece[on_body], u_m[on_body], v_m[on_body], shade[on_body] = cylinders.surface(
+                nearest[on_body], c, r[on_body], t_hit[on_body])
+        if on_head.any():
+            piece[on_head], u_m[on_head], v_m[on_head], shade[on_head] = head.surface(
+                c, r[on_head], t_hit[on_head], look.long_hair)
         grey = np.zeros(t.shape[1])
         for i, name in enumerate(look.textures):
-            sel = cover & (piece == i)
-            if sel.any():
-                grey[sel] = self._sample(name, u_m[sel], v_m[sel], px_per_m) * (
-                    look.greys[i] * self._scale) * shade[sel]
+            part = piece == i
+            if part.any():
+                grey[part] = self._sample(name, u_m[part], v_m[part], px_per_m) * (
+                    look.greys[i] * self._scale) * shade[part]
         grey_all[rays] = grey
         cover_all[rays] = cover
         return grey_all.reshape(h, w), cover_all.reshape(h, w)
-
-    @staticmethod
-    def _cylinder(c: FloatArray, r: FloatArray, centre: tuple[float, float],
-                  axes: tuple[float, float], z0: float, z1: float, piece: int,
-                  skin_below: float | None = None) -> tuple[FloatArray, ...]:
-        """Nearest hits of rays ``c + t r`` (person frame) with a vertical elliptic cylinder.
-
-        Returns:
-            t (inf where none), piece, u_m (arc length around it), v_m (down from z1),
-            shade; each (N,).
-        """
-        a_f, a_l = axes
-        q = np.array([(c[0] - centre[0]) / a_f, (c[1] - centre[1]) / a_l])
-        e0, e1 = r[:, 0] / a_f, r[:, 1] / a_l
-        a = e0 * e0 + e1 * e1
-        b = 2.0 * (q[0] * e0 + q[1] * e1)
-        cc = q @ q - 1.0
-        disc = b * b - 4.0 * a * cc
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = (-b - np.sqrt(disc)) / (2.0 * a)
-        z = c[2] + t * r[:, 2]
-        ok = (disc > 0) & (t > 0) & (z >= z0) & (z <= z1)
-        t = np.where(ok, t, np.inf)
-        # The end caps: seen from below (bottom) or above (top).
-        cap = z0 if c[2] < z0 else z1 if c[2] > z1 else None
-        if cap is not None:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t_cap = (cap - c[2]) / r[:, 2]
-            inside = (q[0] + t_cap * e0) ** 2 + (q[1] + t_cap * e1) ** 2 <= 1.0
-            on_cap = (t_cap > 0) & inside & (t_cap < t)
-            t = np.where(on_cap, t_cap, t)
-            ok |= on_cap
-        t_ok = np.where(ok, t, 0.0)
-        hx, hy = q[0] + t_ok * e0, q[1] + t_ok * e1  # on the unit circle where ok
-        with np.errstate(invalid="ignore"):
-            phi = np.arctan2(hy, hx)
-            # Lambert-like: the surface's normal against the line of sight.
-            facing = -(hx * r[:, 0] / a_f + hy * r[:, 1] / a_l) / np.hypot(r[:, 0], r[:, 1])
-        shade = 0.45 + 0.55 * np.clip(np.nan_to_num(facing), 0.0, 1.0)
-        pieces = np.full(t.shape, float(piece))
-        if skin_below is not None:
-            pieces[z < skin_below] = 2.0
-        u_m = phi * 0.5 * (a_f + a_l)
-        return t, pieces, u_m, z1 - z, shade
-
-    @staticmethod
-    def _head(c: FloatArray, r: FloatArray, s: float, long_hair: bool) -> tuple[FloatArray, ...]:
-        """Nearest hits with the head's sphere: face in front, hair above and behind."""
-        f, lat, zc, rad = _HEAD
-        o = c - np.array([f, lat, zc * s])
-        b = r @ o
-        disc = b * b - (o @ o - rad * rad)
-        with np.errstate(invalid="ignore"):
-            t = -b - np.sqrt(disc)
-        ok = (disc > 0) & (t > 0)
-        t = np.where(ok, t, np.inf)
-        p = o + np.where(ok, t, 0.0)[:, None] * r  # on the sphere where ok, centre at 0
-        with np.errstate(invalid="ignore"):
-            n = p / rad
-            phi = np.arctan2(n[:, 1], n[:, 0])  # 0 = straight ahead
-            shade = 0.45 + 0.55 * np.clip(np.nan_to_num(-(n * r).sum(axis=1)), 0.0, 1.0)
-        face = (np.abs(phi) < _FACE_HALF_ANGLE) & (n[:, 2] < 0.55)
-        hair = ~face & ((n[:, 2] > -0.2) | long_hair)
-        piece = np.where(face, 4.0, np.where(hair, 3.0, 2.0))
-        # Face: u across the front (0 at the left edge), v down from the top of the head.
-        u_face = (phi + _FACE_HALF_ANGLE) * rad
-        u_m = np.where(face, u_face, phi * rad)
-        v_m = (1.0 - n[:, 2]) * rad
-        return t, piece, u_m, v_m, shade
 
     # -- textures ---------------------------------------------------------------------
 
@@ -396,7 +353,7 @@ class PersonFigures:
         else:
             x, y = np.clip(x, 0, pw - 1), np.clip(y, 0, ph - 1)
         n = x.shape[0]
-        rows = -(-n // _REMAP_COLUMNS)  # cv2.remap wants maps narrower than 32767 px
+        rows = -(-n // _REMAP_COLUMNS)
         maps = np.zeros((2, rows * _REMAP_COLUMNS), dtype=np.float32)
         maps[0, :n], maps[1, :n] = x, y
         values = cv2.remap(picture, maps[0].reshape(rows, -1), maps[1].reshape(rows, -1),
@@ -412,3 +369,113 @@ class PersonFigures:
                 levels.append(cv2.pyrDown(levels[-1]))
             self._mips[name] = (texture, levels)
         return self._mips[name]
+
+
+# -- the solids ------------------------------------------------------------------------
+
+_TROUSERS, _SHIRT, _SKIN, _HAIR, _FACE = range(5)
+"""Indices into :attr:`PersonLook.textures`."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Cylinders:
+    """The figure's vertical elliptic cylinders, person frame, each a row of (K,) arrays:
+    centre (forward, left) m, semi-axes m, bottom and top heights m, part, and the height
+    below which it is skin (hands), m."""
+
+    centre_f: FloatArray
+    centre_l: FloatArray
+    axis_f: FloatArray
+    axis_l: FloatArray
+    z0: FloatArray
+    z1: FloatArray
+    piece: npt.NDArray[np.int64]
+    skin_below_m: FloatArray
+
+    def distances(self, c: FloatArray, r: FloatArray) -> FloatArray:
+        """(K, N) distance along each ray ``c + t r`` (r: (N, 3) unit) to each cylinder,
+        inf where it misses (sides, and the end cap seen from below or above)."""
+        q0 = ((c[0] - self.centre_f) / self.axis_f)[:, None]
+        q1 = ((c[1] - self.centre_l) / self.axis_l)[:, None]
+        e0 = r[None, :, 0] / self.axis_f[:, None]
+        e1 = r[None, :, 1] / self.axis_l[:, None]
+        a = e0 * e0 + e1 * e1
+        b = q0 * e0 + q1 * e1  # half the quadratic's b
+        disc = b * b - a * (q0 * q0 + q1 * q1 - 1.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = (-b - np.sqrt(disc)) / a
+            z = c[2] + t * r[None, :, 2]
+            side = (disc > 0) & (t > 0) & (z >= self.z0[:, None]) & (z <= self.z1[:, None])
+            t = np.where(side, t, np.inf)
+            cap = np.where(c[2] < self.z0, self.z0, np.where(c[2] > self.z1, self.z1, np.nan))
+            t_cap = (cap[:, None] - c[2]) / r[None, :, 2]
+            on_cap = ((t_cap > 0) & (t_cap < t)
+                      & ((q0 + t_cap * e0) ** 2 + (q1 + t_cap * e1) ** 2 <= 1.0))
+        return np.where(on_cap, t_cap, t)
+
+    def surface(self, k: npt.NDArray[np.int64], c: FloatArray, r: FloatArray,
+                t: FloatArray) -> tuple[FloatArray, ...]:
+        """Part, u_m (arc length around), v_m (down from the top) and shade where ray i
+        hits cylinder ``k[i]`` at ``t[i]``."""
+        a_f, a_l = self.axis_f[k], self.axis_l[k]
+        hx = (c[0] + t * r[:, 0] - self.centre_f[k]) / a_f
+        hy = (c[1] + t * r[:, 1] - self.centre_l[k]) / a_l
+        z = c[2] + t * r[:, 2]
+        # Lambert-like: the surface's normal against the line of sight (the caps take
+        # their rim's, near enough).
+        facing = -(hx * r[:, 0] / a_f + hy * r[:, 1] / a_l) / np.hypot(r[:, 0], r[:, 1])
+        shade = 0.45 + 0.55 * np.clip(facing, 0.0, 1.0)
+        piece = np.where(z < self.skin_below_m[k], _SKIN, self.piece[k])
+        u_m = np.arctan2(hy, hx) * 0.5 * (a_f + a_l)
+        return piece, u_m, self.z1[k] - z, shade
+
+
+@dataclass(frozen=True, slots=True)
+class _Head:
+    """The head's sphere, person frame: centre (forward, left, up) and radius, m."""
+
+    centre: tuple[float, float, float]
+    radius: float
+
+    def distances(self, c: FloatArray, r: FloatArray) -> FloatArray:
+        """(N,) distance along each ray ``c + t r`` (r: (N, 3) unit) to the sphere, inf if none."""
+        o = c - np.array(self.centre)
+        b = r @ o
+        disc = b * b - (o @ o - self.radius**2)
+        with np.errstate(invalid="ignore"):
+            t = -b - np.sqrt(disc)
+        return np.where((disc > 0) & (t > 0), t, np.inf)
+
+    def surface(self, c: FloatArray, r: FloatArray, t: FloatArray,
+                long_hair: bool) -> tuple[FloatArray, ...]:
+        """Face in front, hair above (and behind, long hair), skin elsewhere."""
+        n = (c - np.array(self.centre) + t[:, None] * r) / self.radius
+        phi = np.arctan2(n[:, 1], n[:, 0])  # 0 = straight ahead
+        shade = 0.45 + 0.55 * np.clip(-(n * r).sum(axis=1), 0.0, 1.0)
+        face = (np.abs(phi) < _FACE_HALF_ANGLE) & (n[:, 2] < 0.55)
+        hair = ~face & ((n[:, 2] > -0.2) | long_hair)
+        piece = np.where(face, _FACE, np.where(hair, _HAIR, _SKIN))
+        # Face: u across the front (0 at its left edge); v down from the top of the head.
+        u_m = np.where(face, phi + _FACE_HALF_ANGLE, phi) * self.radius
+        return piece, u_m, (1.0 - n[:, 2]) * self.radius, shade
+
+
+def _solids(pose: FigurePose) -> tuple[_Cylinders, _Head]:
+    """The figure's solids in its frame, scaled to its height, legs and arms mid-swing."""
+    s = pose.height_m / _REFERENCE_HEIGHT_M
+    swing = _SWING_M * math.sin(2.0 * math.pi * pose.walked_m / _STRIDE_M)
+    rows = []  # centre_f, centre_l, axis_f, axis_l, z0, z1, piece, skin below
+    for side in (1.0, -1.0):
+        f, lat, rad, z0, z1 = _LEG
+        rows.append((f + side * swing, side * lat, rad, rad, z0 * s, z1 * s, _TROUSERS, -1.0))
+        f, lat, rad, z0, z1 = _ARM
+        rows.append((f - side * swing, side * lat, rad, rad, z0 * s, z1 * s, _SHIRT,
+                     (z0 + _HAND_M) * s))
+    f, lat, af, al, z0, z1 = _TORSO
+    rows.append((f, lat, af, al, z0 * s, z1 * s, _SHIRT, -1.0))
+    f, lat, rad, z0, z1 = _NECK
+    rows.append((f, lat, rad, rad, z0 * s, z1 * s, _SKIN, -1.0))
+    columns = np.array(rows).T
+    f, lat, zc, rad = _HEAD
+    return (_Cylinders(*columns[:6], columns[6].astype(np.int64), columns[7]),
+            _Head((f, lat, zc * s), rad))

@@ -163,9 +163,8 @@ class FisheyeRenderer:
         self._paint_all(image, ids, affines, dist)
 
         gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
-        image = cv2.convertScaleAbs(image, alpha=gain)
         image = self.effects.apply(image, sim.now_ns,
-                                   camera_motion(sim.body.velocity_base, self.mount))
+                                   camera_motion(sim.body.velocity_base, self.mount), gain)
         near = np.argsort(dist)
         return RenderedFrame(
             t_ns=sim.now_ns,

@@ -33,7 +33,11 @@ def add_parser(vision_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     pair.add_argument("--calibration-b", type=Path, metavar="CAM_B",
                       help="calibration of IMG_B's camera [default: CAM_A]")
     pair.add_argument("--out", type=Path, metavar="FILE.png",
-                      help="write a picture of the matches (grey) and inliers (green)")
+                      help="write a picture of the inliers (green) and rejected matches (red); "
+                           "JPEG if FILE ends in .jpg")
+    pair.add_argument("--config", type=Path, metavar="FILE",
+                      help="vmnav TOML config: the front end of its [features] table and the "
+                           "matching of its [localize] table [default: the defaults]")
     pair.add_argument("--seed", type=int, default=0, help="seed of RANSAC's samples [default: 0]")
     pair.set_defaults(run=run)
 
@@ -44,11 +48,13 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from robot.config import load_config
     from robot.vision.two_view import TwoViewConfig, rotation_vector_deg, two_cameras, two_view
     from shared.calibration import check_image_size, read_camera
     from shared.errors import InputError
     from shared.image_decode import FILE_FORMATS, read_grey
 
+    config = load_config(args.config)
     camera_a = read_camera(args.calibration)
     camera_b = camera_a if args.calibration_b is None else read_camera(args.calibration_b)
     image_a = read_grey(args.image_a, error=InputError, formats=FILE_FORMATS)
@@ -56,14 +62,16 @@ def run(args: argparse.Namespace) -> int:
     check_image_size(camera_a, image_a.shape[1], image_a.shape[0], args.calibration)
     check_image_size(camera_b, image_b.shape[1], image_b.shape[0],
                      args.calibration_b or args.calibration)
-    cameras = two_cameras(camera_a, camera_b)
+    cameras = two_cameras(camera_a, camera_b, config.features)
     start_ns = time.perf_counter_ns()
-    result = two_view(image_a, image_b, cameras, TwoViewConfig(), np.random.default_rng(args.seed))
+    result = two_view(image_a, image_b, cameras, TwoViewConfig(matching=config.localize.matching),
+                      np.random.default_rng(args.seed))
     elapsed_ns = time.perf_counter_ns() - start_ns
     fit = result.fit
     report: dict[str, Any] = {
         "image_a": str(args.image_a),
         "image_b": str(args.image_b),
+        "method": config.features.method,
         "corners_a": len(result.corners_a),
         "corners_b": len(result.corners_b),
         "matches": len(result.matched_a),

@@ -49,6 +49,8 @@ from robot.config.vision import (
     PathStateConfig,
     RelativePoseConfig,
     TeachConfig,
+    migrate_vision_keys,
+    renamed_vision_key,
 )
 from shared.config import (
     SIM_TABLE,
@@ -120,7 +122,8 @@ def load_config(path: str | Path | None) -> VmnavConfig:
 
     Raises:
         ConfigError: naming the file, table and key at fault; a table of
-            :data:`MOVED_TABLES` names where it lives now.
+            :data:`MOVED_TABLES` names where it lives now, a pixel-valued vision key
+            (:data:`robot.config.vision.RENAMED_VISION_KEYS`) its angle.
     """
     if path is None:
         return VmnavConfig()
@@ -128,6 +131,10 @@ def load_config(path: str | Path | None) -> VmnavConfig:
     for old, new, why in MOVED_TABLES:
         if _lookup(data, old) is not None:
             raise ConfigError(path, f"{old}: moved to [{new}] ({why})")
+    renamed = renamed_vision_key(data)
+    if renamed is not None:
+        raise ConfigError(path, f"{renamed[0]}: renamed to {renamed[1]} (vision windows are "
+                                "angles on the sphere now, docs/front-end.md)")
     return from_mapping(VmnavConfig, {k: v for k, v in data.items() if k != SIM_TABLE},
                         str(path))
 
@@ -138,7 +145,8 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
     A log written before the simulator's tables left the robot's config holds them
     too (``sim``, ``teach_driver``) and the camera mount in ``sim.camera``: the mount
     becomes ``camera.mount`` and the simulator's tables, which the robot never used,
-    are dropped, so such a log replays as it ran.
+    are dropped, so such a log replays as it ran. Vision windows logged in pixels
+    become the angles they were on the default lens (:func:`migrate_vision_keys`).
 
     Raises:
         ConfigError: a key unknown in both layouts, a bad value (at ``key_path``).
@@ -151,7 +159,7 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
         if isinstance(sim, Mapping) and "camera" in sim and isinstance(camera, Mapping):
             old["camera"] = {**camera, "mount": sim["camera"]}
         data = old
-    return from_mapping(VmnavConfig, data, source, key_path)
+    return from_mapping(VmnavConfig, migrate_vision_keys(data), source, key_path)
 
 
 def _lookup(data: Mapping[str, Any], dotted: str) -> Any:

@@ -7,9 +7,26 @@ of a vmnav config file (:mod:`robot.config`).
 
 from __future__ import annotations
 
+import copy
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
+from shared.camera_model import CameraModel
 from shared.config import require
+
+#: The default lens's scale at the image centre, px/rad (as
+#: :func:`robot.vision.features.pixels_per_radian` computes it): the lens every
+#: pixel-valued vision key was sized for, and the defaults below still are.
+_DEFAULT_LENS = CameraModel.default()
+_DEFAULT_LENS_PX_PER_RAD = float(_DEFAULT_LENS.K[0, 0] / (1.0 + _DEFAULT_LENS.xi))
+
+
+def degrees_on_default_lens(px: float) -> float:
+    """The angle that spans ``px`` pixels at the default lens's centre, degrees."""
+    return math.degrees(px / _DEFAULT_LENS_PX_PER_RAD)
+
 
 #: Front-end methods (:mod:`robot.vision.front_end`): the paper's Harris corners with ZNCC
 #: patches, and OpenCV's descriptors (TEBLID and BEBLID from opencv-contrib).
@@ -22,25 +39,51 @@ class FeatureConfig:
     (Courbon et al. 2008, sec. III-A).
 
     Defaults follow OpenCV's Harris (``k`` = 0.04, 3x3 block, 3x3 Sobel) and the
-    reference benchmark (300 corners, 11x11 patches).
+    reference benchmark (300 corners, 11x11 patches on the default lens).
+
+    Windows are angles on the sphere (``*_deg``), turned into pixels through the camera
+    model's scale at the image centre (:func:`robot.vision.front_end.pixels_per_radian`;
+    174 px/rad on the default lens), so a lens of another resolution or focal length
+    sees the same part of the scene. The Harris block and the sub-pixel window stay in
+    pixels: they are about image gradients and pixel noise, not about the scene.
     """
 
-    method: str = "harris-zncc"
-    """One of ``FRONT_END_METHODS``: how points are detected and described (docs/front-end.md)."""
+    method: str = "orb"
+    """One of ``FRONT_END_METHODS``: how points are detected and described. ``orb`` (upright
+    ORB on FAST corners spread over a grid) was chosen by measurement on the real fisheye
+    pair and in the simulator, against the paper's ``harris-zncc`` (docs/front-end.md)."""
     max_corners: int = 300
     """Keep at most this many corners, strongest Harris response first."""
     quality_level: float = 0.01
     """Reject corners whose response is below this fraction of the frame's strongest, in (0, 1)."""
-    min_distance_px: float = 8.0
-    """Minimum Euclidean distance between two corners, px (greedy, strongest first)."""
+    min_distance_deg: float = degrees_on_default_lens(8.0)
+    """Minimum angle between two Harris corners, degrees (greedy, strongest first); 8 px on
+    the default lens, 2.64 degrees."""
     block_size_px: int = 3
     """Side of the window summing the gradient products of the Harris matrix, px (odd)."""
     harris_k: float = 0.04
     """Harris & Stephens' k in det(M) - k trace(M)^2 (dimensionless)."""
-    patch_size_px: int = 11
-    """Side P of the square ZNCC patch, px (odd, >= 3); a descriptor has P*P values."""
+    patch_size_deg: float = degrees_on_default_lens(11.0)
+    """Side of the square ZNCC patch, degrees: P px, the nearest odd >= 3; 11 px on the
+    default lens, 3.63 degrees; a descriptor has P*P values."""
     subpixel_half_window_px: int = 3
     """Half side of the cv2.cornerSubPix window, px; 0 keeps integer corner positions."""
+    fast_threshold: int = 12
+    """Methods on FAST corners (orb, teblid, beblid): the absolute contrast threshold,
+    grey levels (a corner needs 9 contiguous circle pixels this much brighter or darker)."""
+    fast_threshold_low: int = 5
+    """Methods on FAST corners: a grid cell that found fewer corners than its share is
+    searched again with this threshold, grey levels (a local floor: a dim part of the view
+    keeps corners); >= ``fast_threshold`` turns the second search off."""
+    grid_cells: int = 8
+    """Methods on FAST corners: the image is cut into this many square cells along its longer
+    side, and each cell inside the lens keeps its share of ``max_corners``."""
+    descriptor_size_deg: float = degrees_on_default_lens(31.0)
+    """Methods on FAST corners: side of the window the binary descriptor samples, degrees;
+    31 px (ORB's) on the default lens, 10.2 degrees."""
+    max_hamming_fraction: float = 0.25
+    """Bit-string methods: a match differs in at most this fraction of its bits (similarity
+    1 - 2 d / bits >= 0.5 at the default), in (0, 0.5]."""
 
     def __post_init__(self) -> None:
         require(self.method in FRONT_END_METHODS,
@@ -49,22 +92,28 @@ class FeatureConfig:
         require(
             0 < self.quality_level < 1, f"quality_level must be in (0, 1), got {self.quality_level}"
         )
-        require(
-            self.min_distance_px >= 0, f"min_distance_px must be >= 0, got {self.min_distance_px}"
-        )
+        require(self.min_distance_deg >= 0,
+                f"min_distance_deg must be >= 0, got {self.min_distance_deg}")
         require(
             self.block_size_px >= 3 and self.block_size_px % 2 == 1,
             f"block_size_px must be odd and >= 3, got {self.block_size_px}",
         )
         require(0 < self.harris_k < 0.25, f"harris_k must be in (0, 0.25), got {self.harris_k}")
-        require(
-            self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
-            f"patch_size_px must be odd and >= 3, got {self.patch_size_px}",
-        )
+        require(0 < self.patch_size_deg <= 30,
+                f"patch_size_deg must be in (0, 30], got {self.patch_size_deg}")
         require(
             self.subpixel_half_window_px >= 0,
             f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}",
         )
+        require(1 <= self.fast_threshold <= 254,
+                f"fast_threshold must be in [1, 254], got {self.fast_threshold}")
+        require(1 <= self.fast_threshold_low <= 254,
+                f"fast_threshold_low must be in [1, 254], got {self.fast_threshold_low}")
+        require(self.grid_cells >= 1, f"grid_cells must be >= 1, got {self.grid_cells}")
+        require(0 < self.max_hamming_fraction <= 0.5,
+                f"max_hamming_fraction must be in (0, 0.5], got {self.max_hamming_fraction}")
+        require(0 < self.descriptor_size_deg <= 60,
+                f"descriptor_size_deg must be in (0, 60], got {self.descriptor_size_deg}")
 
 
 
@@ -76,19 +125,28 @@ class MatchConfig:
     and a threshold measured on synthetic pairs (``robot/vision/bench_features.py``).
     """
 
-    search_radius_px: float | None = 40.0
-    """Candidates satisfy |dx| <= r and |dy| <= r, px; None searches the whole image
-    (code only: TOML cannot write None, so a file can only set a finite radius)."""
+    search_radius_deg: float | None = degrees_on_default_lens(40.0)
+    """Candidates lie within this angle of the point's bearing (turned by a predicted
+    rotation, if any), degrees; 40 px on the default lens, 13.2 degrees; None searches the
+    whole sphere (code only: TOML cannot write None, so a file can only set a finite
+    radius)."""
     min_zncc: float = 0.8
-    """Reject matches whose ZNCC score is below this, in [-1, 1]."""
+    """Reject matches whose similarity is below this, in [-1, 1]: the ZNCC score of
+    ``harris-zncc``, the cosine of SIFT's rows. Bit strings use ``[features]
+    max_hamming_fraction`` instead."""
     max_distance_ratio: float | None = None
-    """Lowe's ratio test on patch distances sqrt(2 - 2 ZNCC), in (0, 1]; None = off."""
+    """Lowe's ratio test on descriptor distances, in (0, 1]; None = off."""
+    ratio_exclusion_deg: float = 1.5
+    """The ratio test's second best lies farther than this from the best, degrees: a
+    corner's own neighbours are not its rivals (robot.vision.matching)."""
 
     def __post_init__(self) -> None:
         require(
-            self.search_radius_px is None or self.search_radius_px > 0,
-            f"search_radius_px must be > 0 or None, got {self.search_radius_px}",
+            self.search_radius_deg is None or 0 < self.search_radius_deg <= 180,
+            f"search_radius_deg must be in (0, 180] or None, got {self.search_radius_deg}",
         )
+        require(self.ratio_exclusion_deg >= 0,
+                f"ratio_exclusion_deg must be >= 0, got {self.ratio_exclusion_deg}")
         require(-1 <= self.min_zncc <= 1, f"min_zncc must be in [-1, 1], got {self.min_zncc}")
         require(
             self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
@@ -98,7 +156,7 @@ class MatchConfig:
 
 
 def _tracking_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=20.0, min_zncc=0.7)
+    return MatchConfig(search_radius_deg=degrees_on_default_lens(20.0), min_zncc=0.7)
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,7 +180,7 @@ class TeachConfig:
     max_turn_deg: float = 15.0
     """A key image is at most this far turned (odometric yaw) from the previous one, deg:
     the repeat matches the next key image in a window of ``PathStateConfig.matching``'s
-    radius (120 px; a yaw of 1 deg moves the image centre by about 4 px), so a long
+    radius (39.6 degrees), so a long
     gap in a turn leaves nothing to match (the ``campus`` U-turn had a 50 deg gap)."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
@@ -218,7 +276,7 @@ class RelativePoseConfig:
 
 
 def _state_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=120.0)
+    return MatchConfig(search_radius_deg=degrees_on_default_lens(120.0))
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,7 +331,7 @@ class PathStateConfig:
 
 
 def _localize_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=None, min_zncc=0.8)
+    return MatchConfig(search_radius_deg=None, min_zncc=0.8)
 
 
 @dataclass(frozen=True, slots=True)
@@ -312,3 +370,49 @@ class LocalizeConfig:
         require(self.prefilter_max_shift_px >= 0,
                 f"prefilter_max_shift_px must be >= 0, got {self.prefilter_max_shift_px}")
 
+
+
+#: Vision keys that were pixels on the default lens and are angles now (docs/front-end.md):
+#: the tables that hold them, the old key, the new one.
+RENAMED_VISION_KEYS: tuple[tuple[tuple[str, ...], str, str], ...] = (
+    (("features",), "min_distance_px", "min_distance_deg"),
+    (("features",), "patch_size_px", "patch_size_deg"),
+    (("matching", "teach.tracking", "path_state.matching", "localize.matching"),
+     "search_radius_px", "search_radius_deg"),
+)
+def renamed_vision_key(data: Mapping[str, Any]) -> tuple[str, str] | None:
+    """The first pixel-valued vision key ``data`` (a config's tables) still holds, as
+    ``(old dotted key, new dotted key)``; None if there is none."""
+    for tables, old, new in RENAMED_VISION_KEYS:
+        for dotted in tables:
+            table = _table(data, dotted)
+            if table is not None and old in table:
+                return f"{dotted}.{old}", f"{dotted}.{new}"
+    return None
+
+
+def migrate_vision_keys(data: Mapping[str, Any]) -> dict[str, Any]:
+    """``data`` with its pixel-valued vision keys turned into the angles they were on the
+    default lens (a field log replays with the windows it ran with, on that lens).
+
+    A patch of P px becomes the angle that gives P px again; ``None`` stays ``None``.
+    """
+    out = copy.deepcopy(dict(data))
+    for tables, old, new in RENAMED_VISION_KEYS:
+        for dotted in tables:
+            table = _table(out, dotted)
+            if table is None or old not in table:
+                continue
+            value = table.pop(old)
+            table[new] = None if value is None else degrees_on_default_lens(float(value))
+    return out
+
+
+def _table(data: Mapping[str, Any], dotted: str) -> Any:
+    """The (mutable, when ``data`` is) table at ``dotted``, or None."""
+    value: Any = data
+    for key in dotted.split("."):
+        if not isinstance(value, Mapping) or key not in value:
+            return None
+        value = value[key]
+    return value if isinstance(value, dict) else None

@@ -27,6 +27,7 @@ restricted to the mask eroded by the patch half size plus the sub-pixel window
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig
+from shared.camera_model import CameraModel
 from shared.errors import ShapeError, check_shape
 
 PixelsXY = npt.NDArray[np.float64]
@@ -137,6 +139,48 @@ class Features:
                         self.bearings[rows])
 
 
+def pixels_per_radian(camera: CameraModel) -> float:
+    """The lens's scale at the image centre, px/rad (mean of x and y).
+
+    Unified model (Mei and Rives, ICRA 2007): a ray at angle theta off the axis lands
+    r = f sin(theta) / (cos(theta) + xi) from the centre, so dr/dtheta = f / (1 + xi) at
+    theta = 0 (first-order distortion k1 does not change it). 174 px/rad on the default
+    lens, 366 on the MYNT EYE's.
+    """
+    return float((camera.K[0, 0] + camera.K[1, 1]) / 2.0 / (1.0 + camera.xi))
+
+
+@dataclass(frozen=True, slots=True)
+class PixelSizes:
+    """The front end's windows in pixels for one lens: ``FeatureConfig``'s angles times the
+    lens's scale at the image centre (:func:`pixels_per_radian`).
+
+    Attributes:
+        patch_px: side P of a ZNCC patch, odd, >= 3.
+        min_distance_px: least distance between two Harris corners.
+        descriptor_px: side of a binary descriptor's window, >= 7.
+    """
+
+    patch_px: int
+    min_distance_px: float
+    descriptor_px: int
+
+    @classmethod
+    def for_lens(cls, config: FeatureConfig, px_per_rad: float) -> PixelSizes:
+        """The sizes of ``config``'s angles on a lens of ``px_per_rad``."""
+        def px(deg: float) -> float:
+            return math.radians(deg) * px_per_rad
+
+        return cls(patch_px=max(3, 2 * round((px(config.patch_size_deg) - 1) / 2) + 1),
+                   min_distance_px=px(config.min_distance_deg),
+                   descriptor_px=max(7, round(px(config.descriptor_size_deg))))
+
+    @classmethod
+    def for_camera(cls, config: FeatureConfig, camera: CameraModel) -> PixelSizes:
+        """The sizes of ``config``'s angles on ``camera``."""
+        return cls.for_lens(config, pixels_per_radian(camera))
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class Keypoints:
     """What a detector found, before the camera model lifts it (:class:`Features` less bearings).
@@ -156,7 +200,8 @@ class Keypoints:
 
 
 def detect_harris(
-    image: GreyImage, config: FeatureConfig, mask: BoolImage | None = None
+    image: GreyImage, config: FeatureConfig, mask: BoolImage | None = None,
+    sizes: PixelSizes | None = None,
 ) -> Keypoints:
     """Detect Harris corners and extract their ZNCC patches (the paper's front end).
 
@@ -166,6 +211,8 @@ def detect_harris(
         mask: (H, W) bool, True where pixels are valid (e.g. inside the fisheye
             image circle); None = the whole image. Every returned patch lies
             within the mask and the image.
+        sizes: the patch and spacing in pixels for the lens; None = the default lens's
+            (:meth:`PixelSizes.for_camera` of ``CameraModel.default()``).
 
     Returns:
         Up to ``config.max_corners`` corners, strongest first, with (N, P*P) float32
@@ -176,37 +223,28 @@ def detect_harris(
         ShapeError: ``image`` is not 2-D, or ``mask`` differs from it in shape.
         TypeError: ``image`` is not uint8 or ``mask`` is not bool.
     """
-    image = np.ascontiguousarray(image)
-    check_shape("image", image.shape, (None, None))
-    if image.dtype != np.uint8:
-        raise TypeError(f"image: expected dtype uint8, got {image.dtype}")
-    if mask is not None:
-        mask = np.asarray(mask)
-        check_shape("mask", mask.shape, image.shape)
-        if mask.dtype != np.bool_:
-            raise TypeError(f"mask: expected dtype bool, got {mask.dtype}")
-    half = config.patch_size_px // 2
+    image, mask = check_image(image, mask)
+    sizes = sizes or PixelSizes.for_camera(config, CameraModel.default())
+    side = sizes.patch_px
+    half = side // 2
     margin = half + config.subpixel_half_window_px
-    allowed = _allowed_centres(image.shape, margin, mask)
+    allowed = allowed_centres(image.shape, margin, mask)
     if allowed is None:
-        return _no_corners(config.patch_size_px)
+        return _no_corners(side)
     corners, quality = cv2.goodFeaturesToTrackWithQuality(
-        image, config.max_corners, config.quality_level, config.min_distance_px, allowed,
+        image, config.max_corners, config.quality_level, sizes.min_distance_px, allowed,
         blockSize=config.block_size_px, gradientSize=_GRADIENT_SIZE,
         useHarrisDetector=True, k=config.harris_k,
     )
     if corners is None:
-        return _no_corners(config.patch_size_px)
-    if config.subpixel_half_window_px > 0:
-        win = (config.subpixel_half_window_px, config.subpixel_half_window_px)
-        corners = cv2.cornerSubPix(image, corners, win, (-1, -1), _SUBPIX_CRITERIA)
-    pixels_xy = corners.reshape(-1, 2).astype(np.float64)
+        return _no_corners(side)
+    pixels_xy = refine_subpixel(image, corners.reshape(-1, 2), config.subpixel_half_window_px)
     # cornerSubPix reverts any move longer than its half window, so the rounded
     # centre stays within `margin` of an allowed pixel; the clip only guards rounding.
     height, width = image.shape
     cols = np.clip(np.rint(pixels_xy[:, 0]).astype(np.intp), half, width - 1 - half)
     rows = np.clip(np.rint(pixels_xy[:, 1]).astype(np.intp), half, height - 1 - half)
-    patches = _normalised_patches(image, rows, cols, config.patch_size_px)
+    patches = _normalised_patches(image, rows, cols, side)
     return Keypoints(pixels_xy=pixels_xy, descriptors=patches,
                      response=quality.reshape(-1).astype(np.float32))
 
@@ -216,7 +254,48 @@ def _no_corners(patch_size_px: int) -> Keypoints:
                      np.zeros(0, np.float32))
 
 
-def _allowed_centres(
+def check_image(image: npt.ArrayLike, mask: npt.ArrayLike | None
+                ) -> tuple[GreyImage, BoolImage | None]:
+    """``image`` as a contiguous (H, W) uint8 array and ``mask`` as (H, W) bool, checked.
+
+    Raises:
+        ShapeError: ``image`` is not 2-D, or ``mask`` differs from it in shape.
+        TypeError: ``image`` is not uint8 or ``mask`` is not bool.
+    """
+    image = np.ascontiguousarray(image)
+    check_shape("image", image.shape, (None, None))
+    if image.dtype != np.uint8:
+        raise TypeError(f"image: expected dtype uint8, got {image.dtype}")
+    if mask is None:
+        return image, None
+    mask = np.asarray(mask)
+    check_shape("mask", mask.shape, image.shape)
+    if mask.dtype != np.bool_:
+        raise TypeError(f"mask: expected dtype bool, got {mask.dtype}")
+    return image, mask
+
+
+def refine_subpixel(image: GreyImage, pixels_xy: npt.ArrayLike, half_window_px: int
+                    ) -> PixelsXY:
+    """Corners moved to their sub-pixel positions (``cv2.cornerSubPix``, Förstner 1987).
+
+    Args:
+        image: (H, W) uint8.
+        pixels_xy: (N, 2) corner positions, px.
+        half_window_px: half side of the window; 0 keeps the positions. A corner whose
+            refinement would move it farther than this keeps its position.
+
+    Returns:
+        (N, 2) float64 px.
+    """
+    corners = np.ascontiguousarray(pixels_xy, dtype=np.float32).reshape(-1, 1, 2)
+    if half_window_px > 0 and len(corners):
+        win = (half_window_px, half_window_px)
+        corners = cv2.cornerSubPix(image, corners, win, (-1, -1), _SUBPIX_CRITERIA)
+    return corners.reshape(-1, 2).astype(np.float64)
+
+
+def allowed_centres(
     shape: tuple[int, ...], margin: int, mask: BoolImage | None
 ) -> npt.NDArray[np.uint8] | None:
     """The uint8 mask of pixels whose (2 margin + 1)^2 neighbourhood is valid; None if none are.

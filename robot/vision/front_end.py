@@ -21,34 +21,27 @@ their byte values 0-255, exactly), so a memory is read back by the method that w
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
 
 import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, MatchConfig
+from robot.vision.descriptors import DESCRIPTOR_BYTES, SIFT_LENGTH, Detector, opencv_detector
 from robot.vision.features import (
     BoolImage,
     Descriptors,
     Features,
     GreyImage,
-    Keypoints,
+    PixelSizes,
     PixelsXY,
     detect_harris,
 )
 from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import Matches, match_features
 from shared.camera_model import CameraModel
-from shared.errors import check_shape
+from shared.errors import MemoryFormatError, check_shape
 from shared.memory import Keyframe
-
-Detector = Callable[[GreyImage, FeatureConfig, BoolImage], Keypoints]
-"""A method's detector: (image, config, mask) -> keypoints inside the mask."""
-
-#: Each method's detector and whether its descriptors are packed bits.
-_METHODS: dict[str, tuple[Detector, bool]] = {
-    "harris-zncc": (detect_harris, False),
-}
 
 
 class FrontEnd:
@@ -59,16 +52,19 @@ class FrontEnd:
     Args:
         config: the ``[features]`` table: the method and its parameters.
         camera: the lens of every image described (size, image circle, lift).
-
-    Raises:
-        ConfigError: the method is not available in this OpenCV build.
+        mask: the lens's mask (:func:`robot.vision.lens_mask.lens_mask`) if the caller has
+            it already; None computes it.
     """
 
-    def __init__(self, config: FeatureConfig, camera: CameraModel) -> None:
+    def __init__(self, config: FeatureConfig, camera: CameraModel,
+                 mask: BoolImage | None = None) -> None:
         self.config = config
         self.camera = camera
-        self.mask: BoolImage = lens_mask(camera)
-        self._detect, self._binary = _METHODS[config.method]
+        self.mask: BoolImage = lens_mask(camera) if mask is None else mask
+        self.sizes = PixelSizes.for_camera(config, camera)
+        self._detect: Detector = (detect_harris if config.method == "harris-zncc"
+                                  else opencv_detector(config.method))
+        self._binary = config.method not in ("harris-zncc", "sift")
 
     @property
     def method(self) -> str:
@@ -91,7 +87,7 @@ class FrontEnd:
         """
         image = np.asarray(image)
         check_shape("image", image.shape, (self.camera.height, self.camera.width))
-        found = self._detect(image, self.config, self.mask if mask is None else mask)
+        found = self._detect(image, self.config, self.mask if mask is None else mask, self.sizes)
         return self.features(found.pixels_xy, found.descriptors, found.response)
 
     def features(self, pixels_xy: PixelsXY, descriptors: Descriptors,
@@ -114,8 +110,26 @@ class FrontEnd:
         return Features(pixels_xy, descriptors,
                         np.zeros(n, np.float32) if response is None else response, bearings)
 
+    @property
+    def descriptor_length(self) -> int:
+        """D: values per descriptor (bytes of a bit string, floats of a row)."""
+        if self.method == "harris-zncc":
+            return self.sizes.patch_px ** 2
+        return SIFT_LENGTH if self.method == "sift" else DESCRIPTOR_BYTES[self.method]
+
     def features_from_keyframe(self, keyframe: Keyframe) -> Features:
-        """A key image's stored points and descriptors (see :func:`stored_descriptors`)."""
+        """A key image's stored points and descriptors (see :func:`stored_descriptors`).
+
+        Raises:
+            MemoryFormatError: the key image's descriptors are not this method's (a memory
+                taught with another front end, or another lens).
+        """
+        if keyframe.descriptor_length != self.descriptor_length:
+            raise MemoryFormatError(
+                f"key image {keyframe.id}",
+                f"descriptors have {keyframe.descriptor_length} values, the front end "
+                f"{self.method!r} on this lens makes {self.descriptor_length}: the memory was "
+                f"taught with another [features] method or lens")
         return self.features(keyframe.pixels_xy, self.descriptors_from_stored(keyframe.patches))
 
     def descriptors_from_stored(self, stored: npt.NDArray[np.float32]) -> Descriptors:
@@ -133,24 +147,23 @@ class FrontEnd:
             matching: window, threshold and ratio test.
             predicted: (3, 3) R_b_a, the rotation from camera A's frame to camera B's
                 expected between the two images (e.g. from odometry): each of A's
-                points is searched for around where the rotation moves it. None =
-                around its own pixel.
+                points is searched for around where the rotation turns its bearing.
+                None = around its own bearing.
 
         Returns:
             The matches (index pairs and similarities).
         """
-        centres = None
-        if predicted is not None:
-            R_b_a = np.asarray(predicted, dtype=np.float64)
-            check_shape("predicted", R_b_a.shape, (3, 3))
-            moved, valid = self.camera.project(feats_a.bearings @ R_b_a.T)
-            centres = np.where(valid[:, None], moved, feats_a.pixels_xy)
-        return match_features(feats_a, feats_b, matching, centres)
+        if self._binary:
+            matching = dataclasses.replace(
+                matching, min_zncc=1.0 - 2.0 * self.config.max_hamming_fraction)
+        return match_features(feats_a, feats_b, matching, predicted)
 
 
-def make_front_end(config: FeatureConfig, camera: CameraModel) -> FrontEnd:
-    """The front end of ``config.method`` for images of ``camera`` (module docstring)."""
-    return FrontEnd(config, camera)
+def make_front_end(config: FeatureConfig, camera: CameraModel,
+                   mask: BoolImage | None = None) -> FrontEnd:
+    """The front end of ``config.method`` for images of ``camera`` (module docstring);
+    ``mask``: the lens mask if already computed."""
+    return FrontEnd(config, camera, mask)
 
 
 def stored_descriptors(features: Features) -> npt.NDArray[np.float32]:

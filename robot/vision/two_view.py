@@ -1,11 +1,11 @@
 """The relative pose of two images, each from its own calibrated camera.
 
 What ``vmnav vision pair`` shows and ``vmnav bench real`` measures: the vision front
-end (corners and descriptors in each image, matches between them), the matches lifted
-to bearings through each camera's model, and the general (5-point, 5-dof) relative pose
-of :func:`robot.vision.epipolar.relative_pose` with its inlier tolerance an angle on
-the sphere. Nothing here assumes a ground robot: the two views may be a stereo rig,
-two photos, or a key image and a frame.
+end (:mod:`robot.vision.front_end`, one per camera: points and descriptors in each
+image, bearings through each camera's model, matches between them) and the general
+(5-point, 5-dof) relative pose of :func:`robot.vision.epipolar.relative_pose` with its
+inlier tolerance an angle on the sphere. Nothing here assumes a ground robot: the two
+views may be a stereo rig, two photos, or a key image and a frame.
 
 Convention (OpenCV's stereo calibration, and :class:`~robot.vision.epipolar.EpipolarFit`):
 ``X_b = R_b_a X_a + t_b_a`` maps a point's coordinates in camera a's frame into camera
@@ -23,11 +23,9 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from robot.config import FeatureConfig, MatchConfig, RelativePoseConfig
+from robot.config import FeatureConfig, LocalizeConfig, MatchConfig, RelativePoseConfig
 from robot.vision.epipolar import EpipolarFit, relative_pose
-from robot.vision.features import BoolImage, detect_harris
-from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
+from robot.vision.front_end import FrontEnd, make_front_end
 from shared.camera_model import CameraModel
 from shared.errors import check_shape
 
@@ -48,40 +46,38 @@ class TwoViewConfig:
     """The front end and the relative pose of two views.
 
     Attributes:
-        features: corners and descriptors of each image.
-        matching: matching of the two images (the whole image: the views may differ by
-            any motion).
+        matching: matching of the two images; by default localization's (``[localize]
+            matching``: the whole image), since the two views, like a query and a key
+            image, may differ by any motion.
         relative_pose: the general model, its inlier tolerance an angle, rad.
+
+    The front end's method and parameters (``[features]``) are the cameras'
+    (:func:`two_cameras`).
     """
 
-    features: FeatureConfig = field(
-        default_factory=lambda: FeatureConfig(max_corners=1000, quality_level=0.001))
-    matching: MatchConfig = field(default_factory=lambda: MatchConfig(search_radius_px=None))
+    matching: MatchConfig = field(default_factory=lambda: LocalizeConfig().matching)
     relative_pose: RelativePoseConfig = field(default_factory=_pose_config)
 
 
 @dataclass(frozen=True, eq=False)
 class TwoCameras:
-    """The two cameras of a pair and their lens masks (computed once, reused per pair).
+    """The front ends of the two cameras of a pair (built once, reused per pair).
 
     Attributes:
-        camera_a: camera a's model.
-        camera_b: camera b's model.
-        mask_a: (H_a, W_a) bool, pixels whose ray camera a accepts.
-        mask_b: (H_b, W_b) bool, the same for camera b.
+        front_a: camera a's front end (its lens, mask and method).
+        front_b: camera b's, of the same method.
     """
 
-    camera_a: CameraModel
-    camera_b: CameraModel
-    mask_a: BoolImage
-    mask_b: BoolImage
+    front_a: FrontEnd
+    front_b: FrontEnd
 
 
-def two_cameras(camera_a: CameraModel, camera_b: CameraModel) -> TwoCameras:
-    """The pair's cameras with their lens masks (:func:`robot.vision.lens_mask.lens_mask`)."""
-    mask_b = lens_mask(camera_b) if camera_b is not camera_a else None
-    mask_a = lens_mask(camera_a)
-    return TwoCameras(camera_a, camera_b, mask_a, mask_a if mask_b is None else mask_b)
+def two_cameras(camera_a: CameraModel, camera_b: CameraModel,
+                features: FeatureConfig) -> TwoCameras:
+    """The pair's front ends (:func:`robot.vision.front_end.make_front_end`) for ``features``."""
+    front_a = make_front_end(features, camera_a)
+    front_b = front_a if camera_b is camera_a else make_front_end(features, camera_b)
+    return TwoCameras(front_a, front_b)
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,8 +87,8 @@ class TwoView:
     Attributes:
         corners_a: (N, 2) float64 corner pixels of image a, px.
         corners_b: (M, 2) float64 corner pixels of image b, px.
-        matched_a: (K, 2) float64 pixels in image a of the matches whose rays are valid
-            in both cameras, px.
+        matched_a: (K, 2) float64 pixels in image a of the matches, px (every point the
+            front end describes lies in its lens's image circle, so each has a ray).
         matched_b: (K, 2) float64 the same matches' pixels in image b, px.
         fit: the relative pose (``fit.inlier_mask`` is (K,)); ``fit.ok`` is False when
             there were too few matches or inliers.
@@ -112,8 +108,8 @@ def two_view(image_a: GreyImage, image_b: GreyImage, cameras: TwoCameras,
     Args:
         image_a: (H_a, W_a) uint8 grey image of camera a (its calibration's size).
         image_b: (H_b, W_b) uint8 grey image of camera b.
-        cameras: the two cameras (:func:`two_cameras`).
-        config: front end and pose parameters.
+        cameras: the two cameras' front ends (:func:`two_cameras`).
+        config: matching and pose parameters.
         rng: draws RANSAC's samples.
 
     Returns:
@@ -122,18 +118,14 @@ def two_view(image_a: GreyImage, image_b: GreyImage, cameras: TwoCameras,
     Raises:
         ShapeError: an image is not of its camera's size.
     """
-    camera_a, camera_b = cameras.camera_a, cameras.camera_b
-    check_shape("image_a", np.shape(image_a), (camera_a.height, camera_a.width))
-    check_shape("image_b", np.shape(image_b), (camera_b.height, camera_b.width))
-    feats_a = detect_harris(image_a, config.features, cameras.mask_a)
-    feats_b = detect_harris(image_b, config.features, cameras.mask_b)
-    matches = match_zncc(feats_a, feats_b, config.matching)
+    feats_a = cameras.front_a.describe(image_a)
+    feats_b = cameras.front_b.describe(image_b)
+    # Camera b's front end: a predicted search would project into b's image.
+    matches = cameras.front_b.match(feats_a, feats_b, config.matching)
     pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
-    bearings_a, valid_a = camera_a.lift(pixels_a)
-    bearings_b, valid_b = camera_b.lift(pixels_b)
-    valid = valid_a & valid_b
-    fit = relative_pose(bearings_a[valid], bearings_b[valid], rng, config.relative_pose)
-    return TwoView(feats_a.pixels_xy, feats_b.pixels_xy, pixels_a[valid], pixels_b[valid], fit)
+    fit = relative_pose(feats_a.bearings[matches.idx_a], feats_b.bearings[matches.idx_b], rng,
+                        config.relative_pose)
+    return TwoView(feats_a.pixels_xy, feats_b.pixels_xy, pixels_a, pixels_b, fit)
 
 
 def relative_pose_from_body(T_body_a: FloatArray,

@@ -11,8 +11,12 @@ import pytest
 
 from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig
+from shared.pose import Pose2
 from sim.camera_effects import CameraEffects, CameraMotion, camera_motion
-from sim.config import SensorConfig
+from sim.config import SensorConfig, SimConfig
+from sim.renderer import FisheyeRenderer
+from sim.simulation import Simulation
+from tests.sim.rooms import box_room
 
 CAMERA = CameraModel.default()
 MOUNT = CameraMountConfig()
@@ -132,6 +136,16 @@ class TestAutoExposure:
         expected = math.log(2.0) * np.exp(-np.array(times) / tau_s)
         np.testing.assert_allclose(errors, expected, atol=0.01)
 
+    def test_more_light_than_the_scene_holds_is_not_clipped_before_the_sensor(self) -> None:
+        fx = effects(dataclasses.replace(IDEAL, auto_exposure=True, target_grey=60.0))
+        scene = uniform(150.0)
+        scene[:, 400:] = 250.0
+        for k in range(40):  # the light doubles: 300 and 500 reach the lens
+            image = fx.apply(scene, k * FRAME_NS, CameraMotion(), light_gain=2.0)
+        left, right = image[250:350, 300:380].mean(), image[250:350, 420:500].mean()
+        assert right / left == pytest.approx(500.0 / 300.0, rel=0.02)
+        assert image[250:350, 300:500].mean() == pytest.approx(60.0, abs=3.0)
+
     def test_dark_scenes_take_longer_exposures_then_gain(self) -> None:
         config = dataclasses.replace(SensorConfig(), motion_blur=False)
         fx = effects(config)
@@ -214,3 +228,21 @@ class TestClipping:
     def test_a_scene_of_the_wrong_size_is_refused(self) -> None:
         with pytest.raises(ValueError, match=r"scene: expected shape \(600, 800\)"):
             effects(IDEAL).apply(np.zeros((10, 10), np.uint8), 0, CameraMotion())
+
+
+class TestInTheRenderer:
+    def test_every_frame_is_recorded_with_the_bodys_motion(self) -> None:
+        sim = Simulation(box_room(), SimConfig(seed=2))
+        sim.place_robot(Pose2(2.0, 3.0, 0.0))
+        renderer = FisheyeRenderer.for_simulation(sim, CAMERA)
+        renderer.render(sim)
+        still = renderer.effects.last
+        sim.body.command(0.0, 1.0)
+        sim.step_until(1_500_000_000)  # turning at 1 rad/s
+        renderer.render(sim)
+        turning = renderer.effects.last
+        assert still is not None and turning is not None
+        assert still.blur_px == 0.0
+        # At least the centre's blur: omega x exposure x the lens's scale there.
+        assert turning.blur_px >= 0.95 * turning.exposure_s * PX_PER_RAD
+        assert turning.mean_grey == pytest.approx(SensorConfig().target_grey, abs=10.0)

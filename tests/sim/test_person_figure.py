@@ -99,6 +99,22 @@ class TestDraw:
         assert desk[head_v, head_u] == alone[head_v, head_u] != BACKGROUND
         assert desk[foot_v, foot_u] == BACKGROUND != alone[foot_v, foot_u]
 
+    def test_a_depth_image_hides_it_per_pixel_on_a_float_canvas(self) -> None:
+        fig = figures()
+        pose = facing_camera(3.0)
+        look = fig.look(0)
+        alone = draw(fig, pose, look)
+        _, waist_v = pixel_of(pose.x_m - 0.1, 0.0, 1.0)
+        depth = np.full((CAMERA.height, CAMERA.width), np.inf, dtype=np.float32)
+        depth[round(waist_v):] = 2.0  # something 2 m away below the waist
+        canvas = np.full((CAMERA.height, CAMERA.width), float(BACKGROUND), dtype=np.float32)
+        fig.draw(canvas, pose, look, R_CAM_WORLD, CENTRE_W, [], depth)
+        head_u, head_v = (round(p) for p in pixel_of(pose.x_m - 0.1, 0.0, 1.6))
+        foot_u, foot_v = (round(p) for p in pixel_of(pose.x_m - 0.08, 0.09, 0.2))
+        assert canvas[head_v, head_u] == pytest.approx(alone[head_v, head_u], abs=0.5)
+        assert canvas[foot_v, foot_u] == BACKGROUND != alone[foot_v, foot_u]
+        assert canvas[head_v, head_u] != round(canvas[head_v, head_u])  # not rounded
+
     def test_a_figure_behind_the_camera_or_too_near_draws_nothing(self) -> None:
         fig = figures()
         behind = dataclasses.replace(facing_camera(-3.0), heading_rad=0.0)

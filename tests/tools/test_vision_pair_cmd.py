@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig
 from robot.vision.epipolar import rotation_from_rotvec
 from robot.vision.two_view import direction_error_deg, relative_pose_from_body, rotation_error_deg
 from shared.kannala_brandt_yaml import read_equidistant_yaml
@@ -37,11 +38,16 @@ def test_the_real_pair(calibrations: tuple[Path, Path], tmp_path: Path,
                        capsys: pytest.CaptureFixture[str]) -> None:
     capsys.readouterr()
     picture = tmp_path / "pair.png"
+    # Harris + ZNCC with corners over the whole image, through --config.
+    config = tmp_path / "vmnav.toml"
+    config.write_text('[features]\nmethod = "harris-zncc"\nmax_corners = 1000\n'
+                      "quality_level = 0.001\n")
     code = main(["vision", "pair", str(FISHEYE_LEFT_IMAGE), str(FISHEYE_RIGHT_IMAGE),
                  "--calibration", str(calibrations[0]), "--calibration-b", str(calibrations[1]),
-                 "--out", str(picture)])
+                 "--config", str(config), "--out", str(picture)])
     assert code == 0
     report = json.loads(capsys.readouterr().out)
+    assert report["method"] == "harris-zncc" and report["corners_a"] > 300
     assert report["corners_a"] > 100 and report["corners_b"] > 100
     assert report["corners_a"] >= report["matches"] >= report["inliers"] > 100
     assert report["ok"] is True and report["convention"] == "X_b = R X_a + t"
@@ -62,13 +68,16 @@ def test_the_real_pair(calibrations: tuple[Path, Path], tmp_path: Path,
     assert green.sum() > 1000
 
 
-def test_one_calibration_for_both(calibrations: tuple[Path, Path],
+def test_one_calibration_for_both(calibrations: tuple[Path, Path], tmp_path: Path,
                                   capsys: pytest.CaptureFixture[str]) -> None:
     capsys.readouterr()
+    picture = tmp_path / "same.jpg"
     assert main(["vision", "pair", str(FISHEYE_LEFT_IMAGE), str(FISHEYE_LEFT_IMAGE),
-                 "--calibration", str(calibrations[0])]) == 0
+                 "--calibration", str(calibrations[0]), "--out", str(picture)]) == 0
+    assert picture.read_bytes()[:2] == b"\xff\xd8"  # a JPEG, by the name
     report = json.loads(capsys.readouterr().out)
-    # The same image twice: every match is exact; no translation to recover.
+    # The same image twice, the default front end: every match is exact; no translation.
+    assert report["method"] == FeatureConfig().method
     assert report["matches"] == report["corners_a"] and report["rotation_deg"] < 0.01
     assert report["parallax_deg"] < 0.01
 
@@ -93,6 +102,11 @@ def test_bad_input(calibrations: tuple[Path, Path], tmp_path: Path,
     code = main(["vision", "pair", str(FISHEYE_LEFT_IMAGE), str(FISHEYE_RIGHT_IMAGE),
                  "--calibration", str(FISHEYE_LEFT_YAML)])
     fails(capsys, code, f"{FISHEYE_LEFT_YAML}: ")
+    bad_config = tmp_path / "bad.toml"
+    bad_config.write_text('[features]\nmethod = "magic"\n')
+    code = main(["vision", "pair", str(FISHEYE_LEFT_IMAGE), str(FISHEYE_RIGHT_IMAGE),
+                 "--calibration", str(left), "--config", str(bad_config)])
+    fails(capsys, code, f"{bad_config}", "method must be one of")
     text = tmp_path / "notes.png"
     text.write_text("not an image")
     code = main(["vision", "pair", str(text), str(FISHEYE_RIGHT_IMAGE), "--calibration", str(left)])

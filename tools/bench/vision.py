@@ -38,6 +38,7 @@ image's true pose, which the memory itself does not know. Then:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import operator
@@ -87,6 +88,9 @@ _COMPARISONS = {">=": operator.ge, "<=": operator.le, "<": operator.lt}
 #: Key image spacings are reported apart below and above this, m (beyond about 0.5-0.6 m
 #: matching the two key images directly was expected to degrade).
 SPACING_SPLIT_M = 0.6
+#: The paper's front end (Courbon et al. 2008: Harris corners, ZNCC), measured beside the
+#: config's.
+PAPER_METHOD = "harris-zncc"
 #: Query poses tried per query before giving up.
 _PLACEMENT_TRIES = 100
 #: Frames run through the pipeline before timing (first-call costs).
@@ -234,10 +238,36 @@ class _Segments:
 def bench_vision(
     config: VmnavConfig, sim_config: SimConfig, camera: CameraModel, plan: VisionBenchPlan
 ) -> dict[str, Any]:
-    """Teach, then measure state accuracy, frame time and localization (module docstring).
+    """Both rows: the config's front end, and the paper's (``harris-zncc``) beside it.
 
     Returns:
-        JSON-ready figures (see ``vmnav bench vision --help`` and the module docstring).
+        The figures of the config's front end (:func:`bench_front_end`) with
+        ``front_end`` (its method) and ``paper_front_end``: the same figures with
+        ``[features] method = "harris-zncc"`` (absent when that is the config's).
+
+    Raises:
+        InputError: an unknown route, or a teach drive that does not reach its end.
+        ConfigError: no free query pose found near the paths.
+    """
+    figures = bench_front_end(config, sim_config, camera, plan)
+    result = {"front_end": config.features.method, **figures}
+    if config.features.method != PAPER_METHOD:
+        paper = dataclasses.replace(
+            config, features=dataclasses.replace(config.features, method=PAPER_METHOD))
+        result["paper_front_end"] = {"front_end": PAPER_METHOD,
+                                     **bench_front_end(paper, sim_config, camera, plan)}
+    return {**result, "versions": library_versions()}
+
+
+def bench_front_end(
+    config: VmnavConfig, sim_config: SimConfig, camera: CameraModel, plan: VisionBenchPlan
+) -> dict[str, Any]:
+    """Teach, then measure state accuracy, frame time and localization (module docstring),
+    with the config's front end.
+
+    Returns:
+        JSON-ready figures (see ``vmnav bench vision --help`` and the module docstring),
+        with ``targets`` and ``targets_met``.
 
     Raises:
         InputError: an unknown route, or a teach drive that does not reach its end.
@@ -262,7 +292,7 @@ def bench_vision(
         **state_summary(run),
         **localization,
     }
-    return {**figures, **target_figures(figures), "versions": library_versions()}
+    return {**figures, **target_figures(figures)}
 
 
 def library_versions() -> dict[str, str]:
@@ -508,8 +538,6 @@ def _median(values: Sequence[float]) -> float | None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the vision benchmark's JSON (``vmnav bench vision``)."""
-    import dataclasses
-
     from robot.config import load_config
     from shared.errors import InputError
     from tools.bench.cpu import pin_to_one_core

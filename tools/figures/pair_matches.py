@@ -1,7 +1,8 @@
 """The picture of ``vmnav vision pair --out``: two images side by side with their matches.
 
 Corners are small grey dots, matches that the relative pose rejects thin red lines, its
-inliers green lines; a caption gives the counts. Written atomically as PNG.
+inliers green lines; a caption gives the counts. Written atomically, as JPEG (quality
+90) when the file's name ends in ``.jpg`` or ``.jpeg``, else as PNG.
 """
 
 from __future__ import annotations
@@ -56,12 +57,15 @@ def pair_matches_image(image_a: npt.NDArray[np.uint8], image_b: npt.NDArray[np.u
 
 def write_pair_matches(path: Path, image_a: npt.NDArray[np.uint8],
                        image_b: npt.NDArray[np.uint8], result: TwoView) -> None:
-    """Draw :func:`pair_matches_image` and write it to ``path`` as PNG, atomically.
+    """Draw :func:`pair_matches_image` and write it to ``path`` (module docstring), atomically.
 
     Raises:
         InputError: the file cannot be written (:mod:`shared.atomic_file`).
     """
-    ok, data = cv2.imencode(".png", pair_matches_image(image_a, image_b, result))
+    jpeg = path.suffix.lower() in (".jpg", ".jpeg")
+    ok, data = cv2.imencode(".jpg" if jpeg else ".png",
+                            pair_matches_image(image_a, image_b, result),
+                            [cv2.IMWRITE_JPEG_QUALITY, 90] if jpeg else [])
     if not ok:  # encoding a uint8 BGR image cannot fail; kept as a guard, not a path
         raise RuntimeError("cv2.imencode failed on a uint8 BGR image")
     write_bytes_atomic(path, data.tobytes())

@@ -137,6 +137,6 @@ def test_localize_config_is_validated() -> None:
 
     config = from_mapping(VmnavConfig, {"localize": {"candidates": 5}}, "f.toml")
     assert config.localize.candidates == 5
-    assert config.localize.matching.search_radius_px is None
+    assert config.localize.matching.search_radius_deg is None
     with pytest.raises(ConfigError, match="localize: prefilter_window_px must be odd"):
         from_mapping(VmnavConfig, {"localize": {"prefilter_window_px": 4}}, "f.toml")

@@ -9,12 +9,19 @@ import numpy as np
 import pytest
 
 from robot.config import FeatureConfig
-from robot.vision.features import Features, Keypoints, detect_harris
+from robot.vision.features import (
+    Features,
+    Keypoints,
+    PixelSizes,
+    detect_harris,
+    pixels_per_radian,
+)
+from shared.camera_model import CameraModel
 from shared.errors import ShapeError
 from sim.synthetic.image_pairs import texture
 
 CONFIG = FeatureConfig()
-P = CONFIG.patch_size_px
+P = PixelSizes.for_camera(CONFIG, CameraModel.default()).patch_px
 
 
 def _textured(seed: int, width: int = 320, height: int = 240) -> np.ndarray:
@@ -142,8 +149,9 @@ class TestDetectHarris:
         assert np.all(feats.response > 0)
 
     def test_min_distance(self) -> None:
-        config = dataclasses.replace(CONFIG, min_distance_px=15.0, subpixel_half_window_px=0)
-        feats = detect_harris(_textured(3), config)
+        config = dataclasses.replace(CONFIG, subpixel_half_window_px=0)
+        sizes = PixelSizes(patch_px=P, min_distance_px=15.0, descriptor_px=31)
+        feats = detect_harris(_textured(3), config, None, sizes)
         dist = np.linalg.norm(feats.pixels_xy[:, None] - feats.pixels_xy[None], axis=2)
         np.fill_diagonal(dist, np.inf)
         assert dist.min() >= 15.0
@@ -191,3 +199,27 @@ class TestDetectHarris:
 
     def test_empty_mask_gives_empty_features(self) -> None:
         _assert_empty(detect_harris(_textured(6), CONFIG, np.zeros((240, 320), bool)))
+
+
+class TestPixelSizes:
+    def test_default_lens_keeps_the_reference_sizes(self) -> None:
+        camera = CameraModel.default()
+        assert pixels_per_radian(camera) == pytest.approx(173.8, abs=0.1)
+        sizes = PixelSizes.for_camera(FeatureConfig(), camera)
+        assert (sizes.patch_px, sizes.descriptor_px) == (11, 31)
+        assert sizes.min_distance_px == pytest.approx(8.0)
+
+    def test_a_sharper_lens_gets_wider_windows(self) -> None:
+        # The MYNT EYE's 366 px/rad: the same angles span twice the pixels.
+        sizes = PixelSizes.for_lens(FeatureConfig(), 366.0)
+        assert (sizes.patch_px, sizes.descriptor_px) == (23, 65)
+        assert sizes.patch_px % 2 == 1
+
+    def test_smallest_sizes(self) -> None:
+        sizes = PixelSizes.for_lens(FeatureConfig(), 1.0)
+        assert (sizes.patch_px, sizes.descriptor_px) == (3, 7)
+
+    def test_harris_patches_follow_the_sizes(self) -> None:
+        sizes = PixelSizes(patch_px=7, min_distance_px=8.0, descriptor_px=31)
+        feats = detect_harris(_textured(8), CONFIG, None, sizes)
+        assert feats.descriptors.shape == (len(feats), 49)

@@ -71,7 +71,7 @@ class TestKeyCorrespondences:
                                         ) -> None:
         table = descriptors(rng, len(scene.points_w))
         pairs = key_correspondences(features(scene.next, table), features(scene.previous, table),
-                                    front_end(scene), MatchConfig(search_radius_px=None))
+                                    front_end(scene), MatchConfig(search_radius_deg=None))
         assert pairs.n_tracked == 0
         np.testing.assert_array_equal(scene.next.point_ids[pairs.idx_next],
                                       scene.previous.point_ids[pairs.idx_other])
@@ -83,7 +83,7 @@ class TestKeyCorrespondences:
         table = descriptors(rng, len(scene.points_w))
         tracks = true_tracks(scene.next, scene.previous)[::3]
         pairs = key_correspondences(features(scene.next, table), features(scene.previous, table),
-                                    front_end(scene), MatchConfig(search_radius_px=None), tracks)
+                                    front_end(scene), MatchConfig(search_radius_deg=None), tracks)
         assert pairs.n_tracked == len(tracks)
         np.testing.assert_array_equal(pairs.idx_next[: len(tracks)], tracks[:, 0])
         np.testing.assert_array_equal(pairs.idx_other[: len(tracks)], tracks[:, 1])

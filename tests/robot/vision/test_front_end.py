@@ -8,7 +8,8 @@ import pytest
 from robot.config import FeatureConfig, MatchConfig
 from robot.vision.front_end import FrontEnd, make_front_end, stored_descriptors
 from shared.camera_model import CameraModel
-from shared.errors import ShapeError
+from shared.errors import MemoryFormatError, ShapeError
+from shared.memory import KeyframeRecord, VisualMemory
 from sim.synthetic.image_pairs import texture
 
 CAMERA = CameraModel.default()
@@ -16,7 +17,8 @@ CAMERA = CameraModel.default()
 
 @pytest.fixture(scope="module")
 def front_end() -> FrontEnd:
-    return make_front_end(FeatureConfig(), CAMERA)
+    """The paper's method (float patches); the default's bit strings are tested apart."""
+    return make_front_end(FeatureConfig(method="harris-zncc"), CAMERA)
 
 
 def _textured(seed: int) -> np.ndarray:
@@ -69,13 +71,13 @@ class TestStoredFeatures:
 
 class TestMatch:
     def test_guided_by_a_predicted_rotation(self, front_end: FrontEnd) -> None:
-        """B sees A's points turned 30 degrees about the vertical: a +-15 px window around
-        A's own pixels misses them, around the predicted ones finds them all."""
+        """B sees A's points turned 30 degrees about the vertical: a 5 degree cone around
+        A's own bearings misses them, around the predicted ones finds them all."""
         feats_a = front_end.describe(_textured(3))
         R_b_a = _rotation_y(np.radians(30.0))
         moved, valid = CAMERA.project(feats_a.bearings @ R_b_a.T)
         feats_b = front_end.features(moved[valid], feats_a.descriptors[valid])
-        matching = MatchConfig(search_radius_px=15.0)
+        matching = MatchConfig(search_radius_deg=5.0)
         assert len(front_end.match(feats_a, feats_b, matching)) < 0.2 * len(feats_b)
         guided = front_end.match(feats_a, feats_b, matching, predicted=R_b_a)
         assert len(guided) == len(feats_b)
@@ -84,5 +86,28 @@ class TestMatch:
 
     def test_predicted_must_be_a_matrix(self, front_end: FrontEnd) -> None:
         feats = front_end.describe(_textured(4))
-        with pytest.raises(ShapeError, match="predicted"):
+        with pytest.raises(ShapeError, match="R_b_a: expected shape"):
             front_end.match(feats, feats, MatchConfig(), predicted=np.eye(2))
+
+
+class TestDefault:
+    def test_the_default_method_round_trips_through_a_memory(self) -> None:
+        front_end = make_front_end(FeatureConfig(), CAMERA)
+        feats = front_end.describe(_textured(5))
+        assert front_end.method == "orb" and feats.binary
+        assert feats.descriptors.shape[1] == front_end.descriptor_length == 32
+        stored = stored_descriptors(feats)
+        assert stored.dtype == np.float32 and stored.max() <= 255
+        np.testing.assert_array_equal(front_end.descriptors_from_stored(stored),
+                                      feats.descriptors)
+
+    def test_a_memory_of_another_method_is_refused(self, front_end: FrontEnd) -> None:
+        memory = VisualMemory(CAMERA)
+        feats = front_end.describe(_textured(6))
+        memory.add_path("p", [KeyframeRecord(t_ns=0, odom_pose=(0.0, 0.0, 0.0), distance_m=0.0,
+                                             image=_textured(6), pixels_xy=feats.pixels_xy,
+                                             patches=stored_descriptors(feats))])
+        orb = make_front_end(FeatureConfig(), CAMERA)
+        with pytest.raises(MemoryFormatError, match=r"key image 0: descriptors have 121 values, "
+                                                    r"the front end 'orb' on this lens makes 32"):
+            orb.features_from_keyframe(memory.keyframe(0))

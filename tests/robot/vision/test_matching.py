@@ -20,10 +20,24 @@ FEATURES = FeatureConfig()
 CONFIG = MatchConfig()
 
 
+#: The test lens: pixel (x, y) looks x / S to the right and y / S down, rad.
+S_PX_PER_RAD = 174.0
+
+
+def _bearings(pixels_xy: np.ndarray) -> np.ndarray:
+    yaw, pitch = np.asarray(pixels_xy, dtype=float).reshape(-1, 2).T / S_PX_PER_RAD
+    return np.column_stack([np.sin(yaw) * np.cos(pitch), np.sin(pitch),
+                            np.cos(yaw) * np.cos(pitch)])
+
+
+def _deg(px: float) -> float:
+    """A pixel distance on the test lens as an angle, degrees."""
+    return float(np.degrees(px / S_PX_PER_RAD))
+
+
 def _feats(pixels_xy: np.ndarray, descriptors: np.ndarray, response: np.ndarray) -> Features:
-    """Features with every bearing along the optical axis (pixel windows ignore bearings)."""
-    n = len(pixels_xy)
-    return Features(pixels_xy, descriptors, response, np.tile([0.0, 0.0, 1.0], (n, 1)))
+    """Features with the test lens's bearings."""
+    return Features(pixels_xy, descriptors, response, _bearings(pixels_xy))
 
 
 def _harris(image: np.ndarray, config: FeatureConfig) -> Features:
@@ -43,11 +57,11 @@ def _random_features(rng: np.random.Generator, n: int, extent_px: int, side: int
 def _brute_force(feats_a: Features, feats_b: Features, config: MatchConfig) -> set[tuple[int, int]]:
     """The paper's rule written as plain loops: best in window, threshold, mutual best."""
     scores = feats_a.descriptors @ feats_b.descriptors.T
-    r = config.search_radius_px
+    r = config.search_radius_deg
 
     def candidate(i: int, j: int) -> bool:
-        d = np.abs(feats_a.pixels_xy[i] - feats_b.pixels_xy[j])
-        return r is None or bool(np.all(d <= r))
+        cosine = float(feats_a.bearings[i] @ feats_b.bearings[j])
+        return r is None or cosine >= np.cos(np.radians(r))
 
     def best(items: list[int], score: list[float]) -> int | None:
         return items[int(np.argmax(score))] if items else None
@@ -139,12 +153,13 @@ class TestMatchFeatures:
         assert len(np.unique(matches.idx_b)) == len(matches)
 
     def test_window_is_respected(self, rng: np.random.Generator) -> None:
-        # B's twin of A lies 11 px away: found with r = 11 (inclusive), not with r = 10.
+        # B's twin of A lies `angle` away: found within a cone a little wider, not narrower.
         feats_a = _random_features(rng, 1, 0)
         shifted = feats_a.pixels_xy + np.array([[11.0, -3.0]])
         feats_b = _feats(shifted, feats_a.descriptors, np.ones(1))
-        for radius, found in ((11.0, 1), (10.0, 0), (None, 1)):
-            config = dataclasses.replace(CONFIG, search_radius_px=radius)
+        angle = np.degrees(np.arccos(feats_a.bearings[0] @ feats_b.bearings[0]))
+        for radius, found in ((angle * 1.001, 1), (angle * 0.999, 0), (None, 1)):
+            config = dataclasses.replace(CONFIG, search_radius_deg=radius)
             assert len(match_features(feats_a, feats_b, config)) == found
 
     def test_window_is_respected_on_images(self) -> None:
@@ -152,9 +167,11 @@ class TestMatchFeatures:
         feats_a = _harris(pair.image_a, FEATURES)
         feats_b = _harris(pair.image_b, FEATURES)
         matches = match_features(feats_a, feats_b,
-                                 dataclasses.replace(CONFIG, search_radius_px=6.0))
-        pixels_a, pixels_b = matches.pixels_xy(feats_a, feats_b)
-        assert np.all(np.abs(pixels_b - pixels_a) <= 6.0)
+                                 dataclasses.replace(CONFIG, search_radius_deg=_deg(6.0)))
+        cosines = np.einsum("kd,kd->k", feats_a.bearings[matches.idx_a],
+                            feats_b.bearings[matches.idx_b])
+        assert len(matches) > 20
+        assert np.all(cosines >= np.cos(np.radians(_deg(6.0))))
 
     def test_threshold(self, rng: np.random.Generator) -> None:
         feats_a, feats_b = _random_features(rng, 30, 20), _random_features(rng, 30, 20)
@@ -186,11 +203,12 @@ class TestMatchFeatures:
         e *= 0.2 / np.linalg.norm(e)
         plus, minus = (p + e) / np.linalg.norm(p + e), (p - e) / np.linalg.norm(p - e)
         ratio = dataclasses.replace(CONFIG, max_distance_ratio=0.8)
-        ambiguous = _feats(np.zeros((2, 2)), np.stack([plus, minus]), np.ones(2))
+        apart = np.array([[0.0, 0.0], [30.0, 0.0]])  # 10 degrees: rivals
+        ambiguous = _feats(apart, np.stack([plus, minus]), np.ones(2))
         assert len(match_features(feats_a, ambiguous, CONFIG)) == 1
         assert len(match_features(feats_a, ambiguous, ratio)) == 0
         other = _random_features(rng, 1, 0).descriptors[0]
-        distinct = _feats(np.zeros((2, 2)), np.stack([other, plus]), np.ones(2))
+        distinct = _feats(apart, np.stack([other, plus]), np.ones(2))
         matches = match_features(feats_a, distinct, ratio)
         assert matches.idx_b.tolist() == [1]
 
@@ -207,23 +225,24 @@ class TestMatchFeatures:
 
     @settings(max_examples=60, deadline=None)
     @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 40),
-           radius=st.sampled_from([None, 1.0, 40.0]))
+           radius=st.sampled_from([None, _deg(1.0), _deg(40.0)]))
     def test_self_match_is_identity(self, seed: int, n: int, radius: float | None) -> None:
         feats = _random_features(np.random.default_rng(seed), n, 200, side=5)
-        matches = match_features(feats, feats, dataclasses.replace(CONFIG, search_radius_px=radius))
+        matches = match_features(feats, feats,
+                                 dataclasses.replace(CONFIG, search_radius_deg=radius))
         np.testing.assert_array_equal(matches.idx_a, np.arange(n))
         np.testing.assert_array_equal(matches.idx_b, np.arange(n))
         np.testing.assert_allclose(matches.score, 1.0, atol=1e-5)
 
     @settings(max_examples=100, deadline=None)
     @given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 15), m=st.integers(0, 15),
-           radius=st.sampled_from([None, 3.0, 5.0, 10.0]),
+           radius=st.sampled_from([None, _deg(3.0), _deg(5.0), _deg(10.0)]),
            min_zncc=st.sampled_from([-1.0, 0.0, 0.4]))
     def test_equals_brute_force(self, seed: int, n: int, m: int, radius: float | None,
                                 min_zncc: float) -> None:
         rng = np.random.default_rng(seed)
         feats_a, feats_b = _random_features(rng, n, 12), _random_features(rng, m, 12)
-        config = MatchConfig(search_radius_px=radius, min_zncc=min_zncc)
+        config = MatchConfig(search_radius_deg=radius, min_zncc=min_zncc)
         matches = match_features(feats_a, feats_b, config)
         found = set(zip(matches.idx_a.tolist(), matches.idx_b.tolist(), strict=True))
         assert found == _brute_force(feats_a, feats_b, config)
@@ -235,8 +254,8 @@ class TestBitStrings:
         bits_b = rng.integers(0, 256, (40, 32), dtype=np.uint8)
         feats_a = _feats(rng.uniform(0, 50, (30, 2)), bits_a, np.ones(30))
         feats_b = _feats(rng.uniform(0, 50, (40, 2)), bits_b, np.ones(40))
-        for radius in (None, 10.0):
-            matches = match_features(feats_a, feats_b, MatchConfig(search_radius_px=radius,
+        for radius in (None, _deg(10.0)):
+            matches = match_features(feats_a, feats_b, MatchConfig(search_radius_deg=radius,
                                                                    min_zncc=-1.0))
             assert len(matches) > 0
             hamming = np.unpackbits(bits_a[matches.idx_a] ^ bits_b[matches.idx_b], axis=1).sum(1)
@@ -250,7 +269,7 @@ class TestBitStrings:
         pixels = rng.uniform(0, 400, (50, 2))
         feats_a = _feats(pixels, bits, np.ones(50))
         feats_b = _feats(pixels[order] + 2.0, noisy[order], np.ones(50))
-        matches = match_features(feats_a, feats_b, MatchConfig(search_radius_px=None))
+        matches = match_features(feats_a, feats_b, MatchConfig(search_radius_deg=None))
         assert len(matches) == 50
         np.testing.assert_array_equal(order[matches.idx_b], matches.idx_a)
 
@@ -261,14 +280,41 @@ class TestBitStrings:
 
 
 class TestGuidedSearch:
-    def test_windows_centred_on_the_prediction(self, rng: np.random.Generator) -> None:
-        feats_a = _random_features(rng, 20, 300)
-        feats_b = _feats(feats_a.pixels_xy + np.array([100.0, -60.0]), feats_a.descriptors,
-                         np.ones(20))
-        config = MatchConfig(search_radius_px=10.0)
+    def test_cones_turned_by_the_prediction(self, rng: np.random.Generator) -> None:
+        feats_a = _random_features(rng, 20, 100)  # within 33 degrees of the axis
+        c, s = np.cos(np.radians(25.0)), np.sin(np.radians(25.0))
+        R_b_a = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        turned = feats_a.bearings @ R_b_a.T
+        feats_b = Features(feats_a.pixels_xy, feats_a.descriptors, np.ones(20), turned)
+        config = MatchConfig(search_radius_deg=3.0)
         assert len(match_features(feats_a, feats_b, config)) == 0
-        guided = match_features(feats_a, feats_b, config,
-                                feats_a.pixels_xy + np.array([98.0, -58.0]))
+        guided = match_features(feats_a, feats_b, config, R_b_a)
         np.testing.assert_array_equal(guided.idx_b, np.arange(20))
-        with pytest.raises(ShapeError, match="centres_a_xy"):
-            match_features(feats_a, feats_b, config, np.zeros((3, 2)))
+        with pytest.raises(ShapeError, match="R_b_a"):
+            match_features(feats_a, feats_b, config, np.eye(2))
+
+
+class TestRatioTestOutsideTheNeighbourhood:
+    def test_neighbours_are_not_rivals_but_a_period_away_is(
+        self, rng: np.random.Generator
+    ) -> None:
+        """B holds A's corner twice, 0.5 degrees apart (a corner and its neighbour), and once
+        more 5 degrees away (the next period of a pattern)."""
+        feats_a = _random_features(rng, 1, 0)
+        p = feats_a.descriptors[0]
+        ratio = MatchConfig(search_radius_deg=None, max_distance_ratio=0.8,
+                            ratio_exclusion_deg=1.5)
+        near = np.array([[0.0, 0.0], [_px(0.5), 0.0]])
+        feats_b = _feats(near, np.stack([p, p]), np.ones(2))
+        assert len(match_features(feats_a, feats_b, ratio)) == 1
+        period = np.array([[0.0, 0.0], [_px(0.5), 0.0], [_px(5.0), 0.0]])
+        feats_b = _feats(period, np.stack([p, p, p]), np.ones(3))
+        assert len(match_features(feats_a, feats_b, ratio)) == 0
+        no_exclusion = dataclasses.replace(ratio, ratio_exclusion_deg=0.0)
+        assert len(match_features(feats_a, _feats(near, np.stack([p, p]), np.ones(2)),
+                                  no_exclusion)) == 0
+
+
+def _px(deg: float) -> float:
+    """An angle on the test lens as a pixel distance."""
+    return float(np.radians(deg) * S_PX_PER_RAD)

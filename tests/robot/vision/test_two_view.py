@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
+from robot.config import FeatureConfig
 from robot.vision.epipolar import rotation_from_rotvec
 from robot.vision.two_view import (
     TwoViewConfig,
@@ -30,6 +31,10 @@ from tools.bench.realdata import (
     FISHEYE_RIGHT_YAML,
     ROTATION_TOLERANCE_DEG,
 )
+
+#: Harris + ZNCC with corners over the whole image (1000 corners down to 0.1 % of the
+#: strongest response): the two-view pipeline's own test, whatever the default front end.
+SPREAD = FeatureConfig(method="harris-zncc", max_corners=1000, quality_level=0.001)
 
 
 def pose(rotvec: list[float], t: list[float]) -> np.ndarray:
@@ -91,8 +96,8 @@ class TestTwoView:
     ) -> None:
         image_a = cv2.imread(str(FISHEYE_LEFT_IMAGE), cv2.IMREAD_GRAYSCALE)
         image_b = cv2.imread(str(FISHEYE_RIGHT_IMAGE), cv2.IMREAD_GRAYSCALE)
-        result = two_view(image_a, image_b, two_cameras(*fisheye_cameras), TwoViewConfig(),
-                          np.random.default_rng(0))
+        result = two_view(image_a, image_b, two_cameras(*fisheye_cameras, SPREAD),
+                          TwoViewConfig(), np.random.default_rng(0))
         R_ref, t_ref = relative_pose_from_body(read_equidistant_yaml(FISHEYE_LEFT_YAML)
                                                .T_body_sensor,
                                                read_equidistant_yaml(FISHEYE_RIGHT_YAML)
@@ -108,8 +113,8 @@ class TestTwoView:
     def test_blank_images_give_no_pose(self) -> None:
         camera = CameraModel.default()
         blank = np.full((camera.height, camera.width), 90, np.uint8)
-        result = two_view(blank, blank, two_cameras(camera, camera), TwoViewConfig(),
-                          np.random.default_rng(0))
+        result = two_view(blank, blank, two_cameras(camera, camera, FeatureConfig()),
+                          TwoViewConfig(), np.random.default_rng(0))
         assert len(result.corners_a) == 0 and len(result.matched_a) == 0
         assert not result.fit.ok and result.fit.n_inliers == 0
 
@@ -117,4 +122,5 @@ class TestTwoView:
         camera = CameraModel.default()
         with pytest.raises(ShapeError):
             two_view(np.zeros((10, 10), np.uint8), np.zeros((600, 800), np.uint8),
-                     two_cameras(camera, camera), TwoViewConfig(), np.random.default_rng(0))
+                     two_cameras(camera, camera, FeatureConfig()), TwoViewConfig(),
+                     np.random.default_rng(0))
