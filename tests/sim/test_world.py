@@ -99,12 +99,17 @@ class TestBuiltinWorlds:
         assert corridor.max_corner[0] - corridor.min_corner[0] == pytest.approx(20.0)
         assert max(w.height_m for w in campus.walls) >= 8.0
         assert campus.lighting.brightness > lab.lighting.brightness
-        assert campus.landmarks.wall_per_m2 < lab.landmarks.wall_per_m2
 
-    def test_campus_facades_have_big_patches_and_the_lab_the_default(self) -> None:
-        lab, campus = load_world("lab"), load_world("campus")
-        assert lab.landmarks.patch_size_m == 0.15
-        assert all(w.patch_size_m is None for w in lab.walls)
+    def test_the_lab_is_textured_without_patches(self) -> None:
+        lab = load_world("lab")
+        assert lab.landmarks.wall_per_m2 == lab.landmarks.furniture_per_m2 == 0.0
+        assert all(w.left and w.right for w in lab.walls)
+        assert len(lab.lamps) >= 30 and len(lab.pictures) >= 40
+        assert {p.texture for p in lab.pictures} >= {"whiteboard", "light_switch", "window_wide"}
+        assert any(o.movable for o in lab.objects) and any(o.kind == "door" for o in lab.objects)
+
+    def test_campus_facades_have_big_patches(self) -> None:
+        campus = load_world("campus")
         facades = [w for w in campus.walls if w.height_m >= 8.0]
         assert len(facades) == 5
         assert all(0.6 <= (w.patch_size_m or 0.0) <= 0.8 for w in facades)
