@@ -5,7 +5,8 @@ Courbon et al. 2008, sec. III; DESIGN.md sec. 5.5-5.7. Per frame
 
 1. the base's odometry since the previous frame predicts the state
    (:meth:`robot.estimator.Estimator.predict`);
-2. the frame's Harris corners are matched with the next key image's and give
+2. the frame's points (the front end's, :mod:`robot.vision.front_end`) are matched
+   with the next key image's and give
    (s, y, theta) and the image errors (:func:`robot.vision.frame_state.state_from_frame`);
    a usable estimate updates the filter;
 3. key image switching (:func:`robot.switching.observe_frame`) on errImageMax and
@@ -49,17 +50,16 @@ from robot.config import (
 )
 from robot.control_law import Twist, steer
 from robot.estimator import Estimate, Estimator, EstimatorLost
-from robot.memory.localize import keyframe_features
 from robot.segment_frame import arc_coordinates, relative_pose, segment_curvature_1_m
 from robot.switching import FrameEvidence, KeyImageSwitch, SwitchState, observe_frame
-from robot.vision.features import Features, detect_harris
+from robot.vision.features import Features
 from robot.vision.frame_state import (
     FrameState,
     KeySegment,
     key_segment_from_key_images,
     state_from_frame,
 )
-from robot.vision.lens_mask import lens_mask
+from robot.vision.front_end import make_front_end
 from robot.vision.path_state import PathCoordinates
 from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError
@@ -163,7 +163,7 @@ class RouteFollower:
         self._config = config
         self._rng = rng
         self.targets = targets_from_route(memory, route)
-        self._mask = lens_mask(memory.camera)
+        self._front_end = make_front_end(config.features, memory.camera)
         self._estimator = Estimator(config.estimator, now_ns)
         self._switching = SwitchState(route_length=len(self.targets))
         self._segments: dict[int, KeySegment | None] = {}
@@ -199,7 +199,7 @@ class RouteFollower:
         self._odom, self._distance_m = base.odom_pose, base.odom_distance_m
         self._estimator.predict(ds, dpsi)
         index = self.target_index
-        corners = detect_harris(image, self._config.features, self._mask)
+        corners = self._front_end.describe(image)
         vision = self._vision(index, corners)
         if vision is not None and vision.state.ok and self._trusted(vision):
             self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
@@ -235,7 +235,7 @@ class RouteFollower:
         if segment is None:
             return None
         cfg = self._config
-        return state_from_frame(corners, segment, self._memory.camera, cfg.mount, self._rng,
+        return state_from_frame(corners, segment, self._front_end, cfg.mount, self._rng,
                                 cfg.path_state)
 
     def _segment(self, index: int) -> KeySegment | None:
@@ -254,8 +254,9 @@ class RouteFollower:
         for other, tracks in _partners(self._memory, key):
             try:
                 segment = key_segment_from_key_images(
-                    keyframe_features(key), keyframe_features(other), key.odom_pose,
-                    other.odom_pose, self._memory.camera, cfg.mount, self._rng, cfg.path_state,
+                    self._front_end.features_from_keyframe(key),
+                    self._front_end.features_from_keyframe(other), key.odom_pose,
+                    other.odom_pose, self._front_end, cfg.mount, self._rng, cfg.path_state,
                     tracks)
             except DegenerateGeometryError:
                 continue

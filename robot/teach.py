@@ -7,13 +7,14 @@ at least M common interest points tracked between Ii and Ii+1."
 
 Rules of this implementation (:class:`KeyImageSelector`):
 
-1. **Tracked points.** The Harris corners of the last key image are tracked
-   frame to frame: each frame's corners are matched by ZNCC in a small window
-   with the mutual-best check (:func:`robot.vision.matching.match_zncc`, with
-   ``TeachConfig.tracking``) against the points' latest positions and patches.
-   A matched point moves to its match and takes its patch (the appearance drifts
-   slowly as the view changes); an unmatched point keeps its last position and
-   patch. A point dies after more than ``max_missed_frames`` consecutive frames
+1. **Tracked points.** The points of the last key image (the front end's,
+   :mod:`robot.vision.front_end`; the paper's Harris corners) are tracked frame
+   to frame: each frame's points are matched in a small window with the
+   mutual-best check (:meth:`robot.vision.front_end.FrontEnd.match`, with
+   ``TeachConfig.tracking``) against the points' latest positions and descriptors.
+   A matched point moves to its match and takes its descriptor (the appearance
+   drifts slowly as the view changes); an unmatched point keeps its last position
+   and descriptor. A point dies after more than ``max_missed_frames`` consecutive frames
    without a match, so that one missed detection (noise, a person passing) does
    not end it. Corners are detected inside the lens's image circle only.
 2. **Shared points.** A frame shares with the key image the tracked points
@@ -67,9 +68,8 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, TeachConfig
-from robot.vision.features import Features, GreyImage, detect_harris
-from robot.vision.lens_mask import lens_mask
-from robot.vision.matching import match_zncc
+from robot.vision.features import Features, GreyImage
+from robot.vision.front_end import FrontEnd, make_front_end, stored_descriptors
 from shared.camera_model import CameraModel
 from shared.errors import InputError
 from shared.memory import KeyframeRecord
@@ -86,7 +86,7 @@ class SelectedKeyImage:
 
     Attributes:
         record: the key image (time, odometry, distance from the first frame,
-            image, corners and ZNCC patches, the corners tracked from the previous
+            image, corners and descriptors, the corners tracked from the previous
             key image); the memory adds id and thumbnail.
         frame_index: position of its frame in the stream (0 = first frame).
         shared_points: tracked points it shares with the previous key image
@@ -129,8 +129,7 @@ class _Tracks:
     """Points of one key image followed frame to frame (rule 1)."""
 
     def __init__(self, features: Features) -> None:
-        self._pixels_xy = features.pixels_xy.copy()
-        self._patches = features.patches.copy()
+        self._live = features
         self._missed = np.zeros(len(features), dtype=np.intp)
         self._origin = np.arange(len(features), dtype=np.int64)  # the key image's corner
 
@@ -138,22 +137,26 @@ class _Tracks:
     def alive(self) -> int:
         return int(self._missed.shape[0])
 
-    def update(self, features: Features, config: TeachConfig) -> npt.NDArray[np.int64]:
+    def update(self, features: Features, front_end: FrontEnd,
+               config: TeachConfig) -> npt.NDArray[np.int64]:
         """Match the live points in a new frame.
 
         Returns:
             (K, 2) int64 (key image corner, frame corner) of the points matched.
         """
-        live = Features(self._pixels_xy, self._patches, np.zeros(self.alive, dtype=np.float32))
-        matches = match_zncc(live, features, config.tracking)
+        matches = front_end.match(self._live, features, config.tracking)
         tracks = np.column_stack([self._origin[matches.idx_a], matches.idx_b]).astype(np.int64)
-        self._pixels_xy[matches.idx_a] = features.pixels_xy[matches.idx_b]
-        self._patches[matches.idx_a] = features.patches[matches.idx_b]
+        moved = []
+        for name in ("pixels_xy", "descriptors", "bearings"):
+            column = np.array(getattr(self._live, name))
+            column[matches.idx_a] = getattr(features, name)[matches.idx_b]
+            moved.append(column)
         self._missed += 1
         self._missed[matches.idx_a] = 0
         keep = self._missed <= config.max_missed_frames
-        self._pixels_xy = self._pixels_xy[keep]
-        self._patches = self._patches[keep]
+        pixels_xy, descriptors, bearings = (column[keep] for column in moved)
+        self._live = Features(pixels_xy, descriptors, np.zeros(len(pixels_xy), np.float32),
+                              bearings)
         self._missed = self._missed[keep]
         self._origin = self._origin[keep]
         return tracks
@@ -166,21 +169,20 @@ class KeyImageSelector:
 
     Args:
         camera: the camera that takes the frames (image size, lens circle).
-        features: Harris corner and patch parameters.
+        features: the front end's method and parameters.
         config: M, the tracking window and the gap tolerance.
     """
 
     def __init__(self, camera: CameraModel, features: FeatureConfig, config: TeachConfig) -> None:
         self._camera = camera
-        self._feature_config = features
+        self._front_end = make_front_end(features, camera)
         self._config = config
-        self._mask = lens_mask(camera)
         self._count = 0
         self._distance_m = 0.0
         self._last: _Frame | None = None
         self._last_seen: _Seen | None = None
         self._key: _Frame | None = None
-        self._tracks = _Tracks(Features.empty(features.patch_size_px))
+        self._tracks: _Tracks | None = None  # from the first key image on
         self._threshold = config.min_tracked_points
         self._candidate: _Seen | None = None
         self._pending: list[_Seen] = []
@@ -212,7 +214,8 @@ class KeyImageSelector:
         queue = deque([frame])
         while queue:
             current = queue.popleft()
-            tracks = self._tracks.update(current.features, self._config)
+            assert self._tracks is not None  # set with the first key image
+            tracks = self._tracks.update(current.features, self._front_end, self._config)
             m = self._threshold
             seen = self._last_seen = _Seen(current, tracks)
             if self._tracks.alive >= m and not self._turned_too_far(current):
@@ -262,7 +265,7 @@ class KeyImageSelector:
             distance_m=frame.distance_m,
             image=frame.image,
             pixels_xy=np.array(feats.pixels_xy),
-            patches=np.array(feats.patches),
+            patches=stored_descriptors(feats),
             tracked_from_previous=seen.tracks,
         )
         return SelectedKeyImage(record=record, frame_index=frame.index, shared_points=seen.shared)
@@ -293,7 +296,7 @@ class KeyImageSelector:
             image=image,
             odom_pose=Pose2(*pose),
             distance_m=self._distance_m,
-            features=detect_harris(image, self._feature_config, self._mask),
+            features=self._front_end.describe(image),
         )
         self._count += 1
         return frame
@@ -310,7 +313,7 @@ def select_key_images(
     Args:
         frames: (t_ns, image, odom_pose) in capture order.
         camera: the camera that took them.
-        features: Harris corner and patch parameters.
+        features: the front end's method and parameters.
         config: key image selection parameters.
 
     Returns:

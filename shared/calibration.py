@@ -149,6 +149,39 @@ def write_camera(
     write_text_atomic(path, text)
 
 
+def check_replaceable(path: str | Path, writer: str) -> None:
+    """Fail unless ``path`` is absent or a calibration file that ``writer`` wrote.
+
+    A tool that writes calibrations calls this before its work, so that a typo in
+    ``--out`` cannot replace an image, a config or a calibration made by hand.
+
+    Args:
+        path: the file about to be written.
+        writer: what the ``source`` field of the tool's files starts with
+            (e.g. ``"vmnav calibrate"``).
+
+    Raises:
+        CalibrationError: the file exists and is not such a calibration; names it.
+    """
+    path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        return
+    refusal = f"exists and was not written by {writer}: not replacing it (move it away first)"
+    # A calibration is a few hundred bytes: a big file is something else, left unread.
+    if not path.is_file() or path.stat().st_size > 1 << 16:
+        raise CalibrationError(path, refusal)
+    try:
+        data = parse_json(path, path.read_text(encoding="utf-8"), CalibrationError)
+    except (CalibrationError, OSError, UnicodeDecodeError):
+        raise CalibrationError(path, refusal) from None
+    if not isinstance(data, Mapping):
+        raise CalibrationError(path, refusal)
+    source = data.get("source")
+    if not (data.get("format") == FORMAT and isinstance(source, str)
+            and source.startswith(writer)):
+        raise CalibrationError(path, refusal)
+
+
 def camera_to_dict(
     camera: CameraModel, *, rms_px: float | None = None, source: str | None = None
 ) -> dict[str, Any]:

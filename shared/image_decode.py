@@ -10,7 +10,9 @@ itself (a photo goal, a memory's key images, a log's camera frames) goes through
 1. the file's size is capped (:data:`MAX_FILE_BYTES`) before it is read;
 2. its structure is walked (:func:`shared.image_header.read_image_header`): every
    declared length is checked against the bytes there, so a bogus chunk length cannot
-   make the decoder allocate or read gigabytes;
+   make the decoder allocate or read gigabytes. A user's own files (calibration
+   images, ``formats=FILE_FORMATS``) may also be Netpbm, BMP, TIFF or WebP, walked by
+   :mod:`shared.image_header_files`;
 3. the declared picture is held to the caller's pixel budget (at most
    :data:`MAX_PIXELS`, each side at most :data:`MAX_SIDE_PX`; a photo goal's budget
    comes from the camera, :func:`photo_pixel_limit`), so a decompression bomb is
@@ -41,7 +43,14 @@ import numpy as np
 import numpy.typing as npt
 
 from shared.errors import InputError
-from shared.image_header import ImageHeader, read_image_header
+from shared.image_header import (
+    JPEG_SOI,
+    PNG_SIGNATURE,
+    ImageFormat,
+    ImageHeader,
+    read_image_header,
+)
+from shared.image_header_files import MAGICS, read_file_image_header
 
 #: Largest picture decoded, pixels (~33.5 Mpx, a 6700x5000 photo).
 MAX_PIXELS = 1 << 25
@@ -55,6 +64,12 @@ PHOTO_PIXELS_PER_CAMERA_PIXEL = 4
 
 GreyImage = npt.NDArray[np.uint8]  # (H, W) uint8
 
+#: What comes from a peer, an upload or a memory: PNG or JPEG only.
+WIRE_FORMATS = frozenset({ImageFormat.PNG, ImageFormat.JPEG})
+#: What a user's own files may be (calibration images): also Netpbm (PGM...), BMP, TIFF
+#: and WebP.
+FILE_FORMATS = frozenset(ImageFormat)
+
 
 def photo_pixel_limit(width_px: int, height_px: int) -> int:
     """The pixel budget for a photo meant for a ``width_px`` x ``height_px`` camera.
@@ -67,26 +82,39 @@ def photo_pixel_limit(width_px: int, height_px: int) -> int:
 
 
 def check_image(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
-                error: type[InputError] = InputError) -> ImageHeader:
-    """The header of the PNG or JPEG ``data``, once checked against the limits.
+                error: type[InputError] = InputError,
+                formats: frozenset[ImageFormat] = WIRE_FORMATS) -> ImageHeader:
+    """The header of the image ``data``, once checked against the limits.
 
     Args:
         data: the whole file.
         where: the file (or message) the bytes came from, for errors.
         max_pixels: the caller's budget, pixels (at most :data:`MAX_PIXELS` is used).
         error: the :class:`InputError` subclass to raise.
+        formats: the formats accepted (:data:`WIRE_FORMATS` or :data:`FILE_FORMATS`).
 
     Returns:
         The picture's header.
 
     Raises:
-        InputError: (``error``) too big a file, not a PNG or JPEG, a broken structure,
+        InputError: (``error``) too big a file, not of ``formats``, a broken structure,
             or a picture over the budget; one line naming what is wrong.
     """
     if len(data) > MAX_FILE_BYTES:
         raise error(where, f"{len(data)} bytes, more than the {MAX_FILE_BYTES} an image "
                            f"file may have")
-    header = read_image_header(data, where, error)
+    local = formats - WIRE_FORMATS
+    if local and data.startswith(MAGICS):
+        header = read_file_image_header(data, where, error)
+        if header.format not in formats:
+            raise error(where, f"{header.format.value} images are not accepted here")
+    elif local and not data.startswith((PNG_SIGNATURE, JPEG_SOI)):
+        names = ", ".join(f.value for f in ImageFormat if f in formats)
+        start = data[:8].hex(" ") if data else "nothing"
+        raise error(where, f"not an image of a format read here ({names}; the file starts "
+                           f"with {start})")
+    else:
+        header = read_image_header(data, where, error)
     size = f"{header.format.value} of {header.width_px}x{header.height_px} px"
     if max(header.width_px, header.height_px) > MAX_SIDE_PX:
         raise error(where, f"{size}: a side is longer than {MAX_SIDE_PX} px")
@@ -97,14 +125,16 @@ def check_image(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
 
 
 def decode_grey(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
-                error: type[InputError] = InputError) -> GreyImage:
-    """Decode the PNG or JPEG ``data`` to grey, once :func:`check_image` passed.
+                error: type[InputError] = InputError,
+                formats: frozenset[ImageFormat] = WIRE_FORMATS) -> GreyImage:
+    """Decode the image ``data`` to grey, once :func:`check_image` passed.
 
     Args:
         data: the whole file.
         where: the file (or message) the bytes came from, for errors.
         max_pixels: the caller's budget, pixels (at most :data:`MAX_PIXELS` is used).
         error: the :class:`InputError` subclass to raise.
+        formats: the formats accepted (:data:`WIRE_FORMATS` or :data:`FILE_FORMATS`).
 
     Returns:
         (H, W) uint8 grey picture (colour converted, 16-bit reduced to 8, alpha dropped,
@@ -116,7 +146,7 @@ def decode_grey(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
     """
     import cv2
 
-    header = check_image(data, where, max_pixels, error)
+    header = check_image(data, where, max_pixels, error, formats)
     try:
         image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
     except cv2.error as e:
@@ -130,8 +160,9 @@ def decode_grey(data: bytes, where: str | Path, max_pixels: int = MAX_PIXELS,
 
 
 def read_grey(path: Path, max_pixels: int = MAX_PIXELS,
-              error: type[InputError] = InputError) -> GreyImage:
-    """Read the PNG or JPEG file at ``path`` and decode it to grey (:func:`decode_grey`).
+              error: type[InputError] = InputError,
+              formats: frozenset[ImageFormat] = WIRE_FORMATS) -> GreyImage:
+    """Read the image file at ``path`` and decode it to grey (:func:`decode_grey`).
 
     At most :data:`MAX_FILE_BYTES` + 1 bytes are read, whatever the file's size.
 
@@ -143,4 +174,4 @@ def read_grey(path: Path, max_pixels: int = MAX_PIXELS,
             data = file.read(MAX_FILE_BYTES + 1)
     except OSError as e:
         raise error(path, f"cannot read the image: {e.strerror}") from None
-    return decode_grey(data, path, max_pixels, error)
+    return decode_grey(data, path, max_pixels, error, formats)

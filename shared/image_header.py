@@ -85,10 +85,15 @@ _Corrupt = Callable[[str], InputError]
 
 
 class ImageFormat(Enum):
-    """The formats :func:`read_image_header` reads."""
+    """The formats whose header is walked: PNG and JPEG here (:func:`read_image_header`),
+    the others in :mod:`shared.image_header_files` (a user's own files only)."""
 
     PNG = "PNG"
     JPEG = "JPEG"
+    NETPBM = "Netpbm"
+    BMP = "BMP"
+    TIFF = "TIFF"
+    WEBP = "WebP"
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,12 +101,15 @@ class ImageHeader:
     """What an image file declares about its picture.
 
     Attributes:
-        format: PNG or JPEG.
+        format: the file's format.
         width_px: picture width, px (>= 1).
         height_px: picture height, px (>= 1).
         channels: samples per pixel as stored: PNG 1 grey, 2 grey + alpha, 3 colour or
-            palette, 4 colour + alpha; JPEG the frame's components (1-4).
-        bit_depth: bits per sample (PNG 1-16; JPEG precision 8 or 12).
+            palette, 4 colour + alpha; JPEG the frame's components (1-4); Netpbm 1
+            (PBM, PGM) or 3 (PPM); BMP 3, or 4 with 32 bits per pixel; TIFF
+            SamplesPerPixel; WebP 3, or 4 with alpha.
+        bit_depth: bits per sample (PNG 1-16; JPEG precision 8 or 12; Netpbm 1, 8 or
+            16; BMP bits per pixel, 1-32; TIFF the first BitsPerSample; WebP 8).
     """
 
     format: ImageFormat

@@ -42,6 +42,7 @@ import numpy.typing as npt
 
 from shared.camera_model import CameraModel
 from shared.errors import ShapeError, TransportError
+from sim.config import SensorConfig
 from sim.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
@@ -51,8 +52,9 @@ log = logging.getLogger(__name__)
 STREAM_PATH = "/stream.mjpg"
 SNAPSHOT_PATH = "/snapshot.jpg"
 BOUNDARY = "vmnavframe"
-DEFAULT_JPEG_QUALITY = 90
-"""cv2.IMWRITE_JPEG_QUALITY of the served frames (about 45 kB per 800x600 frame)."""
+DEFAULT_JPEG_QUALITY = SensorConfig().jpeg_quality
+"""cv2.IMWRITE_JPEG_QUALITY of the served frames unless told (``[sim.sensor]
+jpeg_quality``: the simulated camera's MJPEG)."""
 _POLL_S = 0.05
 """The accept loop checks for :meth:`CameraServer.close` this often, s."""
 _CORRUPT_XOR = 0x5A

@@ -1,5 +1,5 @@
-"""The simulator's configs: world, body, odometry, renderer, people, the emulated Pioneer
-and the scripted teach driver.
+"""The simulator's configs: world, body, odometry, renderer, camera sensor, people, the
+emulated Pioneer and the scripted teach driver.
 
 They are the ``[sim]`` table of a vmnav config file (:data:`shared.config.SIM_TABLE`;
 the file's other tables are the robot's, :mod:`robot.config`)::
@@ -9,6 +9,9 @@ the file's other tables are the robot's, :mod:`robot.config`)::
 
     [sim.people]
     count = 3
+
+    [sim.sensor]
+    read_noise_grey = 2.0
 
 The simulated camera sits where the robot's config says its camera is: whoever builds
 a simulation for a robot sets :attr:`SimConfig.camera_mount` from the robot's
@@ -31,6 +34,7 @@ from shared.config import (
     load_toml,
     require,
 )
+from shared.errors import ConfigError
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,17 +97,15 @@ class OdometryConfig:
 
 @dataclass(frozen=True, slots=True)
 class RenderConfig:
-    """The fisheye renderer."""
+    """The fisheye renderer's light: a slow global change of the scene's brightness
+    (the camera's own flaws are :class:`SensorConfig`'s)."""
 
-    noise_sigma: float = 2.0
-    """Std of additive Gaussian sensor noise, grey levels."""
     illumination_amplitude: float = 0.15
     """Peak relative change of the global illumination gain over time (0 = constant)."""
     illumination_period_s: float = 40.0
     """Period of the slow global illumination change, s."""
 
     def __post_init__(self) -> None:
-        require(self.noise_sigma >= 0, f"noise_sigma must be >= 0, got {self.noise_sigma}")
         require(
             0 <= self.illumination_amplitude < 1,
             f"illumination_amplitude must be in [0, 1), got {self.illumination_amplitude}",
@@ -112,6 +114,81 @@ class RenderConfig:
             self.illumination_period_s > 0,
             f"illumination_period_s must be > 0, got {self.illumination_period_s}",
         )
+
+
+
+@dataclass(frozen=True, slots=True)
+class SensorConfig:
+    """A real camera's flaws (:mod:`sim.camera_effects`), each on by default at a value
+    typical of a small CMOS camera behind a fisheye lens.
+
+    The renderer draws the scene as the grey levels the sensor would record with
+    ``reference_exposure_s`` at unity gain; this stage blurs, exposes, vignettes, adds
+    noise and clips them. :meth:`ideal` is the camera without flaws (``motion_blur =
+    false``, ``vignetting_rim = 1``, ``shot_noise_electrons_per_grey = 0``,
+    ``read_noise_grey = 0``, ``auto_exposure = false`` with the reference exposure).
+    """
+
+    reference_exposure_s: float = 0.008
+    """Exposure time at which, with unity gain, the sensor records the renderer's grey
+    levels as drawn, s: how bright the world's light is for this camera."""
+    auto_exposure: bool = True
+    """Whether the exposure time and gain follow the image's brightness (a lagging loop)."""
+    target_grey: float = 110.0
+    """Auto-exposure's target mean grey level of the image circle, grey levels (0-255)."""
+    exposure_time_constant_s: float = 0.5
+    """Time constant of auto-exposure's first-order response to a change of brightness
+    (in log exposure), s."""
+    min_exposure_s: float = 0.0001
+    """Shortest exposure time auto-exposure uses, s."""
+    max_exposure_s: float = 0.03
+    """Longest exposure time auto-exposure uses before raising the gain, s (at most the
+    frame period)."""
+    max_gain: float = 8.0
+    """Highest analogue gain auto-exposure uses, factor (8 = 18 dB)."""
+    exposure_s: float = 0.008
+    """Exposure time with ``auto_exposure = false``, s (at most the frame period)."""
+    gain: float = 1.0
+    """Analogue gain with ``auto_exposure = false``, factor >= 1."""
+    motion_blur: bool = True
+    """Whether the image is blurred along the image motion during the exposure (the
+    camera's rotation and translation, from the simulated body's velocity)."""
+    vignetting_rim: float = 0.65
+    """Relative illumination at the rim of the lens's field of view (cos^4-like falloff
+    from the centre), fraction in (0, 1]; 1 = no vignetting."""
+    shot_noise_electrons_per_grey: float = 20.0
+    """Photo-electrons per grey level at unity gain (Poisson shot noise: variance
+    ``gain * grey / this``), e-/grey level; 0 = no shot noise."""
+    read_noise_grey: float = 1.0
+    """Std of the Gaussian read noise at unity gain (scales with the gain), grey levels."""
+    jpeg_quality: int = 80
+    """JPEG quality of the frames where they travel as MJPEG (``vmnav sim serve
+    --video``'s network camera), cv2.IMWRITE_JPEG_QUALITY 1-100."""
+
+    @classmethod
+    def ideal(cls) -> SensorConfig:
+        """A flawless camera: records the renderer's grey levels as drawn (rounded, clipped)."""
+        return cls(auto_exposure=False, motion_blur=False, vignetting_rim=1.0,
+                   shot_noise_electrons_per_grey=0.0, read_noise_grey=0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("reference_exposure_s", "exposure_time_constant_s", "min_exposure_s",
+                     "exposure_s"):
+            require(getattr(self, name) > 0, f"{name} must be > 0 s, got {getattr(self, name)}")
+        require(self.min_exposure_s <= self.max_exposure_s,
+                f"max_exposure_s must be >= min_exposure_s ({self.min_exposure_s} s), "
+                f"got {self.max_exposure_s}")
+        require(0 < self.target_grey < 255,
+                f"target_grey must be in (0, 255) grey levels, got {self.target_grey}")
+        require(self.max_gain >= 1, f"max_gain must be >= 1, got {self.max_gain}")
+        require(1 <= self.gain <= self.max_gain,
+                f"gain must be in [1, max_gain = {self.max_gain}], got {self.gain}")
+        require(0 < self.vignetting_rim <= 1,
+                f"vignetting_rim must be in (0, 1], got {self.vignetting_rim}")
+        for name in ("shot_noise_electrons_per_grey", "read_noise_grey"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(1 <= self.jpeg_quality <= 100,
+                f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
 
 
 
@@ -258,6 +335,7 @@ class SimConfig:
     body: BodyConfig = field(default_factory=BodyConfig)
     odometry: OdometryConfig = field(default_factory=OdometryConfig)
     render: RenderConfig = field(default_factory=RenderConfig)
+    sensor: SensorConfig = field(default_factory=SensorConfig)
     people: PeopleConfig = field(default_factory=PeopleConfig)
     emulator: EmulatorConfig = field(default_factory=EmulatorConfig)
     teach_driver: TeachDriverConfig = field(default_factory=TeachDriverConfig)
@@ -274,6 +352,11 @@ class SimConfig:
             f"frame_period_ns ({self.frame_period_ns}) must be >= "
             f"physics_dt_ns ({self.physics_dt_ns})",
         )
+        frame_s = self.frame_period_ns / 1e9
+        for name in ("max_exposure_s", "exposure_s"):
+            value = getattr(self.sensor, name)
+            require(value <= frame_s,
+                    f"sensor.{name} ({value} s) must be <= the frame period ({frame_s} s)")
         require(
             self.landmark_density_scale >= 0,
             f"landmark_density_scale must be >= 0, got {self.landmark_density_scale}",
@@ -288,6 +371,10 @@ def load_sim_config(path: str | Path | None, camera_mount: CameraMountConfig) ->
     Raises:
         ConfigError: naming the file, table and key at fault.
     """
-    config = SimConfig() if path is None else from_mapping(
-        SimConfig, load_toml(path).get(SIM_TABLE, {}), str(path), SIM_TABLE)
+    table = {} if path is None else load_toml(path).get(SIM_TABLE, {})
+    render = table.get("render") if isinstance(table, dict) else None
+    if isinstance(render, dict) and "noise_sigma" in render:
+        raise ConfigError(str(path), f"{SIM_TABLE}.render.noise_sigma: the sensor's noise moved to "
+                          f"[{SIM_TABLE}.sensor] read_noise_grey and shot_noise_electrons_per_grey")
+    config = SimConfig() if path is None else from_mapping(SimConfig, table, str(path), SIM_TABLE)
     return dataclasses.replace(config, camera_mount=camera_mount)

@@ -98,6 +98,8 @@ class People:
         self._wait_s = [0.0] * config.count
         self._blocked_s = [0.0] * config.count
         self._sidestepping = [False] * config.count
+        self._headings = np.zeros(config.count)  # facing +x until they walk
+        self._walked_m = np.zeros(config.count)
         for i, (x, y) in enumerate(self._start_places()):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
             body.position = (float(x), float(y))
@@ -114,6 +116,15 @@ class People:
     def positions(self) -> npt.NDArray[np.float64]:
         """Current positions (M, 2), world frame, m."""
         return np.array([tuple(b.position) for b in self._bodies], dtype=float).reshape(-1, 2)
+
+    def headings(self) -> npt.NDArray[np.float64]:
+        """The way each person faces (M,), world frame, rad: their walking direction, kept
+        while they stand."""
+        return self._headings.copy()
+
+    def walked_m(self) -> npt.NDArray[np.float64]:
+        """Distance each person has walked (M,), m (the phase of their gait)."""
+        return self._walked_m.copy()
 
     def index_of(self, shape: pymunk.Shape) -> int | None:
         """Which person ``shape`` is, or None."""
@@ -159,6 +170,10 @@ class People:
             if self.config.avoid_robot and not self._sidestepping[i]:
                 velocity = self._yield(i, body.position, velocity, dt_s)
             body.velocity = velocity
+            speed = velocity.length
+            if speed > _STILL_M_S:
+                self._headings[i] = velocity.angle
+                self._walked_m[i] += speed * dt_s
 
     def _walk(self, i: int, position: pymunk.Vec2d, dt_s: float) -> pymunk.Vec2d:
         """Person ``i``'s velocity by rules 1-2 (pauses, goals), world frame, m/s."""

@@ -10,11 +10,13 @@ Per frame:
    trilinear mip-mapping from the pixel's footprint (no aliasing shimmer) and lit
    by the light map (:mod:`sim.lightmap`: lamps, daylight through windows, open sky).
    The image is a float radiance, grey levels (lamps and sky may exceed 255).
-3. People are drawn (:meth:`FisheyeRenderer._draw_people`: the one place where they
-   are), then the legacy landmark patches of a world that still asks for them.
-4. The post-process stage (:meth:`FisheyeRenderer._post_process`: the one place the
-   camera's own effects go) turns radiance into the uint8 frame: illumination gain,
-   sensor noise, clipping, the image circle.
+3. People are drawn as textured figures (:mod:`sim.person_figure`, hidden per pixel
+   by the depth image), then the legacy landmark patches of a world that asks for them.
+4. The post-process stage (:meth:`FisheyeRenderer._post_process`) turns radiance into
+   the uint8 frame: a global illumination gain (slow sinusoid, times the scene's
+   light change ``Simulation.light_gain_at``), then the camera's flaws
+   (:class:`sim.camera_effects.CameraEffects`: motion blur, vignetting,
+   auto-exposure, noise, clipping; outside the lens's image circle stays black).
 
 Ground truth is exact: the true pose, the depth along each pixel's ray, and the
 "landmarks" in view: the corners of the pictures on the walls (their 3D corners
@@ -27,7 +29,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -38,23 +39,21 @@ from shared.pose import Pose2
 from sim._atlas import Atlas
 from sim._patches import NEAR_M, PatchPainter
 from sim._raycast import bin_primitives, trace
-from sim.config import RenderConfig
+from sim.camera_effects import CameraEffects, camera_motion
+from sim.config import RenderConfig, SensorConfig
 from sim.landmarks import LandmarkField
-from sim.simulation import OCCLUDER_FILTER, Simulation
+from sim.person_figure import PersonFigures
+from sim.simulation import Simulation
 from sim.surfaces import Scene, build_scene
+from sim.texture_library import TextureLibrary
 from sim.world import World
 
 FloatArray = npt.NDArray[np.float64]
 
 WEDGES = 1024
 """Azimuth wedges of the ray kernel's candidate lists (see :mod:`sim._raycast`)."""
-_NOISE_BANK_SIZE = 16
 _RENDER_STREAM = 0x52454E44
 """Mixed with the simulation seed for the renderer's own random stream."""
-_PERSON_GREY = (0.15, 0.42)
-"""Range of the grey level of people's silhouettes, as fractions of the world's brightness."""
-_PERSON_SAMPLES = 8
-"""Points per silhouette side (fisheye-curved outline)."""
 _CORNER_DEPTH_TOLERANCE = 0.05
 """A picture corner is in view when the depth image there is within this fraction of its
 distance (+ 2 cm) of it, m / m."""
@@ -96,11 +95,15 @@ class FisheyeRenderer:
     Args:
         camera: the simulated lens.
         mount: the camera's pose on the robot.
-        config: noise and illumination.
+        config: illumination.
+        sensor: the camera's flaws.
         world: the textured surfaces and their lighting.
         landmarks: legacy landmark patches to paint over them (usually none).
-        rng: seeds the noise bank, the per-frame noise choice and the
-            illumination phase.
+        rng: seeds the illumination phase, people's looks and the sensor's noise.
+
+    Attributes:
+        effects: the camera's flaws, applied to every frame (its ``last`` says how
+            the last frame was exposed).
 
     Raises:
         ConfigError: a texture the world names is missing from its set.
@@ -111,6 +114,7 @@ class FisheyeRenderer:
         camera: CameraModel,
         mount: CameraMountConfig,
         config: RenderConfig,
+        sensor: SensorConfig,
         world: World,
         landmarks: LandmarkField,
         rng: np.random.Generator,
@@ -124,18 +128,17 @@ class FisheyeRenderer:
         self._rng = rng
         self._brightness = world.lighting.brightness
         self._rays(rotation_base_cam(mount))
-        self._circle = self._make_circle()
-        self._noise_pos, self._noise_neg = self._make_noise_bank()
+        self.effects = CameraEffects(camera, mount, sensor, rng.spawn(1)[0])
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
-        self._person_grey: dict[int, int] = {}
+        self._figures: PersonFigures | None = None
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
         """A renderer for ``sim``'s world, landmarks and config (the camera at its
         ``camera_mount``), seeded from its seed."""
         rng = np.random.default_rng([sim.config.seed, _RENDER_STREAM])
-        return cls(camera, sim.config.camera_mount, sim.config.render, sim.world, sim.landmarks,
-                   rng)
+        return cls(camera, sim.config.camera_mount, sim.config.render, sim.config.sensor,
+                   sim.world, sim.landmarks, rng)
 
     @property
     def landmark_count(self) -> int:
@@ -180,7 +183,7 @@ class FisheyeRenderer:
         centre_w = T_world_cam[:3, 3]
         radiance, depth = self.trace(T_world_cam, pose_w[2])
 
-        self._draw_people(sim, radiance, R_cam_world, centre_w)
+        self._draw_people(sim, radiance, R_cam_world, centre_w, depth)
         if self._patches is not None:
             ids, pix, dist, affines = self._patches.visible(sim, R_cam_world, centre_w)
             self._patches.paint(radiance, ids, affines, dist)
@@ -188,8 +191,8 @@ class FisheyeRenderer:
         else:
             ids, pix, dist = self._picture_corners(R_cam_world, centre_w, depth)
 
-        gain = self.illumination_gain(sim.now_ns)
-        image = self._post_process(radiance, gain)
+        gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
+        image = self._post_process(radiance, sim, gain)
         near = np.argsort(dist, kind="stable")
         return RenderedFrame(
             t_ns=sim.now_ns,
@@ -271,22 +274,20 @@ class FisheyeRenderer:
         return keep.astype(np.int64), pix[keep], dist[keep]
 
     def _post_process(
-        self, radiance: npt.NDArray[np.float32], gain: float
+        self, radiance: npt.NDArray[np.float32], sim: Simulation, gain: float
     ) -> npt.NDArray[np.uint8]:
         """The camera's effects, radiance to frame: the one post-process stage.
 
         Args:
             radiance: (H, W) float32 grey levels of the scene (people drawn in).
-            gain: the illumination gain of this frame.
+            sim: the simulation (the body's motion during the exposure).
+            gain: the scene's light relative to ``radiance`` this frame.
 
         Returns:
             (H, W) uint8 frame, 0 outside the image circle.
         """
-        image = cv2.convertScaleAbs(radiance, alpha=gain)
-        if self.config.noise_sigma > 0:
-            j = int(self._rng.integers(_NOISE_BANK_SIZE))
-            image = cv2.subtract(cv2.add(image, self._noise_pos[j]), self._noise_neg[j])
-        return cv2.bitwise_and(image, self._circle)
+        motion = camera_motion(sim.body.velocity_base, self.mount)
+        return self.effects.apply(radiance, sim.now_ns, motion, gain)
 
     def illumination_gain(self, t_ns: int) -> float:
         """The global illumination gain at time ``t_ns`` (1 ± amplitude, slow sinusoid)."""
@@ -302,74 +303,13 @@ class FisheyeRenderer:
         image: npt.NDArray[np.float32],
         R_cam_world: FloatArray,
         centre_w: FloatArray,
+        depth_m: npt.NDArray[np.float32],
     ) -> None:
-        """Draw each person not hidden by a wall as a filled, fisheye-curved silhouette."""
-        positions, radius, height = sim.people_state()
-        cx, cy = float(centre_w[0]), float(centre_w[1])
-        heights = np.linspace(0.0, height, _PERSON_SAMPLES)
-        for k, (px, py) in enumerate(positions):
-            dx, dy = px - cx, py - cy
-            d = math.hypot(dx, dy)
-            if d <= radius + NEAR_M:
-                continue
-            hit = sim.space.segment_query_first((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
-            if hit is not None and hit.shape is not None and not sim.is_person(hit.shape):
-                continue  # hidden behind a wall or furniture (by its centre line)
-            # The two vertical tangent lines of the cylinder seen from the camera.
-            half_angle = math.asin(min(radius / d, 1.0))
-            base = math.atan2(dy, dx)
-            reach = math.sqrt(max(d * d - radius * radius, 0.0))
-            sides = []
-            for sgn in (1.0, -1.0):
-                ang = base + sgn * half_angle
-                sides.append((cx + reach * math.cos(ang), cy + reach * math.sin(ang)))
-            left = np.column_stack(
-                [
-                    np.full(_PERSON_SAMPLES, sides[0][0]),
-                    np.full(_PERSON_SAMPLES, sides[0][1]),
-                    heights,
-                ]
-            )
-            right = np.column_stack(
-                [
-                    np.full(_PERSON_SAMPLES, sides[1][0]),
-                    np.full(_PERSON_SAMPLES, sides[1][1]),
-                    heights,
-                ]
-            )
-            outline_w = np.vstack([left, right[::-1]])
-            pix, ok = self.camera.project((outline_w - centre_w) @ R_cam_world.T)
-            if not ok.any():
-                continue
-            grey = self._person_grey.setdefault(
-                k, round(self._brightness * float(self._rng.uniform(*_PERSON_GREY)))
-            )
-            cv2.fillPoly(
-                image,
-                [np.round(pix[ok] * 16).astype(np.int32)],
-                grey,
-                lineType=cv2.LINE_AA,
-                shift=4,
-            )
-
-    # -- fixed images -------------------------------------------------------------------
-
-    def _make_circle(self) -> npt.NDArray[np.uint8]:
-        """The lens's image-circle mask: (H, W) uint8, 255 where a pixel has a valid ray, else 0."""
-        cam = self.camera
-        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height))
-        _, valid = cam.lift(np.column_stack([u.ravel(), v.ravel()]))
-        return np.where(valid, 255, 0).astype(np.uint8).reshape(cam.height, cam.width)
-
-    def _make_noise_bank(self) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
-        """Pre-drawn Gaussian noise images, split into positive and negative uint8 parts."""
-        shape = (_NOISE_BANK_SIZE, self.camera.height, self.camera.width)
-        if self.config.noise_sigma <= 0:
-            zeros = np.zeros(shape, dtype=np.uint8)
-            return zeros, zeros
-        noise = self._rng.normal(0.0, self.config.noise_sigma, size=shape).astype(np.float32)
-        pos = np.clip(np.round(noise), 0, 255).astype(np.uint8)
-        neg = np.clip(np.round(-noise), 0, 255).astype(np.uint8)
-        return pos, neg
-
-
+        """Draw the people as textured figures (:mod:`sim.person_figure`), hidden per pixel
+        by what the depth image shows nearer."""
+        if len(sim.people) == 0:
+            return
+        if self._figures is None:
+            self._figures = PersonFigures(self.camera, TextureLibrary.builtin(),
+                                          self._brightness, self._rng.spawn(1)[0])
+        self._figures.draw_people(sim, image, R_cam_world, centre_w, depth_m)

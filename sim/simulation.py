@@ -54,6 +54,10 @@ class Simulation:
     Args:
         world: the place.
         config: seed, physics step, body, odometry, people and landmark settings.
+        landmark_world: the world the landmark patches are placed in; None: ``world``.
+            A repeat after a scene change (:mod:`sim.scene_change`) passes the taught
+            world, so that the patches stay where they were taught (moving an object
+            would otherwise redraw the whole field).
 
     Attributes:
         world: the world.
@@ -63,9 +67,13 @@ class Simulation:
         landmarks: the landmark field.
         body: the robot's body.
         people: the people.
+        light_gain_at: the scene's light at a simulation time (ns), relative to the
+            world's lighting: 1 unless a scenario changes the light during the run
+            (:meth:`sim.scene_change.LightingChange.gain_at`); the renderer applies it.
     """
 
-    def __init__(self, world: World, config: SimConfig) -> None:
+    def __init__(self, world: World, config: SimConfig,
+                 landmark_world: World | None = None) -> None:
         self.world = world
         self.config = config
         landmark_rng, odometry_rng, people_rng = np.random.default_rng(config.seed).spawn(3)
@@ -74,10 +82,10 @@ class Simulation:
         self._add_walls_and_furniture()
         self.free_space = FreeSpaceMap.from_world(world)
         self.landmarks: LandmarkField = generate_landmarks(
-            world,
+            world if landmark_world is None else landmark_world,
             landmark_rng,
             config.landmark_density_scale,
-            self.free_space,
+            self.free_space if landmark_world is None else None,
         )
         self.body = PioneerBody(self.space, config.body, config.odometry, world.start, odometry_rng)
         self.people = People(
@@ -86,6 +94,7 @@ class Simulation:
         self._now_ns = 0
         self._dt_s = config.physics_dt_ns / 1e9
         self._step_hooks: list[Callable[[int, int], None]] = []
+        self.light_gain_at: Callable[[int], float] = _steady_light
 
     def _add_walls_and_furniture(self) -> None:
         static = self.space.static_body
@@ -195,3 +204,8 @@ class Simulation:
             )
         self.body.place(pose)
         self.people.clear_robot_start()
+
+
+def _steady_light(t_ns: int) -> float:
+    """The world's light, unchanged at every time."""
+    return 1.0

@@ -64,6 +64,11 @@ def take_snapshot(
     topdown = draw_topdown(sim, frame, camera.fov_deg)
 
     summary = _summary(config, camera, sim, renderer, frame)
+    if renderer.effects.last is not None:
+        reading = renderer.effects.last
+        summary["sensor"] = {"exposure_ms": round(reading.exposure_s * 1e3, 3),
+                             "gain": round(reading.gain, 3), "blur_px": round(reading.blur_px, 2),
+                             "mean_grey": round(reading.mean_grey, 1)}
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as e:

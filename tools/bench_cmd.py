@@ -12,6 +12,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
+from tools.harness.scene_args import add_change_arguments
 from tools.harness.sim_args import add_sim_arguments
 
 
@@ -64,8 +65,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
     follow.add_argument("--goal", type=int, metavar="ID",
                         help="goal key image [default: the demo's]")
-    follow.add_argument("--landmark-dropout", type=float, default=0.0, metavar="F",
-                        help="fraction of landmarks removed before each repeat [default: 0]")
+    add_change_arguments(follow)
     follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
                         help="where the seeds' memories are cached [default: out/bench_follow]")
     follow.set_defaults(run=runner("follow"))
@@ -156,6 +156,24 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                               "traffic, stall, images, files, sim]")
     hostile.add_argument("--seed", type=int, default=0, help="seed of every part [default: 0]")
     hostile.set_defaults(run=runner("hostile"))
+    real = bench_sub.add_parser(
+        "real",
+        help="issue 16: real images: catadioptric calibration, equidistant import, the "
+             "fisheye pair's relative pose per front end",
+        description="Calibrate OpenCV's catadioptric test set (../shared/realdata) against "
+        "its reference focal lengths and xi; fit the unified model to the vendored fisheye "
+        "pair's equidistant calibrations (residual); match the pair and fit its relative "
+        "pose with the paper's front end and the default, against the reference from the "
+        "rig's T_BS, timing each pair on one core. About 20 s.",
+    )
+    real.add_argument("--repeats", type=int, default=10, metavar="N",
+                      help="timed runs of each front end on the pair [default: 10]")
+    real.set_defaults(run=runner("real"))
+    chance = bench_sub.add_parser("chance", help="issue 16: pairs of unrelated real images "
+                                  "through localization's acceptance test (target: none pass)")
+    chance.add_argument("--realdata", type=Path, metavar="DIR", help="real image sets' folder")
+    chance.add_argument("--config", metavar="FILE", help="vmnav TOML config")
+    chance.set_defaults(run=runner("chance"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

@@ -1,10 +1,20 @@
-"""``vmnav calibrate``: calibrate the fisheye camera from chessboard images.
+"""``vmnav calibrate``: calibrate the fisheye camera, or import a calibration.
 
-Reads every ``.png``/``.jpg``/``.jpeg``/``.bmp`` image of a folder (sorted by
-name), finds the board in each, fits the unified sphere model with
-``cv2.omnidir.calibrate`` (:mod:`robot.camera_calibration`), prints what each
-image contributed and the result, and writes the calibration JSON
+From chessboard images: reads every image of a folder in a format OpenCV reads and
+:mod:`shared.image_decode` checks (PNG, JPEG, PGM/PPM/PBM, BMP, TIFF, WebP; sorted by
+name, numbers in numeric order), finds the board in each, fits the unified sphere model with
+``cv2.omnidir.calibrate`` (:mod:`robot.camera_calibration`), prints what each image
+contributed, a warning for each duplicate or outlier view
+(:mod:`robot.calibration_checks`) and the result, and writes the calibration JSON
 (:mod:`shared.calibration`).
+
+``--from-equidistant YAML``: reads a Kannala-Brandt calibration
+(:mod:`shared.kannala_brandt_yaml`), fits the unified model to it
+(:func:`shared.kannala_brandt.fit_unified`), prints the fit and its residual, and
+writes the calibration JSON.
+
+Either way the output file is written atomically, and an existing file is replaced
+only if ``vmnav calibrate`` wrote it.
 """
 
 from __future__ import annotations
@@ -12,6 +22,7 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import statistics
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,29 +33,34 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".jpe", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".dib",
+                  ".tif", ".tiff", ".webp")
+#: What the ``source`` field of every file this command writes starts with.
+WRITER = "vmnav calibrate"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav calibrate``."""
     p = subparsers.add_parser(
         "calibrate",
-        help="calibrate the fisheye camera from chessboard images",
-        description="Find a chessboard in every image of IMAGES_DIR (png, jpg, jpeg, bmp), "
-        "fit the unified sphere camera model with cv2.omnidir.calibrate and write the "
-        "calibration JSON.",
+        help="calibrate the fisheye camera from chessboard images, or import a calibration",
+        description="Find a chessboard in every image of IMAGES_DIR (png, jpg, pgm, ppm, "
+        "pbm, bmp, tif, webp), fit the unified sphere camera model with "
+        "cv2.omnidir.calibrate and write the calibration JSON; or, with --from-equidistant, "
+        "fit the unified model to an equidistant (Kannala-Brandt) calibration and write it.",
     )
-    p.add_argument("images_dir", metavar="IMAGES_DIR", type=Path, help="folder of board images")
+    p.add_argument("images_dir", metavar="IMAGES_DIR", type=Path, nargs="?",
+                   help="folder of board images")
+    p.add_argument("--from-equidistant", type=Path, metavar="YAML",
+                   help="import this equidistant (cv2.fisheye) calibration instead")
     p.add_argument(
         "--pattern",
-        required=True,
         metavar="COLSxROWS",
         help="inner corners of the board, e.g. 9x6 for a board of 10x7 squares",
     )
-    p.add_argument("--square", required=True, metavar="M", help="side of one square, m")
-    p.add_argument(
-        "-o", "--output", required=True, type=Path, metavar="FILE", help="calibration JSON to write"
-    )
+    p.add_argument("--square", metavar="M", help="side of one square, m")
+    p.add_argument("-o", "--output", "--out", required=True, type=Path, metavar="FILE",
+                   help="calibration JSON to write")
     p.add_argument(
         "--fov",
         default="185",
@@ -55,10 +71,27 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    """Calibrate, print the report, write the file; returns the exit code."""
+    """Calibrate or import, print the report, write the file; returns the exit code."""
+    from shared.calibration import check_replaceable
+
+    if (args.images_dir is None) == (args.from_equidistant is None):
+        raise CalibrationError("IMAGES_DIR", "give a folder of board images or "
+                                             "--from-equidistant YAML (one of the two)")
+    check_replaceable(args.output, WRITER)
+    if args.from_equidistant is not None:
+        from tools.calibrate_equidistant_cmd import import_equidistant
+
+        return import_equidistant(args.from_equidistant, args.output, WRITER)
+    return _calibrate(args)
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from robot.calibration_checks import duplicate_views, outlier_views
     from robot.camera_calibration import calibrate_omnidir, find_board_corners
     from shared.calibration import write_camera
 
+    if args.pattern is None or args.square is None:
+        raise CalibrationError("--pattern/--square", "both are needed to calibrate from images")
     board = _board(args.pattern, args.square)
     fov_deg = _number("--fov", args.fov)
     if not 0.0 < fov_deg < 360.0:
@@ -86,6 +119,15 @@ def run(args: argparse.Namespace) -> int:
         else:
             status = "board not found"
         print(f"  {path.name}: {status}")
+    for dup in duplicate_views([detections[path] for path in found], board):
+        print(f"warning: {found[dup.later].name}: nearly the same board pose as "
+              f"{found[dup.earlier].name} (corners {dup.rms_px:.1f} px apart, RMS): a duplicate "
+              "view, drop or retake it")
+    median_px = statistics.median(result.view_rms_px)
+    for k in outlier_views(result.view_rms_px):
+        print(f"warning: {found[result.used[k]].name}: rms {result.view_rms_px[k]:.3f} px, "
+              f"{result.view_rms_px[k] / median_px:.1f}x the median view's {median_px:.3f} px: "
+              "an outlier view (blurred or misdetected board?), check it")
     camera = result.camera
     (fx, skew, cx), (_, fy, cy) = camera.K[0], camera.K[1]
     print(
@@ -96,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"  xi: {camera.xi:.6f}")
     print("  D (k1 k2 p1 p2): " + " ".join(f"{d:.6g}" for d in camera.D))
     source = (
-        f"vmnav calibrate: {len(result.used)} of {len(paths)} images in {args.images_dir}, "
+        f"{WRITER}: {len(result.used)} of {len(paths)} images in {args.images_dir}, "
         f"board {board.cols}x{board.rows} of {board.square_m:g} m, fov {fov_deg:g} deg given"
     )
     write_camera(args.output, camera, rms_px=result.rms_px, source=source)
@@ -131,14 +173,16 @@ def _number(option: str, text: str) -> float:
 
 
 def _image_paths(folder: Path) -> list[Path]:
-    """The images of ``folder``, sorted by name."""
+    """The images of ``folder``, sorted by name, numbers in it by value (2.jpg before 10.jpg)."""
     if not folder.exists():
         raise CalibrationError(folder, "folder not found")
     if not folder.is_dir():
         raise CalibrationError(folder, "not a folder")
     try:
         paths = sorted(
-            p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES
+            (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES),
+            key=lambda p: [int(part) if part.isdigit() else part
+                           for part in re.split(r"(\d+)", p.name)],
         )
     except OSError as e:
         raise CalibrationError(folder, f"cannot list the folder: {e.strerror}") from None
@@ -149,13 +193,11 @@ def _image_paths(folder: Path) -> list[Path]:
 
 def _read_images(paths: list[Path]) -> tuple[list[NDArray[np.uint8]], tuple[int, int]]:
     """The images as (H, W) uint8 grey, and their common ``(width, height)``."""
-    import cv2
+    from shared.image_decode import FILE_FORMATS, read_grey
 
     images = []
     for path in paths:
-        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-        if image is None:
-            raise CalibrationError(path, "cannot read the image (corrupt or not an image)")
+        image = read_grey(path, error=CalibrationError, formats=FILE_FORMATS)
         if images and image.shape != images[0].shape:
             (h, w), (h0, w0) = image.shape, images[0].shape
             raise CalibrationError(path, f"image is {w}x{h} but {paths[0].name} is {w0}x{h0}")

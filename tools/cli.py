@@ -36,10 +36,11 @@ from tools import (
     robot_cmd,
     sim_cmd,
     teach_cmd,
+    vision_cmd,
 )
 
 COMMANDS = (sim_cmd, calibrate, bench_cmd, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
-            log_cmd, replay_cmd, ground_cmd)
+            log_cmd, replay_cmd, ground_cmd, vision_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

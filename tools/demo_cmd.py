@@ -18,6 +18,11 @@ from typing import TYPE_CHECKING
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
+from tools.harness.scene_args import (
+    add_change_arguments,
+    check_change_fits,
+    scene_change_from_args,
+)
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
@@ -53,14 +58,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="routes to teach, in order [default: all the world's, in its order]")
     demo.add_argument("--goal", type=int, default=None, metavar="ID",
                       help="goal key image [default: the middle of the second route]")
-    demo.add_argument("--landmark-dropout", type=float, default=0.0, metavar="F",
-                      help="fraction of landmarks removed between teach and repeat [default: 0]")
     demo.add_argument("--max-omega-deg", type=float, default=DEMO_MAX_OMEGA_DEG, metavar="DEG",
                       help="bound on the turn rate, deg/s [default: %(default)s; the paper's "
                       "10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
     demo.add_argument("--law", choices=CONTROL_LAWS, default=DEMO_LAW,
                       help="control law: the paper's eq. (2), or with the teach path's "
                       "curvature fed forward [default: %(default)s]")
+    add_change_arguments(demo)
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
     demo.add_argument("--no-log", action="store_true",
                       help="do not write the robot's and the ground station's logs "
@@ -81,13 +85,13 @@ def run(args: argparse.Namespace) -> int:
     )
     from tools.harness.demo_log import DemoLog
 
-    if not 0.0 <= args.landmark_dropout <= 1.0:
-        raise InputError("--landmark-dropout", f"must be in [0, 1], got {args.landmark_dropout}")
+    change = scene_change_from_args(args)
     routes = None if args.routes is None else tuple(
         name.strip() for name in args.routes.split(",") if name.strip())
     if routes is not None and not routes:
         raise InputError("--routes", "names no route")
     sim_config, camera = sim_config_from_args(args)
+    check_change_fits(change, sim_config)
     config = load_config(args.config)
     config = follow_config(config, args.law, args.max_omega_deg)
     out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
@@ -97,6 +101,9 @@ def run(args: argparse.Namespace) -> int:
     if args.hil:
         if routes is not None and len(routes) != 1:
             raise InputError("--routes", "--hil teaches one route")
+        if not change.is_none:
+            raise InputError("--hil", "repeats in the taught world: --lighting, --moved, "
+                             "--removed and --doors are for the lock-step demo")
         return run_hil_demo(out, config, sim_config, None if routes is None else routes[0])
     started = time.perf_counter()
     taught = taught_memory(out, routes, config, sim_config, camera)
@@ -112,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:
-        repeat = repeat_in_sim(taught, goal, config, sim_config, args.landmark_dropout, out,
+        repeat = repeat_in_sim(taught, goal, config, sim_config, change, out,
                                _chain(consumers), robot_log,
                                None if args.no_log else out / "logs")
     finally:
@@ -123,7 +130,6 @@ def run(args: argparse.Namespace) -> int:
     report["teach_wall_time_s"] = round(teach_s, 2)
     report["memory_reused"] = taught.reused
     report["people"] = sim_config.people.count
-    report["landmark_dropout"] = args.landmark_dropout
     report["max_omega_deg"] = args.max_omega_deg
     report["control_law"] = config.control.law
     report["dispatch"] = {"transport": "MAVLink over loopback UDP",

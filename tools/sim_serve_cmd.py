@@ -113,7 +113,8 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
     )
     serve.add_argument(
         "--jpeg-quality", type=int, metavar="Q",
-        help="JPEG quality of the --video frames, 1-100 [default: 90, about 45 kB a frame]",
+        help="JPEG quality of the --video frames, 1-100 [default: [sim.sensor] jpeg_quality, "
+        "80]",
     )
     serve.add_argument(
         "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
@@ -134,7 +135,7 @@ def run_serve(args: argparse.Namespace) -> int:
     config, camera = sim_config_from_args(args)
 
     from shared.clock import WallClock
-    from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraServer
+    from sim.camera_server import CameraServer
     from sim.control_server import ControlHook, ControlServer
     from sim.pioneer import PtyLink, TcpListener
     from sim.pioneer.world_server import pioneer_server
@@ -148,7 +149,7 @@ def run_serve(args: argparse.Namespace) -> int:
                 listener = TcpListener(spec.host, spec.port)
                 listeners.append(opened.enter_context(closing(listener)))
         video_server = None if video is None else opened.enter_context(
-            CameraServer(video.host, video.port, args.jpeg_quality or DEFAULT_JPEG_QUALITY))
+            CameraServer(video.host, video.port, args.jpeg_quality or config.sensor.jpeg_quality))
         server = opened.enter_context(
             pioneer_server(config, camera, links, listeners, video_server))
         emulator = server.emulator

@@ -7,55 +7,113 @@ of a vmnav config file (:mod:`robot.config`).
 
 from __future__ import annotations
 
+import copy
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
+from shared.camera_model import CameraModel
 from shared.config import require
+
+#: The default lens's scale at the image centre, px/rad (as
+#: :func:`robot.vision.features.pixels_per_radian` computes it): the lens every
+#: pixel-valued vision key was sized for, and the defaults below still are.
+_DEFAULT_LENS = CameraModel.default()
+_DEFAULT_LENS_PX_PER_RAD = float(_DEFAULT_LENS.K[0, 0] / (1.0 + _DEFAULT_LENS.xi))
+
+
+def degrees_on_default_lens(px: float) -> float:
+    """The angle that spans ``px`` pixels at the default lens's centre, degrees."""
+    return math.degrees(px / _DEFAULT_LENS_PX_PER_RAD)
+
+
+#: Front-end methods (:mod:`robot.vision.front_end`): the paper's Harris corners with ZNCC
+#: patches, and OpenCV's descriptors (TEBLID and BEBLID from opencv-contrib).
+FRONT_END_METHODS = ("harris-zncc", "orb", "akaze", "sift", "teblid", "beblid")
 
 
 @dataclass(frozen=True, slots=True)
 class FeatureConfig:
-    """Harris corners and their ZNCC patch descriptors (Courbon et al. 2008, sec. III-A).
+    """The vision front end: its method, and the paper's Harris corners and ZNCC patches
+    (Courbon et al. 2008, sec. III-A).
 
     Defaults follow OpenCV's Harris (``k`` = 0.04, 3x3 block, 3x3 Sobel) and the
-    reference benchmark (300 corners, 11x11 patches).
+    reference benchmark (300 corners, 11x11 patches on the default lens).
+
+    Windows are angles on the sphere (``*_deg``), turned into pixels through the camera
+    model's scale at the image centre (:func:`robot.vision.front_end.pixels_per_radian`;
+    174 px/rad on the default lens), so a lens of another resolution or focal length
+    sees the same part of the scene. The Harris block and the sub-pixel window stay in
+    pixels: they are about image gradients and pixel noise, not about the scene.
     """
 
+    method: str = "orb"
+    """One of ``FRONT_END_METHODS``: how points are detected and described. ``orb`` (upright
+    ORB on FAST corners spread over a grid) was chosen by measurement on the real fisheye
+    pair and in the simulator, against the paper's ``harris-zncc`` (docs/front-end.md)."""
     max_corners: int = 300
     """Keep at most this many corners, strongest Harris response first."""
     quality_level: float = 0.01
     """Reject corners whose response is below this fraction of the frame's strongest, in (0, 1)."""
-    min_distance_px: float = 8.0
-    """Minimum Euclidean distance between two corners, px (greedy, strongest first)."""
+    min_distance_deg: float = degrees_on_default_lens(8.0)
+    """Minimum angle between two Harris corners, degrees (greedy, strongest first); 8 px on
+    the default lens, 2.64 degrees."""
     block_size_px: int = 3
     """Side of the window summing the gradient products of the Harris matrix, px (odd)."""
     harris_k: float = 0.04
     """Harris & Stephens' k in det(M) - k trace(M)^2 (dimensionless)."""
-    patch_size_px: int = 11
-    """Side P of the square ZNCC patch, px (odd, >= 3); a descriptor has P*P values."""
+    patch_size_deg: float = degrees_on_default_lens(11.0)
+    """Side of the square ZNCC patch, degrees: P px, the nearest odd >= 3; 11 px on the
+    default lens, 3.63 degrees; a descriptor has P*P values."""
     subpixel_half_window_px: int = 3
     """Half side of the cv2.cornerSubPix window, px; 0 keeps integer corner positions."""
+    fast_threshold: int = 12
+    """Methods on FAST corners (orb, teblid, beblid): the absolute contrast threshold,
+    grey levels (a corner needs 9 contiguous circle pixels this much brighter or darker)."""
+    fast_threshold_low: int = 5
+    """Methods on FAST corners: a grid cell that found fewer corners than its share is
+    searched again with this threshold, grey levels (a local floor: a dim part of the view
+    keeps corners); >= ``fast_threshold`` turns the second search off."""
+    grid_cells: int = 8
+    """Methods on FAST corners: the image is cut into this many square cells along its longer
+    side, and each cell inside the lens keeps its share of ``max_corners``."""
+    descriptor_size_deg: float = degrees_on_default_lens(31.0)
+    """Methods on FAST corners: side of the window the binary descriptor samples, degrees;
+    31 px (ORB's) on the default lens, 10.2 degrees."""
+    max_hamming_fraction: float = 0.25
+    """Bit-string methods: a match differs in at most this fraction of its bits (similarity
+    1 - 2 d / bits >= 0.5 at the default), in (0, 0.5]."""
 
     def __post_init__(self) -> None:
+        require(self.method in FRONT_END_METHODS,
+                f"method must be one of {', '.join(FRONT_END_METHODS)}, got {self.method!r}")
         require(self.max_corners >= 1, f"max_corners must be >= 1, got {self.max_corners}")
         require(
             0 < self.quality_level < 1, f"quality_level must be in (0, 1), got {self.quality_level}"
         )
-        require(
-            self.min_distance_px >= 0, f"min_distance_px must be >= 0, got {self.min_distance_px}"
-        )
+        require(self.min_distance_deg >= 0,
+                f"min_distance_deg must be >= 0, got {self.min_distance_deg}")
         require(
             self.block_size_px >= 3 and self.block_size_px % 2 == 1,
             f"block_size_px must be odd and >= 3, got {self.block_size_px}",
         )
         require(0 < self.harris_k < 0.25, f"harris_k must be in (0, 0.25), got {self.harris_k}")
-        require(
-            self.patch_size_px >= 3 and self.patch_size_px % 2 == 1,
-            f"patch_size_px must be odd and >= 3, got {self.patch_size_px}",
-        )
+        require(0 < self.patch_size_deg <= 30,
+                f"patch_size_deg must be in (0, 30], got {self.patch_size_deg}")
         require(
             self.subpixel_half_window_px >= 0,
             f"subpixel_half_window_px must be >= 0, got {self.subpixel_half_window_px}",
         )
+        require(1 <= self.fast_threshold <= 254,
+                f"fast_threshold must be in [1, 254], got {self.fast_threshold}")
+        require(1 <= self.fast_threshold_low <= 254,
+                f"fast_threshold_low must be in [1, 254], got {self.fast_threshold_low}")
+        require(self.grid_cells >= 1, f"grid_cells must be >= 1, got {self.grid_cells}")
+        require(0 < self.max_hamming_fraction <= 0.5,
+                f"max_hamming_fraction must be in (0, 0.5], got {self.max_hamming_fraction}")
+        require(0 < self.descriptor_size_deg <= 60,
+                f"descriptor_size_deg must be in (0, 60], got {self.descriptor_size_deg}")
 
 
 
@@ -67,19 +125,28 @@ class MatchConfig:
     and a threshold measured on synthetic pairs (``robot/vision/bench_features.py``).
     """
 
-    search_radius_px: float | None = 40.0
-    """Candidates satisfy |dx| <= r and |dy| <= r, px; None searches the whole image
-    (code only: TOML cannot write None, so a file can only set a finite radius)."""
+    search_radius_deg: float | None = degrees_on_default_lens(40.0)
+    """Candidates lie within this angle of the point's bearing (turned by a predicted
+    rotation, if any), degrees; 40 px on the default lens, 13.2 degrees; None searches the
+    whole sphere (code only: TOML cannot write None, so a file can only set a finite
+    radius)."""
     min_zncc: float = 0.8
-    """Reject matches whose ZNCC score is below this, in [-1, 1]."""
+    """Reject matches whose similarity is below this, in [-1, 1]: the ZNCC score of
+    ``harris-zncc``, the cosine of SIFT's rows. Bit strings use ``[features]
+    max_hamming_fraction`` instead."""
     max_distance_ratio: float | None = None
-    """Lowe's ratio test on patch distances sqrt(2 - 2 ZNCC), in (0, 1]; None = off."""
+    """Lowe's ratio test on descriptor distances, in (0, 1]; None = off."""
+    ratio_exclusion_deg: float = 1.5
+    """The ratio test's second best lies farther than this from the best, degrees: a
+    corner's own neighbours are not its rivals (robot.vision.matching)."""
 
     def __post_init__(self) -> None:
         require(
-            self.search_radius_px is None or self.search_radius_px > 0,
-            f"search_radius_px must be > 0 or None, got {self.search_radius_px}",
+            self.search_radius_deg is None or 0 < self.search_radius_deg <= 180,
+            f"search_radius_deg must be in (0, 180] or None, got {self.search_radius_deg}",
         )
+        require(self.ratio_exclusion_deg >= 0,
+                f"ratio_exclusion_deg must be >= 0, got {self.ratio_exclusion_deg}")
         require(-1 <= self.min_zncc <= 1, f"min_zncc must be in [-1, 1], got {self.min_zncc}")
         require(
             self.max_distance_ratio is None or 0 < self.max_distance_ratio <= 1,
@@ -89,7 +156,7 @@ class MatchConfig:
 
 
 def _tracking_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=20.0, min_zncc=0.7)
+    return MatchConfig(search_radius_deg=degrees_on_default_lens(20.0), min_zncc=0.7)
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,7 +180,7 @@ class TeachConfig:
     max_turn_deg: float = 15.0
     """A key image is at most this far turned (odometric yaw) from the previous one, deg:
     the repeat matches the next key image in a window of ``PathStateConfig.matching``'s
-    radius (120 px; a yaw of 1 deg moves the image centre by about 4 px), so a long
+    radius (39.6 degrees), so a long
     gap in a turn leaves nothing to match (the ``campus`` U-turn had a 50 deg gap)."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
@@ -209,7 +276,7 @@ class RelativePoseConfig:
 
 
 def _state_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=120.0)
+    return MatchConfig(search_radius_deg=degrees_on_default_lens(120.0))
 
 
 @dataclass(frozen=True, slots=True)
@@ -264,7 +331,16 @@ class PathStateConfig:
 
 
 def _localize_match_config() -> MatchConfig:
-    return MatchConfig(search_radius_px=None, min_zncc=0.8)
+    return MatchConfig(search_radius_deg=None, min_zncc=0.8)
+
+
+def _localize_pose_config() -> RelativePoseConfig:
+    # 224 samples (7 batches of 32) draw an all-inlier 5-point sample with probability
+    # 0.999 at the lowest inlier ratio accepted, 0.5: log(0.001) / log(1 - 0.5^5) = 218.
+    # More only spends time on chance matches (17 ms per candidate at 1024). No refinement:
+    # counting inliers needs none, and it halves the time of a true candidate (2 vs 4 ms
+    # on 85 matches; the same inliers to within one).
+    return RelativePoseConfig(model="general", max_iterations_general=224, refine_passes=0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,15 +349,28 @@ class LocalizeConfig:
 
     A global prefilter ranks every key image by the similarity of patch-normalised
     thumbnails (Milford and Wyeth's SeqSLAM / QVPR teach-and-repeat normalisation),
-    then the paper's rule (most Harris + ZNCC matches) picks among the best
-    ``candidates``. Defaults measured on the ``lab`` world (``tools/localize_bench.py``).
+    then each of the best ``candidates`` is matched and verified geometrically
+    (:mod:`robot.memory.verification`): a key image is accepted on the inliers of a
+    relative pose that a ground robot can make, never on a raw match count, and the
+    accepted key image with the most inliers wins. Defaults measured with
+    ``vmnav bench localize`` (true pairs) and ``vmnav bench chance`` (unrelated real images).
     """
 
     candidates: int = 20
     """Key images verified by full matching, the prefilter's best first."""
-    min_matches: int = 25
-    """The winner is a localization (``ok``) with at least this many matches (two unrelated
-    views share up to about 25 chance matches without a search window)."""
+    min_inliers: int = 20
+    """A key image is accepted with at least this many inliers of the relative pose."""
+    min_inlier_ratio: float = 0.5
+    """... and at least this share of its matches inliers, in (0, 1]."""
+    max_yaw_deg: float = 45.0
+    """... and the query turned about the vertical by at most this from the key image, deg."""
+    max_tilt_deg: float = 10.0
+    """... and the vertical axis tilted by at most this between the two views, deg
+    (roll and pitch of the robot: a flat floor, or a ramp)."""
+    relative_pose: RelativePoseConfig = field(default_factory=_localize_pose_config)
+    """The relative pose fitted to the matches (its ``inlier_threshold_rad`` is the
+    verification's angular tolerance); the general 5-point model, so that roll and
+    pitch are measured rather than assumed."""
     matching: MatchConfig = field(default_factory=_localize_match_config)
     """Full matching of the query against a candidate (no window: the view may have turned)."""
     prefilter_rows_fraction: float = 0.6
@@ -295,7 +384,13 @@ class LocalizeConfig:
 
     def __post_init__(self) -> None:
         require(self.candidates >= 1, f"candidates must be >= 1, got {self.candidates}")
-        require(self.min_matches >= 1, f"min_matches must be >= 1, got {self.min_matches}")
+        require(self.min_inliers >= 5, f"min_inliers must be >= 5, got {self.min_inliers}")
+        require(0 < self.min_inlier_ratio <= 1,
+                f"min_inlier_ratio must be in (0, 1], got {self.min_inlier_ratio}")
+        require(0 < self.max_yaw_deg <= 180,
+                f"max_yaw_deg must be in (0, 180], got {self.max_yaw_deg}")
+        require(0 < self.max_tilt_deg <= 180,
+                f"max_tilt_deg must be in (0, 180], got {self.max_tilt_deg}")
         require(0 < self.prefilter_rows_fraction <= 1,
                 f"prefilter_rows_fraction must be in (0, 1], got {self.prefilter_rows_fraction}")
         require(self.prefilter_window_px >= 3 and self.prefilter_window_px % 2 == 1,
@@ -303,3 +398,49 @@ class LocalizeConfig:
         require(self.prefilter_max_shift_px >= 0,
                 f"prefilter_max_shift_px must be >= 0, got {self.prefilter_max_shift_px}")
 
+
+
+#: Vision keys that were pixels on the default lens and are angles now (docs/front-end.md):
+#: the tables that hold them, the old key, the new one.
+RENAMED_VISION_KEYS: tuple[tuple[tuple[str, ...], str, str], ...] = (
+    (("features",), "min_distance_px", "min_distance_deg"),
+    (("features",), "patch_size_px", "patch_size_deg"),
+    (("matching", "teach.tracking", "path_state.matching", "localize.matching"),
+     "search_radius_px", "search_radius_deg"),
+)
+def renamed_vision_key(data: Mapping[str, Any]) -> tuple[str, str] | None:
+    """The first pixel-valued vision key ``data`` (a config's tables) still holds, as
+    ``(old dotted key, new dotted key)``; None if there is none."""
+    for tables, old, new in RENAMED_VISION_KEYS:
+        for dotted in tables:
+            table = _table(data, dotted)
+            if table is not None and old in table:
+                return f"{dotted}.{old}", f"{dotted}.{new}"
+    return None
+
+
+def migrate_vision_keys(data: Mapping[str, Any]) -> dict[str, Any]:
+    """``data`` with its pixel-valued vision keys turned into the angles they were on the
+    default lens (a field log replays with the windows it ran with, on that lens).
+
+    A patch of P px becomes the angle that gives P px again; ``None`` stays ``None``.
+    """
+    out = copy.deepcopy(dict(data))
+    for tables, old, new in RENAMED_VISION_KEYS:
+        for dotted in tables:
+            table = _table(out, dotted)
+            if table is None or old not in table:
+                continue
+            value = table.pop(old)
+            table[new] = None if value is None else degrees_on_default_lens(float(value))
+    return out
+
+
+def _table(data: Mapping[str, Any], dotted: str) -> Any:
+    """The (mutable, when ``data`` is) table at ``dotted``, or None."""
+    value: Any = data
+    for key in dotted.split("."):
+        if not isinstance(value, Mapping) or key not in value:
+            return None
+        value = value[key]
+    return value if isinstance(value, dict) else None

@@ -8,19 +8,19 @@ DESIGN.md sec. 5.5 and 5.7; Courbon et al. 2008, sec. III-B to IV. Two stages:
   the one after next on a path's first segment) is triangulated
   (:func:`robot.vision.key_pair.key_pair_geometry`) from their correspondences:
   the corners tracked frame to frame while teaching (``Keyframe.tracked_from_previous``,
-  :mod:`robot.teach`) when the memory has them, plus ZNCC matches among the corners
+  :mod:`robot.teach`) when the memory has them, plus front-end matches among the corners
   the tracks leave out (:func:`key_correspondences`). Matching the two key images
   alone finds too few pairs where the view changes fast (measured on ``lab``
   key images by ``vmnav bench vision``).
 * **Per frame**, :func:`state_from_frame`: the current frame's corners are matched
-  with the next key image's (ZNCC in the ``PathStateConfig.matching`` window, mutual
-  best), lifted, and the state comes from
+  with the next key image's (:meth:`robot.vision.front_end.FrontEnd.match` in the
+  ``PathStateConfig.matching`` window, mutual best), lifted, and the state comes from
   :func:`robot.vision.path_state.state_from_views`; the paper's image errors
   errImageMax and errPoints (:mod:`robot.vision.image_errors`) are measured on the
   matches the estimate keeps as epipolar inliers.
 
-Corner detection stays with the caller, which detects once per frame
-(:func:`robot.vision.features.detect_harris` with :func:`robot.vision.lens_mask.lens_mask`).
+Detection stays with the caller, which describes each frame once
+(:meth:`robot.vision.front_end.FrontEnd.describe`, inside the lens's image circle).
 """
 
 from __future__ import annotations
@@ -33,11 +33,10 @@ import numpy.typing as npt
 from robot.config import MatchConfig, PathStateConfig
 from robot.vision.bearings import LevelBearings, level_bearings
 from robot.vision.features import Features
+from robot.vision.front_end import FrontEnd
 from robot.vision.image_errors import ImageErrors, image_errors
 from robot.vision.key_pair import KeyPairGeometry, key_pair_geometry
-from robot.vision.matching import match_zncc
 from robot.vision.path_state import PathState, state_from_views
-from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
 from shared.config import CameraMountConfig
 from shared.errors import check_shape
@@ -66,7 +65,7 @@ class KeySegment:
     """What the per-frame estimate reuses while the robot heads for one key image.
 
     Attributes:
-        next_features: the next key image's corners and ZNCC patches.
+        next_features: the next key image's corners and descriptors.
         next_bearings: the next key image's corners as level bearings, with validity.
         correspondences: the next key image's pairs with the other key image.
         key_pair: their metric structure; the state is not ok without it.
@@ -97,15 +96,17 @@ class FrameState:
 def key_correspondences(
     next_features: Features,
     other_features: Features,
+    front_end: FrontEnd,
     matching: MatchConfig,
     tracks_next_other: npt.ArrayLike | None = None,
 ) -> KeyCorrespondences:
-    """Pair the corners of two key images: teach tracks first, then ZNCC on the rest.
+    """Pair the corners of two key images: teach tracks first, then matches among the rest.
 
     Args:
         next_features: N corners of the next key image.
         other_features: M corners of the other key image.
-        matching: ZNCC matching of the corners no track pairs.
+        front_end: the front end that described both.
+        matching: matching of the corners no track pairs.
         tracks_next_other: (T, 2) int (next key image's corner, other's corner)
             tracked while teaching, or None. The memory stores them on the later
             key image as (earlier corner, later corner): for the previous key image
@@ -113,7 +114,7 @@ def key_correspondences(
             for the one after next, its ``tracked_from_previous`` as is.
 
     Returns:
-        The tracks, then the mutually best ZNCC matches among the corners that no
+        The tracks, then the mutually best matches among the corners that no
         track uses.
 
     Raises:
@@ -130,8 +131,8 @@ def key_correspondences(
                              f"{tracks[:, column].min()}..{tracks[:, column].max()}")
     free_next = np.setdiff1d(np.arange(len(next_features)), tracks[:, 0])
     free_other = np.setdiff1d(np.arange(len(other_features)), tracks[:, 1])
-    matches = match_zncc(_subset(next_features, free_next), _subset(other_features, free_other),
-                         matching)
+    matches = front_end.match(next_features.subset(free_next), other_features.subset(free_other),
+                              matching)
     return KeyCorrespondences(
         idx_next=np.concatenate([tracks[:, 0], free_next[matches.idx_a]]).astype(np.int64),
         idx_other=np.concatenate([tracks[:, 1], free_other[matches.idx_b]]).astype(np.int64),
@@ -144,7 +145,7 @@ def key_segment_from_key_images(
     other_features: Features,
     odom_next: Pose2,
     odom_other: Pose2,
-    camera: CameraModel,
+    front_end: FrontEnd,
     mount: CameraMountConfig,
     rng: np.random.Generator,
     config: PathStateConfig,
@@ -153,12 +154,12 @@ def key_segment_from_key_images(
     """Prepare the per-frame estimate for heading to the next key image.
 
     Args:
-        next_features: the next key image's corners and patches.
+        next_features: the next key image's corners and descriptors.
         other_features: the previous key image's (or, on a path's first segment,
             the key image after next).
         odom_next: teach odometry base pose of the next key image.
         odom_other: teach odometry base pose of the other key image, same frame.
-        camera: the lens of both key images.
+        front_end: the front end of both key images (and their lens).
         mount: where the camera sits on the robot.
         rng: draws the RANSAC samples.
         config: matching window and geometry thresholds.
@@ -174,8 +175,9 @@ def key_segment_from_key_images(
             than 1 cm apart.
     """
     R_level_cam = rotation_level_cam(mount)
-    pairs = key_correspondences(next_features, other_features, config.matching,
+    pairs = key_correspondences(next_features, other_features, front_end, config.matching,
                                 tracks_next_other)
+    camera = front_end.camera
     next_bearings = level_bearings(camera, next_features.pixels_xy, R_level_cam)
     other = level_bearings(camera, other_features.pixels_xy[pairs.idx_other], R_level_cam)
     valid = next_bearings.valid[pairs.idx_next] & other.valid
@@ -190,7 +192,7 @@ def key_segment_from_key_images(
 def state_from_frame(
     current: Features,
     segment: KeySegment,
-    camera: CameraModel,
+    front_end: FrontEnd,
     mount: CameraMountConfig,
     rng: np.random.Generator,
     config: PathStateConfig,
@@ -198,9 +200,9 @@ def state_from_frame(
     """The state and image errors of one frame (see the module docstring).
 
     Args:
-        current: the frame's corners and patches (inside the lens mask).
+        current: the frame's features (inside the lens mask).
         segment: the key image the robot heads for, prepared once.
-        camera: the lens.
+        front_end: the front end that described the frame and the key images.
         mount: where the camera sits on the robot.
         rng: draws the RANSAC samples.
         config: matching window and geometry thresholds.
@@ -208,8 +210,9 @@ def state_from_frame(
     Returns:
         The state (``ok`` False when the views do not give one) and the image errors.
     """
-    matches = match_zncc(current, segment.next_features, config.matching)
-    lifted = level_bearings(camera, current.pixels_xy[matches.idx_a], rotation_level_cam(mount))
+    matches = front_end.match(current, segment.next_features, config.matching)
+    lifted = level_bearings(front_end.camera, current.pixels_xy[matches.idx_a],
+                            rotation_level_cam(mount))
     valid = lifted.valid & segment.next_bearings.valid[matches.idx_b]
     idx_current, idx_next = matches.idx_a[valid], matches.idx_b[valid]
     state = state_from_views(lifted.bearings[valid], segment.next_bearings.bearings[idx_next],
@@ -218,7 +221,3 @@ def state_from_frame(
     errors = image_errors(current.pixels_xy[idx_current[inliers]],
                           segment.next_features.pixels_xy[idx_next[inliers]])
     return FrameState(state=state, image_errors=errors, matches=len(idx_current))
-
-
-def _subset(features: Features, rows: npt.NDArray[np.int64]) -> Features:
-    return Features(features.pixels_xy[rows], features.patches[rows], features.response[rows])

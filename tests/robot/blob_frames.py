@@ -19,7 +19,7 @@ from shared.camera_model import CameraModel
 WIDTH_PX = 320
 HEIGHT_PX = 200
 CELL_PX = 26
-"""Grid spacing: more than the tracking window's 20 px."""
+"""Grid spacing: more than the tracking window's 20 px (6.59 degrees on :func:`blob_camera`)."""
 COLUMNS = 11
 ROWS = 7
 BACKGROUND = 100.0
@@ -29,10 +29,12 @@ NOISE_SIGMA = 1.0
 
 
 def blob_camera() -> CameraModel:
-    """A 320x200 camera whose every pixel sees the world (a lens circle wider than the image)."""
-    f = 200.0
+    """A 320x200 crop of the default lens (about 174 px/rad everywhere, so the tracking
+    window's 6.59 degrees are about 20 px) whose every pixel sees the world."""
+    xi = 1.6
+    f = 174.0 * (1.0 + xi)
     K = [[f, 0.0, (WIDTH_PX - 1) / 2.0], [0.0, f, (HEIGHT_PX - 1) / 2.0], [0.0, 0.0, 1.0]]
-    return CameraModel(width=WIDTH_PX, height=HEIGHT_PX, K=K, xi=0.0, fov_deg=120.0)
+    return CameraModel(width=WIDTH_PX, height=HEIGHT_PX, K=K, xi=xi, fov_deg=185.0)
 
 
 def cell_centre(point: int) -> tuple[float, float]:

@@ -6,12 +6,15 @@ tests/tools/test_demo.py, which drives MissionRun on the simulator's adapters.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from robot.config import FeatureConfig, MissionConfig, VmnavConfig
 from robot.mission import MissionState
 from robot.mission_run import MissionRun
+from robot.vision.features import pixels_per_radian
 from shared.clock import ManualClock
 from shared.errors import UnknownKeyframeError
 from shared.interfaces import BaseState
@@ -68,7 +71,9 @@ class App:
 
 def make_app(memory, base: FakeBase, count: int | None = None) -> tuple[App, ManualClock]:
     clock = ManualClock()
-    config = VmnavConfig(features=FeatureConfig(patch_size_px=int(PATCH_LENGTH**0.5)),
+    # Patches of the memory's side on its lens.
+    patch_deg = math.degrees(PATCH_LENGTH**0.5 / pixels_per_radian(memory.camera))
+    config = VmnavConfig(features=FeatureConfig(method="harris-zncc", patch_size_deg=patch_deg),
                          mission=MissionConfig(localize_attempts=3))
     frames = FakeFrames((memory.camera.height, memory.camera.width), clock, count)
     return App(MissionRun(memory, config, base, np.random.default_rng(0)), frames, clock), clock

@@ -16,7 +16,8 @@ from robot.teach import KeyImageSelector, select_key_images
 from shared.errors import InputError
 from tests.robot.blob_frames import blob_camera, cell_centre, frames_from_schedule, render
 
-FEATURES = FeatureConfig()
+#: The frames' points are smooth saddles, one Harris corner each: the paper's front end.
+FEATURES = FeatureConfig(method="harris-zncc")
 
 
 def staggered(frames: int, lifetime: int) -> list[list[int]]:
@@ -189,7 +190,7 @@ class TestRecords:
         assert second.record.distance_m == pytest.approx(1.0)
         assert np.array_equal(second.record.image, frames[10][1])
         assert second.record.pixels_xy.shape == (40, 2)
-        assert second.record.patches.shape == (40, FEATURES.patch_size_px**2)
+        assert second.record.patches.shape == (40, 11**2)  # 11 px patches on the default lens
 
     def test_tracks_pair_the_shared_points_of_consecutive_key_images(
         self, rng: np.random.Generator
@@ -254,5 +255,5 @@ def test_teach_config_is_validated() -> None:
     assert config.teach == dataclasses.replace(TeachConfig(), min_tracked_points=12)
     with pytest.raises(ConfigError, match=r"f.toml: teach: min_tracked_points must be >= 1"):
         from_mapping(VmnavConfig, {"teach": {"min_tracked_points": 0}}, "f.toml")
-    with pytest.raises(ConfigError, match=r"teach.tracking: search_radius_px must be > 0"):
-        from_mapping(VmnavConfig, {"teach": {"tracking": {"search_radius_px": -1.0}}}, "f.toml")
+    with pytest.raises(ConfigError, match=r"teach.tracking: search_radius_deg must be in"):
+        from_mapping(VmnavConfig, {"teach": {"tracking": {"search_radius_deg": -1.0}}}, "f.toml")

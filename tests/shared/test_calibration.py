@@ -16,6 +16,7 @@ from shared.calibration import (
     camera_from_dict,
     camera_to_dict,
     check_image_size,
+    check_replaceable,
     read_camera,
     write_camera,
 )
@@ -271,3 +272,32 @@ class TestCheckImageSize:
             str(info.value)
             == f"camera.json: calibration is for 800x600 but images are {width}x{height}"
         )
+
+
+class TestCheckReplaceable:
+    def test_absent_or_own_files_may_be_replaced(self, tmp_path: Path) -> None:
+        check_replaceable(tmp_path / "new.json", "vmnav calibrate")
+        write_camera(tmp_path / "c.json", CameraModel.default(), source="vmnav calibrate: x")
+        check_replaceable(tmp_path / "c.json", "vmnav calibrate")
+
+    @pytest.mark.parametrize("content", [
+        None,  # a calibration written by someone else
+        "not json",
+        "[1, 2]",
+        '{"format": "other", "source": "vmnav calibrate"}',
+    ])
+    def test_other_files_are_refused(self, tmp_path: Path, content: str | None) -> None:
+        path = tmp_path / "c.json"
+        if content is None:
+            write_camera(path, CameraModel.default(), source="by hand")
+        else:
+            path.write_text(content)
+        before = path.read_bytes()
+        with pytest.raises(CalibrationError, match=f"{path}: exists and was not written by "
+                                                   "vmnav calibrate: not replacing it"):
+            check_replaceable(path, "vmnav calibrate")
+        assert path.read_bytes() == before
+
+    def test_a_folder_is_refused(self, tmp_path: Path) -> None:
+        with pytest.raises(CalibrationError, match="exists and was not written"):
+            check_replaceable(tmp_path, "vmnav calibrate")

@@ -45,8 +45,8 @@ class TestLoadSimConfig:
         assert load_sim_config(path, MOUNT) == SimConfig(seed=2, camera_mount=MOUNT)
 
     def test_int_accepted_for_float(self, tmp_path: Path) -> None:
-        path = write(tmp_path, "[sim.render]\nnoise_sigma = 3\n")
-        assert load_sim_config(path, MOUNT).render.noise_sigma == 3.0
+        path = write(tmp_path, "[sim.sensor]\nread_noise_grey = 3\n")
+        assert load_sim_config(path, MOUNT).sensor.read_noise_grey == 3.0
 
     @pytest.mark.parametrize(
         ("text", "fragment"),
@@ -54,10 +54,27 @@ class TestLoadSimConfig:
             ('[sim]\nseed = "one"\n', "sim.seed: expected an integer, got str 'one'"),
             ("[sim]\nsed = 1\n", "sim: unknown key 'sed'"),
             ("[sim.body]\nmax_speed_m_s = -1\n", "sim.body: max_speed_m_s must be > 0, got -1.0"),
-            ("[sim.render]\nnoise_sigma = nan\n",
-             "sim.render.noise_sigma: expected a finite number"),
-            ("[sim.render]\nnoise_sigma = inf\n",
-             "sim.render.noise_sigma: expected a finite number"),
+            ("[sim.sensor]\nread_noise_grey = nan\n",
+             "sim.sensor.read_noise_grey: expected a finite number"),
+            ("[sim.sensor]\nexposure_time_constant_s = inf\n",
+             "sim.sensor.exposure_time_constant_s: expected a finite number"),
+            ("[sim.render]\nnoise_sigma = 2\n",
+             "sim.render.noise_sigma: the sensor's noise moved to [sim.sensor] read_noise_grey"),
+            ("[sim.sensor]\nvignetting_rim = 0\n",
+             "sim.sensor: vignetting_rim must be in (0, 1], got 0.0"),
+            ("[sim.sensor]\nread_noise_grey = -1\n",
+             "sim.sensor: read_noise_grey must be >= 0, got -1.0"),
+            ("[sim.sensor]\ntarget_grey = 300\n",
+             "sim.sensor: target_grey must be in (0, 255) grey levels, got 300.0"),
+            ("[sim.sensor]\nmin_exposure_s = 0.01\nmax_exposure_s = 0.005\n",
+             "sim.sensor: max_exposure_s must be >= min_exposure_s (0.01 s), got 0.005"),
+            ("[sim.sensor]\ngain = 0.5\n", "sim.sensor: gain must be in [1, max_gain = 8.0]"),
+            ("[sim.sensor]\njpeg_quality = 0\n",
+             "sim.sensor: jpeg_quality must be in 1..100, got 0"),
+            ("[sim.sensor]\nmotion_blur = 1\n",
+             "sim.sensor.motion_blur: expected true or false"),
+            ("[sim.sensor]\nmax_exposure_s = 0.1\n",
+             "sim: sensor.max_exposure_s (0.1 s) must be <= the frame period (0.066666667 s)"),
             ("[sim]\nbody = 3\n", "sim.body: expected a table"),
             ("sim = 3\n", "sim: expected a table"),
             ("[sim.people]\ncount = true\n", "sim.people.count: expected an integer"),

@@ -13,7 +13,7 @@ from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world
 from shared.config import CameraMountConfig
 from shared.pose import Pose2
-from sim.config import RenderConfig, SimConfig
+from sim.config import RenderConfig, SensorConfig, SimConfig
 from sim.decor import Lamp, Picture, PlacedObject, Tree
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
@@ -23,7 +23,7 @@ from sim.world import Box, Ceiling, LandmarkDensity, Wall, World, load_world
 
 CAMERA = CameraModel.default()
 NO_PATCHES = LandmarkDensity(0.0, 0.0, 0.0)
-QUIET = RenderConfig(noise_sigma=0.0, illumination_amplitude=0.0)
+QUIET = RenderConfig(illumination_amplitude=0.0)
 
 
 def room(**decor: object) -> World:
@@ -36,7 +36,8 @@ def room(**decor: object) -> World:
 
 
 def renderer_for(world: World, pose: Pose2) -> tuple[Simulation, FisheyeRenderer]:
-    sim = Simulation(world, dataclasses.replace(SimConfig(), render=QUIET))
+    sim = Simulation(world, dataclasses.replace(SimConfig(), render=QUIET,
+                                                sensor=SensorConfig.ideal()))
     sim.place_robot(pose)
     return sim, FisheyeRenderer.for_simulation(sim, CAMERA)
 

@@ -9,9 +9,17 @@ import cv2
 import numpy as np
 import pytest
 
-from shared.calibration import read_camera
+from shared.calibration import read_camera, write_camera
 from shared.camera_model import CameraModel
 from sim.checkerboard import write_synthetic_set
+from tools.bench.realdata import (
+    CATADIOPTRIC_DIR,
+    CATADIOPTRIC_MISSING,
+    CATADIOPTRIC_REFERENCE,
+    FISHEYE_LEFT_YAML,
+    FOCAL_TOLERANCE,
+    XI_TOLERANCE,
+)
 from tools.cli import main
 
 #: The camera behind the synthetic images: the default lens with real distortion.
@@ -95,7 +103,7 @@ class TestBadInput:
     def test_no_images(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
         (tmp_path / "notes.txt").write_text("no images here")
         code = calibrate(tmp_path, tmp_path / "c.json")
-        assert_fails(code, capsys, f"{tmp_path}: no images (.png, .jpg, .jpeg, .bmp)")
+        assert_fails(code, capsys, f"{tmp_path}: no images (.png, .jpg, .jpeg, .jpe, .pgm")
 
     @pytest.mark.slow
     def test_corrupt_image(
@@ -104,7 +112,7 @@ class TestBadInput:
         shutil.copy(views / "view_000.png", tmp_path / "a.png")
         (tmp_path / "b.jpg").write_bytes(b"\xff\xd8 not really a jpeg")
         code = calibrate(tmp_path, tmp_path / "c.json")
-        assert_fails(code, capsys, f"{tmp_path / 'b.jpg'}: cannot read the image")
+        assert_fails(code, capsys, f"{tmp_path / 'b.jpg'}: corrupt JPEG")
 
     @pytest.mark.slow
     def test_images_of_different_sizes(
@@ -195,7 +203,89 @@ class TestBadInput:
         self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
         output = tmp_path / "camera.json"
-        output.write_text("precious")
+        write_camera(output, CameraModel.default(), source="vmnav calibrate: an earlier run")
+        before = output.read_bytes()
         (tmp_path / "empty").mkdir()
         assert calibrate(tmp_path / "empty", output) == 1
-        assert output.read_text() == "precious"
+        assert output.read_bytes() == before
+
+
+@pytest.mark.slow
+def test_reads_pgm_bmp_tiff_and_warns_of_a_duplicate_view(
+    views: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for k, path in enumerate(sorted(views.glob("*.png"))[:6]):
+        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        cv2.imwrite(str(tmp_path / f"v{k}.{('bmp', 'pgm', 'tif')[k % 3]}"), image)
+    shutil.copy(tmp_path / "v1.pgm", tmp_path / "v10.pgm")
+    assert calibrate(tmp_path, tmp_path / "c.json") == 0
+    out = capsys.readouterr().out
+    assert "7 images in" in out and "board found in 7" in out
+    # Numbers in names sort by value: v10 after v5.
+    assert out.index("v5.tif: used") < out.index("v10.pgm: used")
+    assert ("warning: v10.pgm: nearly the same board pose as v1.pgm (corners 0.0 px apart, "
+            "RMS): a duplicate view") in out
+    assert "outlier" not in out
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not CATADIOPTRIC_DIR.is_dir(), reason=CATADIOPTRIC_MISSING)
+def test_reproduces_opencvs_catadioptric_reference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    output = tmp_path / "cata.json"
+    assert calibrate(CATADIOPTRIC_DIR, output) == 0
+    out = capsys.readouterr().out
+    assert "18 images in" in out and "board found in 17" in out
+    assert "warning: 12.jpg: rms 1.7" in out and "an outlier view" in out
+    assert "duplicate" not in out
+    camera = read_camera(output)
+    ref = CATADIOPTRIC_REFERENCE
+    assert camera.K[0, 0] == pytest.approx(ref["fx"], rel=FOCAL_TOLERANCE)
+    assert camera.K[1, 1] == pytest.approx(ref["fy"], rel=FOCAL_TOLERANCE)
+    assert camera.xi == pytest.approx(ref["xi"], abs=XI_TOLERANCE)
+
+
+class TestFromEquidistant:
+    def test_imports_the_fisheye_pair_calibration(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        output = tmp_path / "left.json"
+        assert main(["calibrate", "--from-equidistant", str(FISHEYE_LEFT_YAML),
+                     "--out", str(output)]) == 0
+        out = capsys.readouterr().out
+        assert "equidistant camera 752x480, fx 366.163 fy 365.631" in out
+        assert "unified model fitted (xi, no distortion) on 640 pixels: residual RMS 0.045 px, " \
+               "max 0.151 px" in out
+        camera = read_camera(output)
+        assert (camera.width, camera.height, camera.fov_deg) == (752, 480, 152.0)
+        assert camera.xi == pytest.approx(2.3746, abs=1e-3)
+        assert "residual RMS 0.045 px" in output.read_text()
+        # Its own file may be replaced by a second run.
+        assert main(["calibrate", "--from-equidistant", str(FISHEYE_LEFT_YAML),
+                     "--out", str(output)]) == 0
+
+    def test_refuses_to_replace_another_file(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        output = tmp_path / "left.yaml"
+        shutil.copy(FISHEYE_LEFT_YAML, output)
+        code = main(["calibrate", "--from-equidistant", str(output), "--out", str(output)])
+        assert_fails(code, capsys, f"{output}: exists and was not written by vmnav calibrate")
+        assert output.read_bytes() == FISHEYE_LEFT_YAML.read_bytes()
+
+    def test_bad_yaml(self, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        bad = tmp_path / "bad.yaml"
+        bad.write_text("%YAML:1.0\nintrinsics: [1, 2\n")
+        code = main(["calibrate", "--from-equidistant", str(bad), "--out", str(tmp_path / "c")])
+        assert_fails(code, capsys, f"{bad}: not OpenCV YAML: line 2:")
+        assert not (tmp_path / "c").exists()
+
+    def test_images_or_yaml_not_both(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        code = main(["calibrate", str(tmp_path), "--from-equidistant", str(FISHEYE_LEFT_YAML),
+                     "--out", str(tmp_path / "c.json")])
+        assert_fails(code, capsys, "give a folder of board images or --from-equidistant YAML")
+        code = main(["calibrate", str(tmp_path), "--out", str(tmp_path / "c.json")])
+        assert_fails(code, capsys, "--pattern/--square: both are needed")

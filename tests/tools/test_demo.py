@@ -129,7 +129,7 @@ def test_files_without_a_manifest_are_not_taught_over(tmp_path, capsys, rng) -> 
 @pytest.mark.parametrize(("args", "message"), [
     (["--world", "atlantis"], "atlantis"),
     (["--routes", "nowhere"], "unknown route 'nowhere'"),
-    (["--landmark-dropout", "2"], "--landmark-dropout"),
+    (["--moved", "2"], "--moved"),
 ])
 def test_bad_input_is_one_line(tmp_path, capsys, args, message) -> None:
     code = main(["demo", "--out", str(tmp_path / "out"), "--no-video", *args])

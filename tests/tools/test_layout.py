@@ -26,6 +26,8 @@ ALLOWED = {
 NESTED = {
     "tools.sim_cmd": {"tools.sim_serve_cmd"},
     "tools.memory_cmd": {"tools.memory_localize_cmd"},
+    "tools.calibrate": {"tools.calibrate_equidistant_cmd"},
+    "tools.vision_cmd": {"tools.vision_pair_cmd", "tools.vision_localize_cmd"},
     "tools.ground_cmd": {"tools.ground_memory_cmd", "tools.ground_teach_cmd",
                          "tools.ground_params_cmd", "tools.ground_keygen_cmd"},
 }

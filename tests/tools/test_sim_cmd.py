@@ -46,6 +46,8 @@ class TestSnapshot:
         assert summary["pose_w"] == {"x_m": 8.0, "y_m": 10.0, "yaw_deg": 0.0}
         assert summary["visible_landmarks"] == len(summary["visible"]) > 20
         assert summary["world"] == "lab"
+        assert summary["sensor"]["mean_grey"] == pytest.approx(110.0, abs=15.0)  # auto-exposure
+        assert summary["sensor"]["blur_px"] == 0.0  # standing still
         assert all(0 <= v["u_px"] < 800 and 0 <= v["v_px"] < 600 for v in summary["visible"])
 
     def test_campus_and_start_pose(

@@ -8,8 +8,11 @@ within 2 px of A's corner mapped through the true homography.
 
 Pipelines:
 
-* ``harris_zncc``: the paper's pipeline with the given configs (the default);
+* ``harris_zncc``: the paper's pipeline with the given configs (``method`` set to
+  ``harris-zncc``);
 * ``harris_zncc_integer``: the same without sub-pixel refinement;
+* ``orb``, ``teblid``, ``beblid``: the front end's bit-string methods (FAST corners on a
+  grid, upright descriptors), the same configs otherwise (``orb`` is the default);
 * ``orb500_bf_crosscheck``: OpenCV ORB (500) + brute-force Hamming with cross
   check, the reference's fastest descriptor pipeline, for comparison only.
 
@@ -34,8 +37,8 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, MatchConfig
-from robot.vision.features import detect_harris
-from robot.vision.matching import match_zncc
+from robot.vision.front_end import FrontEnd, make_front_end
+from shared.camera_model import CameraModel
 from sim.synthetic.image_pairs import (
     ImagePair,
     similarity_homography,
@@ -81,11 +84,15 @@ def bench_features(
     """
     features = features or FeatureConfig()
     matching = matching or MatchConfig()
+    camera = _camera(width, height)
+    paper = dataclasses.replace(features, method="harris-zncc")
     pipelines = {
-        "harris_zncc": _harris_zncc(features, matching),
-        "harris_zncc_integer": _harris_zncc(
-            dataclasses.replace(features, subpixel_half_window_px=0), matching
-        ),
+        "harris_zncc": _front_end(make_front_end(paper, camera), matching),
+        "harris_zncc_integer": _front_end(make_front_end(
+            dataclasses.replace(paper, subpixel_half_window_px=0), camera), matching),
+        **{method: _front_end(make_front_end(dataclasses.replace(features, method=method),
+                                             camera), matching)
+           for method in ("orb", "teblid", "beblid")},
         "orb500_bf_crosscheck": _orb_bf(500),
     }
     rng = np.random.default_rng(seed)
@@ -141,11 +148,21 @@ def _measure(pipeline: Pipeline, pairs: list[ImagePair]) -> dict[str, float]:
     }
 
 
-def _harris_zncc(features: FeatureConfig, matching: MatchConfig) -> Pipeline:
-    def match(feats_a: Any, feats_b: Any) -> PixelPairs:
-        return match_zncc(feats_a, feats_b, matching).pixels_xy(feats_a, feats_b)
+def _camera(width: int, height: int) -> CameraModel:
+    """The default lens, its centre moved to the middle of a ``width`` x ``height`` image:
+    the pairs are plane images, so only the image size matters (points anywhere)."""
+    K = CameraModel.default().K.copy()
+    K[0, 2], K[1, 2] = (width - 1) / 2.0, (height - 1) / 2.0
+    return CameraModel(width=width, height=height, K=K, xi=CameraModel.default().xi, fov_deg=360.0)
 
-    return (lambda image: detect_harris(image, features)), match
+
+def _front_end(front_end: FrontEnd, matching: MatchConfig) -> Pipeline:
+    everywhere = np.ones((front_end.camera.height, front_end.camera.width), dtype=bool)
+
+    def match(feats_a: Any, feats_b: Any) -> PixelPairs:
+        return front_end.match(feats_a, feats_b, matching).pixels_xy(feats_a, feats_b)
+
+    return (lambda image: front_end.describe(image, everywhere)), match
 
 
 def _orb_bf(n_features: int) -> Pipeline:

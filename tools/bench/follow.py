@@ -28,12 +28,13 @@ if TYPE_CHECKING:
     from robot.config import VmnavConfig
     from shared.camera_model import CameraModel
     from sim.config import SimConfig
+    from sim.scene_change import SceneChange
 
 #: Report fields kept per seed (the events stay out of the benchmark's JSON).
 SEED_KEYS = ("reached_goal", "reason", "final_position_error_m", "lateral_rms_m",
              "lateral_max_m", "heading_rms_deg", "key_images_route", "key_images_reached",
              "distance_m", "sim_time_s", "wall_time_s", "mean_matches", "loop_ms_p50",
-             "loop_ms_p95", "lost_events")
+             "loop_ms_p95", "lost_events", "scene_change")
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,7 +48,8 @@ class FollowBenchPlan:
         routes: routes taught per seed (None: all the world's, see
             :func:`tools.harness.demo.taught_memory`).
         goal_id: the goal key image (None: :func:`tools.harness.demo.default_goal`).
-        landmark_dropout: fraction of landmarks removed before each repeat.
+        change: what changed between each teach and its repeats (None: nothing; the
+            people are the simulation config's).
     """
 
     seeds: tuple[int, ...]
@@ -55,7 +57,7 @@ class FollowBenchPlan:
     max_omega_deg: float
     routes: tuple[str, ...] | None = None
     goal_id: int | None = None
-    landmark_dropout: float = 0.0
+    change: SceneChange | None = None
 
 
 def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
@@ -63,8 +65,11 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
     """Run the plan; per-seed rows and an aggregate per law.
 
     Raises:
-        InputError: bad routes, goal, bound or dropout (before or at the first seed).
+        InputError: bad routes, goal, bound or scene change (before or at the first seed).
     """
+    from sim.scene_change import SceneChange
+
+    change = plan.change or SceneChange()
     rows: list[dict[str, object]] = []
     for seed in plan.seeds:
         seeded = replace(sim_config, seed=seed)
@@ -73,8 +78,7 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
         for law in plan.laws:
             law_config = follow_config(config, law, plan.max_omega_deg)
             started = time.perf_counter()
-            run = repeat_in_sim(taught, goal, law_config, seeded, plan.landmark_dropout,
-                                out / f"seed{seed}")
+            run = repeat_in_sim(taught, goal, law_config, seeded, change, out / f"seed{seed}")
             report = build_report(run, taught, law_config.control,
                                   time.perf_counter() - started)
             rows.append({"seed": seed, "law": law, "goal_key_image": goal,
@@ -112,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.config import CONTROL_LAWS, load_config
     from shared.errors import InputError
     from tools.harness.demo import DEMO_MAX_OMEGA_DEG
+    from tools.harness.scene_args import check_change_fits, scene_change_from_args
     from tools.harness.sim_args import sim_config_from_args
 
     if args.seeds < 1:
@@ -119,15 +124,15 @@ def run(args: argparse.Namespace) -> int:
     for law in args.laws:
         if law not in CONTROL_LAWS:
             raise InputError("--laws", f"unknown law {law!r} (known: {', '.join(CONTROL_LAWS)})")
-    if not 0.0 <= args.landmark_dropout <= 1.0:
-        raise InputError("--landmark-dropout", f"must be in [0, 1], got {args.landmark_dropout}")
+    change = scene_change_from_args(args)
     sim_config, camera = sim_config_from_args(args)
+    check_change_fits(change, sim_config)
     config = load_config(args.config)
     plan = FollowBenchPlan(
         seeds=tuple(range(sim_config.seed, sim_config.seed + args.seeds)), laws=tuple(args.laws),
         max_omega_deg=DEMO_MAX_OMEGA_DEG if args.max_omega_deg is None else args.max_omega_deg,
         routes=tuple(args.routes) if args.routes else None, goal_id=args.goal,
-        landmark_dropout=args.landmark_dropout)
+        change=change)
     result = bench_follow(plan, args.out, config, sim_config, camera)
     print(json.dumps({"benchmark": "follow", **result}, indent=2))
     return 0

@@ -44,7 +44,7 @@ from robot.memory.localize import Localizer
 from robot.pioneer.client import PioneerClient
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
-from robot.vision.features import detect_harris
+from robot.vision.front_end import make_front_end, stored_descriptors
 from robot.worker import find_photo
 from shared.aria import (
     Command,
@@ -61,7 +61,7 @@ from shared.aria import (
 from shared.aria.commands import ArgType
 from shared.camera_model import CameraModel
 from shared.clock import NS_PER_S, ManualClock
-from shared.config import LogConfig
+from shared.config import CameraMountConfig, LogConfig
 from shared.errors import InputError
 from shared.logs import topics
 from shared.logs.reader import log_info, read_messages, recover
@@ -299,11 +299,11 @@ def _tiny_memory(folder: Path) -> VisualMemory:
     for i in range(2):
         noise = rng.uniform(0, 255, (height, width)).astype(np.float32)
         image = np.clip(cv2.GaussianBlur(noise, (0, 0), 1.5) * 3 - 255, 0, 255).astype(np.uint8)
-        features = detect_harris(image, FeatureConfig())
+        features = make_front_end(FeatureConfig(), camera).describe(image)
         records.append(KeyframeRecord(t_ns=i * NS_PER_S, odom_pose=Pose2(0.5 * i, 0.0, 0.0),
                                       distance_m=0.5 * i, image=image,
                                       pixels_xy=np.array(features.pixels_xy),
-                                      patches=np.array(features.patches)))
+                                      patches=stored_descriptors(features)))
     memory = VisualMemory(camera)
     memory.add_path("fuzz", records)
     write_memory(folder, memory)
@@ -392,7 +392,8 @@ class PhotoTarget:
     def __init__(self, work: Path) -> None:
         memory = _tiny_memory(work / "memory")
         self.camera = memory.camera
-        self.localizer = Localizer.from_memory(memory, FeatureConfig(), LocalizeConfig())
+        self.localizer = Localizer.from_memory(memory, CameraMountConfig(), FeatureConfig(),
+                                               LocalizeConfig())
         image = memory.keyframe(0).image
         self.seeds = [cv2.imencode(ext, image)[1].tobytes() for ext in (".png", ".jpg")]
         self.path = work / "upload" / "1.png"

@@ -161,8 +161,7 @@ def _child(photo: Path, seed: int) -> dict[str, object]:
     from robot.config import VmnavConfig
     from robot.memory.localize import Localizer
     from robot.mode_events import PhotoFound, PhotoNotFound
-    from robot.vision.features import detect_harris
-    from robot.vision.lens_mask import lens_mask
+    from robot.vision.front_end import make_front_end, stored_descriptors
     from robot.worker import find_photo
     from shared.camera_model import CameraModel
     from shared.memory import KeyframeRecord, VisualMemory
@@ -170,12 +169,13 @@ def _child(photo: Path, seed: int) -> dict[str, object]:
     config = VmnavConfig()
     camera = CameraModel.default()
     image = scene(seed)
-    features = detect_harris(image, config.features, lens_mask(camera))
+    features = make_front_end(config.features, camera).describe(image)
     memory = VisualMemory(camera)
     memory.add_path("scene", [KeyframeRecord(t_ns=0, odom_pose=(0.0, 0.0, 0.0), distance_m=0.0,
                                              image=image, pixels_xy=np.array(features.pixels_xy),
-                                             patches=np.array(features.patches))])
-    localizer = Localizer.from_memory(memory, config.features, config.localize)
+                                             patches=stored_descriptors(features))])
+    localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
+                                      config.localize)
     rss_before_kb = status_kb("VmRSS")
     start = time.perf_counter()
     event = find_photo(photo, localizer, camera)

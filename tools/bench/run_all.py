@@ -49,6 +49,7 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "link": ("--window-s", "2", "--dispatches", "50"),
     "faults": ("--repeat", "1"),
     "fuzz": ("--inputs", "1000"),
+    "real": ("--repeats", "3"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).
 EXIT_BENCH_FAILED = 1

@@ -29,6 +29,7 @@ from sim.driver import PurePursuit
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import load_world
+from tools.bench.camera_effects import bench_camera_effects
 from tools.bench.corners import picture_corner_errors_px
 
 RENDER_FPS_TARGET = 60.0
@@ -155,6 +156,7 @@ def run(args: argparse.Namespace) -> int:
     cpus = pin_to_one_core()
     result = {"benchmark": "sim", "cpus": cpus, **bench_render(config, camera, frames=args.frames)}
     result.update(camera_accuracy(camera))
+    result.update(bench_camera_effects(config, camera, frames=min(args.frames, 150)))
     result["versions"] = versions()
     print(json.dumps(result, indent=2))
     return 0

@@ -2,9 +2,11 @@
 
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
 6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
-input crashes or hangs a decoder, and every attack of ``bench hostile`` is met; DESIGN.md
-sec. 6 gathers them). The simulator's, the vision benchmark's and the hostile parts' own
-modules hold theirs (their JSON prints them) and are read from there, not copied.
+input crashes or hangs a decoder, and every attack of ``bench hostile`` is met, 16: real
+images in ``bench real``, and unrelated real images never pass localization's acceptance
+test in ``bench chance``; DESIGN.md sec. 6 gathers them). The simulator's, the vision
+benchmark's, the real images' and the hostile parts' own modules hold theirs (their JSON
+prints them) and are read from there, not copied.
 
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
@@ -29,6 +31,7 @@ from tools.bench.hostile_images import PEAK_RSS_TARGET_MB
 from tools.bench.hostile_messages import MIN_HEARTBEAT_HZ
 from tools.bench.hostile_stall import DISTANCE_TARGET_M, STOP_TARGET_S
 from tools.bench.hostile_traffic import MAX_FTP_CACHE_MB, MAX_REJECTED_LOG_MB
+from tools.bench.real import TARGETS as REAL_TARGETS
 from tools.bench.sim import RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
 from tools.harness.demo import DEMO_LAW
@@ -84,6 +87,9 @@ TARGETS: tuple[Target, ...] = (
     _follow("heading_rms_deg_max", "<=", 1.5),
     _follow("loop_ms_p50_median", "<", 20.0),
     Target("log", "log_overhead_core_fraction", "<", 0.10, "issue 7"),
+    Target("chance", "accepted", "<=", 0, "issue 16"),
+    Target("chance", "paper_front_end.accepted", "<=", 0, "issue 16"),
+    Target("vision", "localize_relit_top1_rate", ">=", 0.90, "issue 16"),
     Target("link", "dispatch_ack_ms_p95", "<", 50.0, "issue 6"),
     Target("link", "ground_cpu_fraction_20_vehicles", "<", 0.30, "issue 6"),
     *(Target("faults", f"{case}.passed", ">=", f"{case}.runs", "issue 8")
@@ -114,6 +120,8 @@ TARGETS: tuple[Target, ...] = (
         ("sim.control_bad_requests_refused", ">=", "sim.control_bad_requests"),
         *((f"{part}.targets_met", ">=", 1) for part in HOSTILE_PARTS),
     )),
+    *(Target("real", figure, comparison, bound, "issue 16")
+      for figure, (comparison, bound) in REAL_TARGETS.items()),
 )
 
 

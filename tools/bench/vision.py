@@ -13,10 +13,11 @@ image's true pose, which the memory itself does not know. Then:
   U(-``max_yaw_deg``, ``max_yaw_deg``) from that line's direction; a pose where
   the robot would overlap a wall or furniture is drawn again. The view is
   rendered (the simulation advances one frame period first, so the illumination
-  drifts) and the robot's per-frame pipeline runs on it: Harris corners inside
-  the lens mask, then :func:`robot.vision.frame_state.state_from_frame` (ZNCC
-  matching with the next key image, lifting, the three-view state, the image
-  errors), with the key segment prepared once per key image
+  drifts) and the robot's per-frame pipeline runs on it: the front end's points
+  inside the lens mask (``[features] method``), then
+  :func:`robot.vision.frame_state.state_from_frame` (matching with the next key
+  image, lifting, the three-view state, the image errors), with the key segment
+  prepared once per key image
   (:func:`robot.vision.frame_state.key_segment_from_key_images`, with the teach
   tracks). The truth is the query's true pose in the next key image's true base
   frame (the definitions of :mod:`robot.vision.path_state`). Estimates that are
@@ -37,6 +38,7 @@ image's true pose, which the memory itself does not know. Then:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import operator
@@ -47,19 +49,18 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
 from robot.config import PathStateConfig, VmnavConfig
 from robot.segment_frame import relative_pose, wrap_angle
 from robot.teach import SelectedKeyImage
-from robot.vision.features import Features, detect_harris
+from robot.vision.features import Features
 from robot.vision.frame_state import (
     FrameState,
     KeySegment,
     key_segment_from_key_images,
     state_from_frame,
 )
-from robot.vision.lens_mask import lens_mask
+from robot.vision.front_end import FrontEnd, make_front_end
 from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig
 from shared.errors import ConfigError, DegenerateGeometryError
@@ -87,6 +88,9 @@ _COMPARISONS = {">=": operator.ge, "<=": operator.le, "<": operator.lt}
 #: Key image spacings are reported apart below and above this, m (beyond about 0.5-0.6 m
 #: matching the two key images directly was expected to degrade).
 SPACING_SPLIT_M = 0.6
+#: The paper's front end (Courbon et al. 2008: Harris corners, ZNCC), measured beside the
+#: config's.
+PAPER_METHOD = "harris-zncc"
 #: Query poses tried per query before giving up.
 _PLACEMENT_TRIES = 100
 #: Frames run through the pipeline before timing (first-call costs).
@@ -189,9 +193,9 @@ class StateRun:
 class _Segments:
     """Key segments prepared on first use (timed), with or without the teach tracks."""
 
-    def __init__(self, camera: CameraModel, config: VmnavConfig, rng: np.random.Generator,
+    def __init__(self, front_end: FrontEnd, config: VmnavConfig, rng: np.random.Generator,
                  tracks: bool) -> None:
-        self._camera, self._config = camera, config
+        self._front_end, self._config = front_end, config
         self._rng, self._tracks = rng, tracks
         self._cache: dict[tuple[str, int], KeySegment | None] = {}
         self.prepare_ms: list[float] = []
@@ -206,8 +210,9 @@ class _Segments:
             t0 = time.thread_time_ns()
             try:
                 self._cache[key] = key_segment_from_key_images(
-                    _features(next_), _features(previous), next_.record.odom_pose,
-                    previous.record.odom_pose, self._camera, self._config.camera.mount, self._rng,
+                    _features(self._front_end, next_), _features(self._front_end, previous),
+                    next_.record.odom_pose, previous.record.odom_pose, self._front_end,
+                    self._config.camera.mount, self._rng,
                     self._config.path_state, tracks,
                 )
             except DegenerateGeometryError:
@@ -233,10 +238,36 @@ class _Segments:
 def bench_vision(
     config: VmnavConfig, sim_config: SimConfig, camera: CameraModel, plan: VisionBenchPlan
 ) -> dict[str, Any]:
-    """Teach, then measure state accuracy, frame time and localization (module docstring).
+    """Both rows: the config's front end, and the paper's (``harris-zncc``) beside it.
 
     Returns:
-        JSON-ready figures (see ``vmnav bench vision --help`` and the module docstring).
+        The figures of the config's front end (:func:`bench_front_end`) with
+        ``front_end`` (its method) and ``paper_front_end``: the same figures with
+        ``[features] method = "harris-zncc"`` (absent when that is the config's).
+
+    Raises:
+        InputError: an unknown route, or a teach drive that does not reach its end.
+        ConfigError: no free query pose found near the paths.
+    """
+    figures = bench_front_end(config, sim_config, camera, plan)
+    result = {"front_end": config.features.method, **figures}
+    if config.features.method != PAPER_METHOD:
+        paper = dataclasses.replace(
+            config, features=dataclasses.replace(config.features, method=PAPER_METHOD))
+        result["paper_front_end"] = {"front_end": PAPER_METHOD,
+                                     **bench_front_end(paper, sim_config, camera, plan)}
+    return {**result, "versions": library_versions()}
+
+
+def bench_front_end(
+    config: VmnavConfig, sim_config: SimConfig, camera: CameraModel, plan: VisionBenchPlan
+) -> dict[str, Any]:
+    """Teach, then measure state accuracy, frame time and localization (module docstring),
+    with the config's front end.
+
+    Returns:
+        JSON-ready figures (see ``vmnav bench vision --help`` and the module docstring),
+        with ``targets`` and ``targets_met``.
 
     Raises:
         InputError: an unknown route, or a teach drive that does not reach its end.
@@ -261,7 +292,7 @@ def bench_vision(
         **state_summary(run),
         **localization,
     }
-    return {**figures, **target_figures(figures), "versions": library_versions()}
+    return {**figures, **target_figures(figures)}
 
 
 def library_versions() -> dict[str, str]:
@@ -315,13 +346,13 @@ def run_state_queries(
     """Render ``plan.state_queries`` views between key images and estimate their state."""
     sim = Simulation(world, sim_config)
     renderer = FisheyeRenderer.for_simulation(sim, camera)
-    mask = lens_mask(camera)
+    front_end = make_front_end(config.features, camera)
     pose_rng = np.random.default_rng([plan.seed, 1])
     ransac_rng = np.random.default_rng([plan.seed, 2])
-    segments = _Segments(camera, config, np.random.default_rng([plan.seed, 3]), True)
-    direct_segments = _Segments(camera, config, np.random.default_rng([plan.seed, 4]), False)
+    segments = _Segments(front_end, config, np.random.default_rng([plan.seed, 3]), True)
+    direct_segments = _Segments(front_end, config, np.random.default_rng([plan.seed, 4]), False)
     mount, state_config = config.camera.mount, config.path_state
-    _warm_up(taught, segments, config, camera, mount, mask, ransac_rng)
+    _warm_up(taught, segments, config, front_end, ransac_rng)
     outcomes, redraws = [], 0
     for _ in range(plan.state_queries):
         route, next_index, pose, tries = _place_between_key_images(taught, sim, pose_rng, plan)
@@ -331,11 +362,11 @@ def run_state_queries(
         segment = segments.get(route, next_index)
         direct_segment = direct_segments.get(route, next_index)
         w0, t0 = time.perf_counter_ns(), time.thread_time_ns()
-        current = detect_harris(image, config.features, mask)
+        current = front_end.describe(image)
         t1 = time.thread_time_ns()
-        tracked = _estimate(current, segment, camera, mount, ransac_rng, state_config)
+        tracked = _estimate(current, segment, front_end, mount, ransac_rng, state_config)
         t2, w2 = time.thread_time_ns(), time.perf_counter_ns()
-        direct = _estimate(current, direct_segment, camera, mount, ransac_rng, state_config)
+        direct = _estimate(current, direct_segment, front_end, mount, ransac_rng, state_config)
         outcomes.append(StateOutcome(
             route=route.route.name, next_index=next_index,
             spacing_m=float(_true_spacings(route)[next_index - 1]),
@@ -431,19 +462,19 @@ def error_figures(rows: Sequence[tuple[Estimate, tuple[float, float, float]]]
     }
 
 
-def _estimate(current: Features, segment: KeySegment | None, camera: CameraModel,
+def _estimate(current: Features, segment: KeySegment | None, front_end: FrontEnd,
               mount: CameraMountConfig, rng: np.random.Generator, config: PathStateConfig
               ) -> Estimate:
     if segment is None:
         return Estimate(frame=None, key_pair_ok=False)
-    return Estimate(frame=state_from_frame(current, segment, camera, mount, rng, config),
+    return Estimate(frame=state_from_frame(current, segment, front_end, mount, rng, config),
                     key_pair_ok=segment.key_pair.ok)
 
 
-def _features(key: SelectedKeyImage) -> Features:
+def _features(front_end: FrontEnd, key: SelectedKeyImage) -> Features:
+    """A selected key image's stored features, as the follower reads them from a memory."""
     record = key.record
-    return Features(record.pixels_xy, record.patches,
-                    np.zeros(len(record.pixels_xy), dtype=np.float32))
+    return front_end.features(record.pixels_xy, front_end.descriptors_from_stored(record.patches))
 
 
 def _true_spacings(route: TaughtRoute) -> np.ndarray:
@@ -486,15 +517,14 @@ def _place_between_key_images(
 
 
 def _warm_up(taught: TaughtMemory, segments: _Segments, config: VmnavConfig,
-             camera: CameraModel, mount: CameraMountConfig, mask: npt.NDArray[np.bool_],
-             rng: np.random.Generator) -> None:
+             front_end: FrontEnd, rng: np.random.Generator) -> None:
     """Run the pipeline on a few key images first, so that first-call costs are not timed."""
     route = taught.routes[0]
     segment = segments.get(route, 1) if len(route.key_images) > 1 else None
     if segment is not None:
         for key in route.key_images[:_WARMUP_FRAMES]:
-            state_from_frame(detect_harris(key.record.image, config.features, mask), segment,
-                             camera, mount, rng, config.path_state)
+            state_from_frame(front_end.describe(key.record.image), segment, front_end,
+                             config.camera.mount, rng, config.path_state)
     segments.prepare_ms.clear()
 
 
@@ -508,8 +538,6 @@ def _median(values: Sequence[float]) -> float | None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the vision benchmark's JSON (``vmnav bench vision``)."""
-    import dataclasses
-
     from robot.config import load_config
     from shared.errors import InputError
     from tools.bench.cpu import pin_to_one_core

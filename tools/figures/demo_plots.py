@@ -1,6 +1,7 @@
 """The figures and the video of ``vmnav demo`` (matplotlib with the Agg backend, OpenCV).
 
-* ``topdown.png``: the taught paths, the route's reference and the repeated trajectory;
+* ``topdown.png``: the taught paths, the route's reference and the repeated trajectory,
+  and the objects moved since the teach (:mod:`sim.scene_change`);
 * ``errors_vs_distance.png``: y and theta against the distance driven, true and
   estimated (as Fig. 8 of Courbon et al. 2008);
 * ``image_errors.png``: errImageMax and errPoints against time (as their Fig. 6);
@@ -30,6 +31,8 @@ if TYPE_CHECKING:
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # after matplotlib.use: the backend must be chosen first
+from matplotlib.axes import Axes
+from matplotlib.patches import Polygon
 
 #: Every n-th servo cycle becomes a video frame.
 VIDEO_EVERY = 2
@@ -54,6 +57,7 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     for i, reference in enumerate(plan_references(run, taught)):
         ax.plot(reference[:, 0], reference[:, 1], "o-", color="tab:blue", lw=1.5, ms=3,
                 label="taught (route key images)" if i == 0 else None)
+    _plot_moved_objects(ax, run)
     repeated = np.array([s.pose_w for s in run.samples]).reshape(-1, 3)
     ax.plot(repeated[:, 0], repeated[:, 1], color="tab:red", lw=1.2, label="repeated")
     ax.plot(*run.start_pose[:2], "g^", ms=10, label="start")
@@ -64,6 +68,15 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     ax.legend(loc="best")
     ax.set_title("Taught paths and the repeated trajectory (ground truth)")
     save_figure(fig, path)
+
+
+def _plot_moved_objects(ax: Axes, run: RepeatRun) -> None:
+    """The objects moved since the teach: where they stood (dashed) and where they stand."""
+    for k, (taught, now) in enumerate(run.changed.moved_footprints()):
+        ax.add_patch(Polygon(taught, closed=True, fill=False, ls="--", ec="0.5",
+                             label=None if k else "object as taught"))
+        ax.add_patch(Polygon(now, closed=True, fc="tab:orange", alpha=0.6,
+                             label=None if k else "moved object"))
 
 
 def _plot_errors(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:

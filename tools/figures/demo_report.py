@@ -31,6 +31,7 @@ from tools.harness.teach import TaughtMemory
 
 if TYPE_CHECKING:
     from shared.logs.writer import LogStats
+    from sim.scene_change import ChangedWorld
     from tools.harness.ground_dispatch import DispatchResult
 
 FloatArray = npt.NDArray[np.float64]
@@ -161,12 +162,32 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
         "loop_ms_p50": _round(float(np.percentile(loop_ms, 50))) if loop_ms.size else None,
         "loop_ms_p95": _round(float(np.percentile(loop_ms, 95))) if loop_ms.size else None,
         "lost_events": sum(e.kind == "lost" for e in result.events),
+        "scene_change": scene_change_report(run.changed),
         "events": [{"t_s": round(e.t_ns / 1e9, 3), "kind": e.kind, "reason": e.reason,
                     "detail": e.detail} for e in result.events],
     }
     report["plans"] = len(plan_references(run, taught))
     report.update(track_metrics(following_errors(run, taught), settle_m))
     return report
+
+
+def scene_change_report(changed: ChangedWorld) -> dict[str, object]:
+    """What changed since the teach (:mod:`sim.scene_change`), for ``report.json``."""
+    change = changed.change
+    lighting = change.lighting
+    return {
+        "light_scale": lighting.scale,
+        "lamps_switched_off": len(changed.lamps_off),
+        "daylight_hour": lighting.hour,
+        "light_step": ({"factor": lighting.step_factor, "at_s": lighting.step_at_s}
+                       if lighting.has_step else None),
+        "moved_fraction": change.moved_fraction,
+        "objects_moved": len(changed.moved),
+        "objects_left_in_place": len(changed.stuck),
+        "pictures_removed": changed.removed_pictures,
+        "objects_removed": changed.removed_objects,
+        "doors": {name: opening for name, opening in change.doors},
+    }
 
 
 def track_metrics(errors: TrackErrors | None, settle_m: float) -> dict[str, object]:

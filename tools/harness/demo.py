@@ -8,9 +8,10 @@ It couples the simulator and the robot application, so it lives in the harness (
    ``OUT/teach.json`` for the evaluation. A memory already there, taught in the same
    world with the same seed, routes and camera, is reused; a memory there taught
    otherwise is an error (never overwritten).
-2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation (optionally with people
-   and with a fraction of the landmarks removed), the robot placed off the taught
-   path: the robot process (:class:`robot.process.RobotProcess`, as on the robot) on
+2. **Repeat** (:func:`repeat_in_sim`): a fresh simulation of the world as it is on
+   the day of the repeat (optionally with people, other light and objects moved:
+   :mod:`sim.scene_change`), the robot placed off the taught path: the robot process
+   (:class:`robot.process.RobotProcess`, as on the robot) on
    :class:`sim.sim_camera.SimFrameSource`, the ARIA driver of the emulated Pioneer
    (:func:`tools.harness.lockstep_pioneer.lockstep_pioneer`) and
    :class:`sim.sim_clock.SimClock`, as a MAVLink vehicle on loopback UDP. A ground
@@ -42,8 +43,10 @@ if TYPE_CHECKING:
     from shared.clock import Clock
     from sim.config import SimConfig
     from sim.renderer import RenderedFrame
+    from sim.scene_change import ChangedWorld, SceneChange
     from sim.sim_camera import SimFrameSource
     from sim.simulation import Simulation
+    from sim.world import World
     from tools.harness.ground_dispatch import DispatchResult
     from tools.harness.teach import TaughtMemory
 
@@ -60,8 +63,11 @@ DEMO_MAX_OMEGA_DEG = 25.0
 #: image and so cuts the lab's turns (measured, seed 1: lateral RMS 7.8 cm, max 22.6 cm);
 #: with the curvature feed-forward it follows the taught arcs (1.8 cm, 5.5 cm).
 DEMO_LAW = "paper+ff"
-#: Mixed with the seed for the repeat's random draws (RANSAC, landmark removal).
+#: Mixed with the seed for the repeat's random draws (RANSAC, the Pioneer's noise).
 _REPEAT_STREAM = 0x52455045
+#: Mixed with the seed for the scene change's draws (which objects move, and where), so
+#: that a change leaves the repeat's other draws alone.
+_CHANGE_STREAM = 0x4348414E
 #: The ground station must have dispatched the goal within this wall time, s.
 _DISPATCH_TIMEOUT_S = 20.0
 #: After the robot stopped, the ground station has this long to see the outcome, s (it
@@ -96,6 +102,7 @@ class RepeatRun:
     samples: tuple[CycleSample, ...]
     sim_time_s: float
     dispatch: DispatchResult
+    changed: ChangedWorld
 
 
 def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig,
@@ -157,7 +164,7 @@ def start_pose(taught: TaughtMemory) -> Pose2:
 
 
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
-                  sim_config: SimConfig, landmark_dropout: float, out: Path,
+                  sim_config: SimConfig, change: SceneChange, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
                   robot_log: FieldLog | None = None, ground_log: Path | None = None) -> RepeatRun:
     """Place the robot, dispatch the goal from the ground station, and let the robot
@@ -168,7 +175,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         goal_id: the goal key image.
         config: the robot's configs.
         sim_config: the repeat's simulation (people, seed, world).
-        landmark_dropout: fraction of the landmarks removed before the repeat, [0, 1].
+        change: what changed since the teach (light, objects moved); the people are
+            ``sim_config.people``.
         out: the output folder; the vehicle keeps its parameters and uploads in
             ``out/vehicle`` (parameters start from ``config`` on every run).
         on_cycle: called after each mission cycle with the simulation and the frame (video).
@@ -178,8 +186,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         ground_log: the ground station's log folder; None: no ground log.
 
     Raises:
-        InputError: ``goal_id`` is not a key image of the memory, or the start
-            pose overlaps an obstacle.
+        InputError: ``goal_id`` is not a key image of the memory, the start
+            pose overlaps an obstacle, or ``change`` does not fit the world.
         GroundError: the ground station could not dispatch the goal.
     """
     import numpy as np
@@ -187,7 +195,6 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import VehicleFiles
     from shared.clock import WallClock
-    from sim.landmark_dropout import drop_landmarks
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
     from sim.simulation import Simulation
@@ -200,9 +207,11 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         raise InputError("--goal", f"key image {goal_id} is not in the memory "
                                    f"(ids 0..{max(memory.keyframes)})")
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
-    sim = Simulation(load_world(sim_config.world), sim_config)
-    sim.landmarks = drop_landmarks(sim.landmarks, landmark_dropout, rng)
     start = start_pose(taught)
+    taught_world = load_world(sim_config.world)
+    changed = changed_world(taught_world, change, sim_config.seed, (start.x_m, start.y_m))
+    sim = Simulation(changed.world, sim_config, landmark_world=taught_world)
+    sim.light_gain_at = change.lighting.gain_at
     sim.place_robot(start)
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
@@ -229,7 +238,35 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                                             f"{_DISPATCH_TIMEOUT_S:.0f} s")
     return RepeatRun(result=result, start_pose=start, goal_id=goal_id,
                      samples=tuple(watch.samples), sim_time_s=sim.now_ns / 1e9,
-                     dispatch=dispatch)
+                     dispatch=dispatch, changed=changed)
+
+
+def changed_world(world: World, change: SceneChange, seed: int,
+                  keep_clear_xy: tuple[float, float] | None = None) -> ChangedWorld:
+    """The repeat's world: ``world`` after ``change``, drawn from the seed's scene-change
+    stream (so that the change leaves the repeat's other draws alone).
+
+    Called before teaching too, with no point kept clear, so that a change the world
+    cannot take is refused before minutes of teaching.
+
+    Args:
+        world: the world as taught.
+        change: what changed.
+        seed: the simulation's seed.
+        keep_clear_xy: (x, y) no moved object may come near (the repeat's start), m.
+
+    Raises:
+        InputError: the change does not fit the world (one line naming what).
+    """
+    import numpy as np
+
+    from sim.scene_change import change_world
+
+    keep = None if keep_clear_xy is None else np.array([keep_clear_xy], dtype=float)
+    try:
+        return change_world(world, change, np.random.default_rng([seed, _CHANGE_STREAM]), keep)
+    except ValueError as e:
+        raise InputError("scene change", str(e)) from None
 
 
 class _RepeatWatch:

@@ -18,6 +18,8 @@ from robot.config import (
     config_from_log,
     load_config,
 )
+from robot.vision.features import PixelSizes
+from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig
 from shared.errors import ConfigError
 
@@ -68,6 +70,10 @@ class TestLoadConfig:
             ("[teach_driver]\nspeed_m_s = 0.2\n",
              "teach_driver: moved to [sim.teach_driver] (the scripted teach driver is the "
              "simulator's)"),
+            ("[localize]\nmin_matches = 25\n",
+             "localize.min_matches: no longer exists, replaced by localize.min_inliers and "
+             "localize.min_inlier_ratio (a key image is accepted on the inliers of a relative "
+             "pose, never on a match count)"),
             ("[control\n", "not valid TOML"),
         ],
     )
@@ -96,7 +102,21 @@ class TestConfigFromLog:
     def test_the_old_layout_reads_as_it_ran(self) -> None:
         expected = VmnavConfig(control=ControlConfig(law="paper+ff",
                                                      max_omega_rad_s=math.radians(25.0)))
+        # Its pixel windows become the angles they were on the default lens: today's defaults.
         assert config_from_log(old_layout(), "log.mcap", "config") == expected
+        sizes = PixelSizes.for_camera(expected.features, CameraModel.default())
+        assert (sizes.patch_px, sizes.min_distance_px) == (11, pytest.approx(8.0))
+
+    def test_a_pixel_window_in_a_file_names_its_angle(self, tmp_path: Path) -> None:
+        for text, old, new in (
+            ("[features]\npatch_size_px = 11\n", "features.patch_size_px",
+             "features.patch_size_deg"),
+            ("[teach.tracking]\nsearch_radius_px = 20.0\n", "teach.tracking.search_radius_px",
+             "teach.tracking.search_radius_deg"),
+        ):
+            with pytest.raises(ConfigError, match=rf"vmnav.toml: {old}: renamed to {new} "
+                                                  r"\(vision windows are angles"):
+                load_config(write(tmp_path, text))
 
     def test_the_old_mount_becomes_the_cameras(self) -> None:
         data = old_layout()
@@ -104,6 +124,11 @@ class TestConfigFromLog:
         config = config_from_log(data, "log.mcap", "config")
         assert config.camera.mount == CameraMountConfig(x_m=0.3, pitch_deg=-7.5)
         assert config.camera.source == data["camera"]["source"]
+
+    def test_a_replaced_key_is_dropped(self) -> None:
+        data = dataclasses.asdict(VmnavConfig())
+        data["localize"] = {**data["localize"], "min_matches": 25}
+        assert config_from_log(data, "log.mcap", "config") == VmnavConfig()
 
     def test_a_key_unknown_in_both_layouts_is_refused(self) -> None:
         data = {**old_layout(), "warp_drive": {}}

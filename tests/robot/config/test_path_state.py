@@ -20,10 +20,10 @@ def test_defaults_and_nested_tables() -> None:
 
 
 def test_matching_window_is_wide_and_configurable() -> None:
-    assert PathStateConfig().matching.search_radius_px == 120.0
-    config = from_mapping(VmnavConfig, {"path_state": {"matching": {"search_radius_px": 80.0}}},
+    assert PathStateConfig().matching.search_radius_deg == pytest.approx(39.57, abs=0.01)
+    config = from_mapping(VmnavConfig, {"path_state": {"matching": {"search_radius_deg": 25.0}}},
                           "vmnav.toml")
-    assert config.path_state.matching.search_radius_px == 80.0
+    assert config.path_state.matching.search_radius_deg == 25.0
     assert config.path_state.matching.min_zncc == PathStateConfig().matching.min_zncc
 
 

@@ -18,12 +18,18 @@ class TestFeatureConfig:
     @pytest.mark.parametrize(
         ("key", "value", "message"),
         [
+            ("method", "surf", "method must be one of harris-zncc, orb, akaze, sift, teblid, "
+             "beblid, got 'surf'"),
             ("max_corners", 0, "max_corners must be >= 1, got 0"),
             ("quality_level", 1.0, "quality_level must be in \\(0, 1\\), got 1.0"),
-            ("min_distance_px", -1.0, "min_distance_px must be >= 0"),
+            ("min_distance_deg", -1.0, "min_distance_deg must be >= 0"),
             ("block_size_px", 4, "block_size_px must be odd and >= 3, got 4"),
             ("harris_k", 0.3, "harris_k must be in \\(0, 0.25\\)"),
-            ("patch_size_px", 10, "patch_size_px must be odd and >= 3, got 10"),
+            ("patch_size_deg", 0.0, "patch_size_deg must be in \\(0, 30\\], got 0.0"),
+            ("fast_threshold", 0, "fast_threshold must be in \\[1, 254\\], got 0"),
+            ("grid_cells", 0, "grid_cells must be >= 1, got 0"),
+            ("descriptor_size_deg", 90.0, "descriptor_size_deg must be in \\(0, 60\\]"),
+            ("max_hamming_fraction", 0.6, "max_hamming_fraction must be in \\(0, 0.5\\]"),
             ("subpixel_half_window_px", -1, "subpixel_half_window_px must be >= 0"),
         ],
     )
@@ -34,12 +40,14 @@ class TestFeatureConfig:
 
 class TestMatchConfig:
     def test_none_radius_in_code(self) -> None:
-        assert MatchConfig(search_radius_px=None).search_radius_px is None
+        assert MatchConfig(search_radius_deg=None).search_radius_deg is None
 
     @pytest.mark.parametrize(
         ("key", "value", "message"),
         [
-            ("search_radius_px", 0.0, "search_radius_px must be > 0 or None, got 0.0"),
+            ("search_radius_deg", 0.0, "search_radius_deg must be in \\(0, 180\\] or None, "
+             "got 0.0"),
+            ("ratio_exclusion_deg", -1.0, "ratio_exclusion_deg must be >= 0, got -1.0"),
             ("min_zncc", 1.5, "min_zncc must be in \\[-1, 1\\], got 1.5"),
             ("max_distance_ratio", 0.0, "max_distance_ratio must be in \\(0, 1\\] or None"),
             ("max_distance_ratio", 1.2, "max_distance_ratio must be in \\(0, 1\\] or None"),

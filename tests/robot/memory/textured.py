@@ -6,19 +6,28 @@ another gain, offset and noise (:func:`sim.synthetic.image_pairs.warped_pair`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from robot.config import FeatureConfig
-from robot.vision.features import detect_harris
-from robot.vision.lens_mask import lens_mask
+from robot.vision.features import pixels_per_radian
+from robot.vision.front_end import make_front_end, stored_descriptors
 from shared.camera_model import CameraModel
 from shared.memory import KeyframeRecord, VisualMemory
 from sim.synthetic.image_pairs import similarity_homography, warped_pair
 from tests.shared.memory.builders import small_camera
 
-FEATURES = FeatureConfig()
+
+def _deg_on_small_camera(px: float) -> float:
+    return math.degrees(px / pixels_per_radian(small_camera()))
+
+
+#: The textures are drawn in pixels of a small, very wide lens (36 px/rad): the paper's front
+#: end with its reference pixel sizes there (11 px patches 8 px apart).
+FEATURES = FeatureConfig(method="harris-zncc", patch_size_deg=_deg_on_small_camera(11.0),
+                         min_distance_deg=_deg_on_small_camera(8.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,14 +52,14 @@ def make_places(
 
 def record_of(image: np.ndarray, camera: CameraModel, index: int) -> KeyframeRecord:
     """A key image record of ``image`` (corners inside the lens), 1 s and 0.5 m apart."""
-    features = detect_harris(image, FEATURES, lens_mask(camera))
+    features = make_front_end(FEATURES, camera).describe(image)
     return KeyframeRecord(
         t_ns=index * 1_000_000_000,
         odom_pose=(0.5 * index, 0.0, 0.0),
         distance_m=0.5 * index,
         image=image,
         pixels_xy=np.array(features.pixels_xy),
-        patches=np.array(features.patches),
+        patches=stored_descriptors(features),
     )
 
 

@@ -1,6 +1,7 @@
 """The per-frame pipeline (robot/vision/frame_state.py) on synthetic corridor scenes.
 
-Each scene point gets its own random ZNCC descriptor, so matching pairs a corner
+Each scene point gets its own random ZNCC descriptor (the ``harris-zncc`` front end's
+kind), so matching pairs a corner
 with the same point's corner whenever it lies in the search window: the
 correspondences are known exactly.
 """
@@ -12,13 +13,15 @@ import math
 import numpy as np
 import pytest
 
-from robot.config import MatchConfig, PathStateConfig
+from robot.config import FeatureConfig, MatchConfig, PathStateConfig
 from robot.vision.features import Features
 from robot.vision.frame_state import (
     key_correspondences,
     key_segment_from_key_images,
     state_from_frame,
 )
+from robot.vision.front_end import FrontEnd, make_front_end
+from shared.camera_model import CameraModel
 from shared.errors import DegenerateGeometryError, ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
 
@@ -33,13 +36,23 @@ def descriptors(rng: np.random.Generator, n_points: int) -> np.ndarray:
     return table / np.linalg.norm(table, axis=1, keepdims=True)
 
 
+#: The scenes' lens is the default one.
+FRONT_END = make_front_end(FeatureConfig(), CameraModel.default())
+
+
+def front_end(scene: CorridorScene) -> FrontEnd:
+    assert np.array_equal(scene.camera.K, FRONT_END.camera.K)
+    return FRONT_END
+
+
 def features(view: SceneView, table: np.ndarray) -> Features:
-    return Features(view.pixels_xy, table[view.point_ids], np.zeros(len(view.point_ids)))
+    return FRONT_END.features(view.pixels_xy, table[view.point_ids])
 
 
 def scrambled(f: Features, rng: np.random.Generator) -> Features:
     """The same corners with unrelated descriptors: ZNCC finds nothing."""
-    return Features(f.pixels_xy, descriptors(rng, len(f))[rng.permutation(len(f))], f.response)
+    return Features(f.pixels_xy, descriptors(rng, len(f))[rng.permutation(len(f))], f.response,
+                    f.bearings)
 
 
 def true_tracks(a: SceneView, b: SceneView) -> np.ndarray:
@@ -58,7 +71,7 @@ class TestKeyCorrespondences:
                                         ) -> None:
         table = descriptors(rng, len(scene.points_w))
         pairs = key_correspondences(features(scene.next, table), features(scene.previous, table),
-                                    MatchConfig(search_radius_px=None))
+                                    front_end(scene), MatchConfig(search_radius_deg=None))
         assert pairs.n_tracked == 0
         np.testing.assert_array_equal(scene.next.point_ids[pairs.idx_next],
                                       scene.previous.point_ids[pairs.idx_other])
@@ -70,7 +83,7 @@ class TestKeyCorrespondences:
         table = descriptors(rng, len(scene.points_w))
         tracks = true_tracks(scene.next, scene.previous)[::3]
         pairs = key_correspondences(features(scene.next, table), features(scene.previous, table),
-                                    MatchConfig(search_radius_px=None), tracks)
+                                    front_end(scene), MatchConfig(search_radius_deg=None), tracks)
         assert pairs.n_tracked == len(tracks)
         np.testing.assert_array_equal(pairs.idx_next[: len(tracks)], tracks[:, 0])
         np.testing.assert_array_equal(pairs.idx_other[: len(tracks)], tracks[:, 1])
@@ -87,18 +100,19 @@ class TestKeyCorrespondences:
         tracks = true_tracks(scene.next, scene.previous)
         pairs = key_correspondences(features(scene.next, table),
                                     scrambled(features(scene.previous, table), rng),
-                                    CONFIG.matching, tracks)
+                                    front_end(scene), CONFIG.matching, tracks)
         assert pairs.n_tracked == len(pairs.idx_next) == len(tracks)
 
     def test_bad_tracks(self, scene: CorridorScene, rng: np.random.Generator) -> None:
         table = descriptors(rng, len(scene.points_w))
         f_next, f_prev = features(scene.next, table), features(scene.previous, table)
+        fe, matching = front_end(scene), CONFIG.matching
         with pytest.raises(ShapeError, match="tracks_next_other"):
-            key_correspondences(f_next, f_prev, CONFIG.matching, np.zeros(4, np.int64))
+            key_correspondences(f_next, f_prev, fe, matching, np.zeros(4, np.int64))
         with pytest.raises(ValueError, match=r"column 1 must index the .* other key image"):
-            key_correspondences(f_next, f_prev, CONFIG.matching, [[0, len(f_prev)]])
+            key_correspondences(f_next, f_prev, fe, matching, [[0, len(f_prev)]])
         with pytest.raises(ValueError, match="column 0 must index"):
-            key_correspondences(f_next, f_prev, CONFIG.matching, [[-1, 0]])
+            key_correspondences(f_next, f_prev, fe, matching, [[-1, 0]])
 
 
 def run(scene: CorridorScene, rng: np.random.Generator, scramble_previous: bool = False,
@@ -108,10 +122,10 @@ def run(scene: CorridorScene, rng: np.random.Generator, scramble_previous: bool 
     if scramble_previous:
         f_prev = scrambled(f_prev, rng)
     segment = key_segment_from_key_images(
-        features(scene.next, table), f_prev, scene.odom_next, scene.odom_previous, scene.camera,
+        features(scene.next, table), f_prev, scene.odom_next, scene.odom_previous, front_end(scene),
         scene.mount, rng, CONFIG, tracks,
     )
-    return segment, state_from_frame(features(scene.current, table), segment, scene.camera,
+    return segment, state_from_frame(features(scene.current, table), segment, front_end(scene),
                                      scene.mount, rng, CONFIG)
 
 
@@ -154,10 +168,10 @@ class TestStateFromFrame:
         table = descriptors(rng, len(scene.points_w))
         segment = key_segment_from_key_images(
             features(scene.next, table), features(scene.previous, table), scene.odom_next,
-            scene.odom_previous, scene.camera, scene.mount, rng, CONFIG,
+            scene.odom_previous, front_end(scene), scene.mount, rng, CONFIG,
         )
-        result = state_from_frame(Features.empty(11), segment, scene.camera, scene.mount, rng,
-                                  CONFIG)
+        result = state_from_frame(Features.empty(121), segment, front_end(scene), scene.mount,
+                                  rng, CONFIG)
         assert not result.state.ok and result.matches == 0
         assert result.image_errors.err_image_max_px == np.inf
 
@@ -168,5 +182,5 @@ class TestStateFromFrame:
         with pytest.raises(DegenerateGeometryError, match="apart by odometry"):
             key_segment_from_key_images(
                 features(scene.next, table), features(scene.previous, table), scene.odom_next,
-                scene.odom_next, scene.camera, scene.mount, rng, CONFIG,
+                scene.odom_next, front_end(scene), scene.mount, rng, CONFIG,
             )

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from robot.config import FeatureConfig, PathStateConfig
-from robot.vision.features import Features, detect_harris
+from robot.vision.features import Features
 from robot.vision.frame_state import key_segment_from_key_images, state_from_frame
-from robot.vision.lens_mask import lens_mask
+from robot.vision.front_end import make_front_end
 from robot.vision.path_state import PathState
 from shared.camera_model import CameraModel
 from shared.pose import Pose2
@@ -25,6 +25,7 @@ from sim.synthetic.corridor_scene import compose
 from sim.world import load_world
 
 CAMERA = CameraModel.default()
+FRONT_END = make_front_end(FeatureConfig(), CAMERA)
 #: Key images about 0.5 m apart (the teach default gives about two per metre).
 SPACING_M = 0.5
 
@@ -34,11 +35,10 @@ class _Views:
         self.config = SimConfig()
         self.sim = Simulation(load_world("lab"), self.config)
         self.renderer = FisheyeRenderer.for_simulation(self.sim, CAMERA)
-        self.mask = lens_mask(CAMERA)
 
     def features(self, pose: Pose2) -> Features:
         self.sim.place_robot(pose)
-        return detect_harris(self.renderer.render(self.sim).image, FeatureConfig(), self.mask)
+        return FRONT_END.describe(self.renderer.render(self.sim).image)
 
 
 @pytest.fixture(scope="module")
@@ -53,9 +53,9 @@ def _state(views: _Views, previous: Pose2, next_: Pose2, current: Pose2,
     # Teach odometry: the true poses with a 1 % scale error on the spacing. No teach
     # tracks: the key images are matched directly.
     odom_next = compose(previous, (1.01 * SPACING_M, 0.0, next_[2] - previous[2]))
-    segment = key_segment_from_key_images(f_next, f_prev, odom_next, previous, CAMERA, mount,
+    segment = key_segment_from_key_images(f_next, f_prev, odom_next, previous, FRONT_END, mount,
                                           rng, config)
-    return state_from_frame(f_cur, segment, CAMERA, mount, rng, config).state
+    return state_from_frame(f_cur, segment, FRONT_END, mount, rng, config).state
 
 
 def lab_state_errors(views: _Views, rng: np.random.Generator, segments: tuple[float, ...],

@@ -24,6 +24,20 @@ def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
     assert result["aggregate"]["paper+ff"]["lateral_rms_m_max"] == row["lateral_rms_m"]
 
 
+@pytest.mark.slow
+def test_the_repeat_runs_with_people_and_the_light_changed(short_demo, capsys) -> None:
+    _, out, _ = short_demo
+    code = main(["bench", "follow", "--seeds", "1", "--routes", "corridor", "--goal", "12",
+                 "--laws", "paper+ff", "--out", str(out.parent), "--people", "2",
+                 "--lighting", "scale=0.8,step=0.6@6"])
+    (row,) = json.loads(capsys.readouterr().out)["seeds"]
+    assert code == 0 and row["reached_goal"] and row["lateral_rms_m"] < 0.05
+    assert row["scene_change"] == {
+        "light_scale": 0.8, "lamps_switched_off": 0, "daylight_hour": None,
+        "light_step": {"factor": 0.6, "at_s": 6.0}, "moved_fraction": 0.0, "objects_moved": 0,
+        "objects_left_in_place": 0, "pictures_removed": 0, "objects_removed": 0, "doors": {}}
+
+
 @pytest.mark.parametrize(("args", "message"), [
     (["--laws", "pid"], "unknown law 'pid'"),
     (["--seeds", "0"], "--seeds"),

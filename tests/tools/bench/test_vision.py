@@ -13,8 +13,9 @@ import math
 
 import pytest
 
+from robot.config import FeatureConfig
 from tests.tools.short_routes import write_short_routes_world
-from tools.bench.vision import TARGETS, target_figures
+from tools.bench.vision import PAPER_METHOD, TARGETS, target_figures
 from tools.cli import main
 
 RATES = ("localize_top1_rate",)
@@ -68,6 +69,18 @@ def test_failures_are_counted_not_dropped(result: dict) -> None:
         assert 0 <= pairs["key_pairs_not_ok"] <= pairs["key_pairs"]
     tracked = result["key_pairs"]["with_teach_tracks"]
     assert tracked["correspondences_min"] >= result["teach_tracks_per_key_image_median"] / 2
+
+
+@pytest.mark.slow
+def test_both_front_ends_are_measured(result: dict) -> None:
+    assert result["front_end"] == FeatureConfig().method
+    if result["front_end"] == PAPER_METHOD:
+        assert "paper_front_end" not in result
+    else:
+        paper = result["paper_front_end"]
+        assert paper["front_end"] == PAPER_METHOD
+        assert paper["state_queries"] == result["state_queries"]
+        assert set(paper["targets_met"]) == set(TARGETS)
 
 
 @pytest.mark.slow
