@@ -63,7 +63,7 @@ def take_snapshot(
     frame = renderer.render(sim)
     topdown = draw_topdown(sim, frame, camera.fov_deg)
 
-    summary = _summary(config, camera, sim, frame)
+    summary = _summary(config, camera, sim, renderer, frame)
     if renderer.effects.last is not None:
         reading = renderer.effects.last
         summary["sensor"] = {"exposure_ms": round(reading.exposure_s * 1e3, 3),
@@ -85,7 +85,11 @@ def take_snapshot(
 
 
 def _summary(
-    config: SimConfig, camera: CameraModel, sim: Simulation, frame: RenderedFrame
+    config: SimConfig,
+    camera: CameraModel,
+    sim: Simulation,
+    renderer: FisheyeRenderer,
+    frame: RenderedFrame,
 ) -> dict[str, Any]:
     x, y, yaw = frame.pose_w
     return {
@@ -94,7 +98,7 @@ def _summary(
         "t_ns": frame.t_ns,
         "pose_w": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_deg": round(math.degrees(yaw), 3)},
         "camera": {"width": camera.width, "height": camera.height, "fov_deg": camera.fov_deg},
-        "landmarks_total": int(sim.landmarks.ids.shape[0]),
+        "landmarks_total": renderer.landmark_count,
         "visible_landmarks": int(frame.visible_ids.shape[0]),
         "people": int(config.people.count),
         "illumination_gain": round(frame.illumination_gain, 4),
