@@ -18,7 +18,11 @@ from typing import TYPE_CHECKING
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
-from tools.harness.scene_args import add_change_arguments, scene_change_from_args
+from tools.harness.scene_args import (
+    add_change_arguments,
+    check_change_fits,
+    scene_change_from_args,
+)
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 if TYPE_CHECKING:
@@ -87,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     if routes is not None and not routes:
         raise InputError("--routes", "names no route")
     sim_config, camera = sim_config_from_args(args)
+    check_change_fits(change, sim_config)
     config = load_config(args.config)
     config = follow_config(config, args.law, args.max_omega_deg)
     out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
@@ -97,8 +102,8 @@ def run(args: argparse.Namespace) -> int:
         if routes is not None and len(routes) != 1:
             raise InputError("--routes", "--hil teaches one route")
         if not change.is_none:
-            raise InputError("--hil", "repeats in the taught world: --lighting and --moved are "
-                             "for the lock-step demo")
+            raise InputError("--hil", "repeats in the taught world: --lighting, --moved, "
+                             "--removed and --doors are for the lock-step demo")
         return run_hil_demo(out, config, sim_config, None if routes is None else routes[0])
     started = time.perf_counter()
     taught = taught_memory(out, routes, config, sim_config, camera)

@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.config import CONTROL_LAWS, load_config
     from shared.errors import InputError
     from tools.harness.demo import DEMO_MAX_OMEGA_DEG
-    from tools.harness.scene_args import scene_change_from_args
+    from tools.harness.scene_args import check_change_fits, scene_change_from_args
     from tools.harness.sim_args import sim_config_from_args
 
     if args.seeds < 1:
@@ -126,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--laws", f"unknown law {law!r} (known: {', '.join(CONTROL_LAWS)})")
     change = scene_change_from_args(args)
     sim_config, camera = sim_config_from_args(args)
+    check_change_fits(change, sim_config)
     config = load_config(args.config)
     plan = FollowBenchPlan(
         seeds=tuple(range(sim_config.seed, sim_config.seed + args.seeds)), laws=tuple(args.laws),

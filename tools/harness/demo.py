@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from sim.scene_change import ChangedWorld, SceneChange
     from sim.sim_camera import SimFrameSource
     from sim.simulation import Simulation
+    from sim.world import World
     from tools.harness.ground_dispatch import DispatchResult
     from tools.harness.teach import TaughtMemory
 
@@ -194,7 +195,6 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import VehicleFiles
     from shared.clock import WallClock
-    from sim.scene_change import change_world
     from sim.sim_camera import SimFrameSource
     from sim.sim_clock import SimClock
     from sim.simulation import Simulation
@@ -209,12 +209,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
     start = start_pose(taught)
     taught_world = load_world(sim_config.world)
-    try:
-        changed = change_world(taught_world, change,
-                               np.random.default_rng([sim_config.seed, _CHANGE_STREAM]),
-                               np.array([[start.x_m, start.y_m]]))
-    except ValueError as e:
-        raise InputError("scene change", str(e)) from None
+    changed = changed_world(taught_world, change, sim_config.seed, (start.x_m, start.y_m))
     sim = Simulation(changed.world, sim_config, landmark_world=taught_world)
     sim.light_gain_at = change.lighting.gain_at
     sim.place_robot(start)
@@ -244,6 +239,34 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     return RepeatRun(result=result, start_pose=start, goal_id=goal_id,
                      samples=tuple(watch.samples), sim_time_s=sim.now_ns / 1e9,
                      dispatch=dispatch, changed=changed)
+
+
+def changed_world(world: World, change: SceneChange, seed: int,
+                  keep_clear_xy: tuple[float, float] | None = None) -> ChangedWorld:
+    """The repeat's world: ``world`` after ``change``, drawn from the seed's scene-change
+    stream (so that the change leaves the repeat's other draws alone).
+
+    Called before teaching too, with no point kept clear, so that a change the world
+    cannot take is refused before minutes of teaching.
+
+    Args:
+        world: the world as taught.
+        change: what changed.
+        seed: the simulation's seed.
+        keep_clear_xy: (x, y) no moved object may come near (the repeat's start), m.
+
+    Raises:
+        InputError: the change does not fit the world (one line naming what).
+    """
+    import numpy as np
+
+    from sim.scene_change import change_world
+
+    keep = None if keep_clear_xy is None else np.array([keep_clear_xy], dtype=float)
+    try:
+        return change_world(world, change, np.random.default_rng([seed, _CHANGE_STREAM]), keep)
+    except ValueError as e:
+        raise InputError("scene change", str(e)) from None
 
 
 class _RepeatWatch:

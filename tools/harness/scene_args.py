@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 from shared.errors import InputError
 
 if TYPE_CHECKING:
+    from sim.config import SimConfig
     from sim.scene_change import LightingChange, SceneChange
 
 #: What ``--landmark-dropout`` (removed) is answered with.
@@ -80,6 +81,20 @@ def scene_change_from_args(args: argparse.Namespace) -> SceneChange:
             raise InputError(option, str(e)) from None
     return SceneChange(lighting=lighting, moved_fraction=args.moved,
                        removed_fraction=removed_fraction, removed=removed, doors=doors)
+
+
+def check_change_fits(change: SceneChange, sim_config: SimConfig) -> None:
+    """Refuse a change the world cannot take (no lamps, no such door, a door closed across
+    a route...) before minutes of teaching.
+
+    Raises:
+        InputError: one line naming what does not fit; ConfigError: a bad world.
+    """
+    from sim.world import load_world
+    from tools.harness.demo import changed_world
+
+    if not change.is_none:
+        changed_world(load_world(sim_config.world), change, sim_config.seed)
 
 
 def lighting_from_text(text: str) -> LightingChange:

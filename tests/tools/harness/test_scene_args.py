@@ -82,6 +82,9 @@ def test_the_options_make_one_scene_change() -> None:
     (["--removed", "2"], "--removed: removed fraction must be in [0, 1], got 2.0"),
     (["--removed", " , "], "--removed: names nothing"),
     (["--doors", "front=400"], "--doors: door 'front': opening must be in [-180, 180]"),
+    (["--doors", "nosuchdoor=open"], "scene change: world 'lab' has no door named 'nosuchdoor'"),
+    (["--removed", "nosuchthing"], "scene change: world 'lab' has no picture or object named "
+                                   "'nosuchthing'"),
     (["--landmark-dropout", "0.3"], "--landmark-dropout: was removed: the fiducial landmarks "
                                     "are gone; say what changed with --lighting, --moved, "
                                     "--removed, --doors and --people"),
