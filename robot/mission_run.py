@@ -155,7 +155,8 @@ class MissionRun:
         self._rng = rng
         self._stopwatch = stopwatch
         self._localizer = (localizer if localizer is not None else
-                           Localizer.from_memory(memory, config.features, config.localize))
+                           Localizer.from_memory(memory, config.camera.mount, config.features,
+                                                 config.localize))
         self._follower_config = FollowerConfig(
             features=config.features, path_state=config.path_state,
             estimator=config.estimator, switching=config.switching, control=config.control,
@@ -278,13 +279,11 @@ class MissionRun:
                   base: BaseState) -> Localization:
         found = self._localizer.localize(image)
         if not found.ok or found.keyframe_id is None:
-            detail = (f"best key image {found.keyframe_id} with {found.matches} matches "
-                      f"(need {self._config.localize.min_matches})")
+            detail = f"best {found.detail}"
             self._events.append(AppEvent(t_ns, "localization", "failed", detail))
             self._feed(LocalizationFailed(t_ns, detail))
             return found
-        self._events.append(AppEvent(t_ns, "localization", "ok",
-                                     f"key image {found.keyframe_id}, {found.matches} matches"))
+        self._events.append(AppEvent(t_ns, "localization", "ok", found.detail))
         goal_id = self._mission.goal_id
         assert goal_id is not None  # set by Start
         route = self._memory.plan_route(found.keyframe_id, goal_id)

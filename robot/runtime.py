@@ -144,7 +144,8 @@ class RobotRuntime:
         self._base = base
         self._clock = clock
         self._log = log
-        self._localizer = Localizer.from_memory(memory, config.features, config.localize)
+        self._localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
+                                                config.localize)
         self._worker = Worker(lockstep)
         self._requests: deque[Event] = deque()
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)

@@ -103,10 +103,8 @@ def find_photo(path: Path, localizer: Localizer, camera: CameraModel) -> Event:
     found = localizer.localize(photo)
     if not found.ok or found.keyframe_id is None:
         return PhotoNotFound(logging.WARNING,
-                             f"photo {path.name}: not in the memory (best key image "
-                             f"{found.keyframe_id}, {found.matches} matches)")
-    return PhotoFound(found.keyframe_id, f"photo {path.name}: key image {found.keyframe_id} "
-                                         f"({found.matches} matches), going there")
+                             f"photo {path.name}: not in the memory (best {found.detail})")
+    return PhotoFound(found.keyframe_id, f"photo {path.name}: {found.detail}, going there")
 
 
 def store_path(memory_dir: Path, camera: CameraModel, name: str,
@@ -137,11 +135,14 @@ def store_path(memory_dir: Path, camera: CameraModel, name: str,
         memory = (read_memory(memory_dir) if (memory_dir / "manifest.json").exists()
                   else VisualMemory(camera))
         path = memory.add_path(name, list(records))
-        attempts = join_path(memory, path, config.features, config.localize, teach)
+        attempts = join_path(memory, path, config.camera.mount, config.features,
+                             config.localize, teach)
         write_memory(memory_dir, memory)
     except (VmnavError, OSError) as e:
         return PathNotStored(f"teach {name!r} not stored: {e}")
     joined = sum(a.accepted for a in attempts)
-    return PathStored(memory, Localizer.from_memory(memory, config.features, config.localize),
+    localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
+                                      config.localize)
+    return PathStored(memory, localizer,
                       f"path {path.id} {name!r}: {len(records)} key images, "
                       f"{joined} junction(s)")

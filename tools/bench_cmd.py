@@ -169,6 +169,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     real.add_argument("--repeats", type=int, default=10, metavar="N",
                       help="timed runs of each front end on the pair [default: 10]")
     real.set_defaults(run=runner("real"))
+    chance = bench_sub.add_parser("chance", help="issue 16: pairs of unrelated real images "
+                                  "through localization's acceptance test (target: none pass)")
+    chance.add_argument("--realdata", type=Path, metavar="DIR", help="real image sets' folder")
+    chance.add_argument("--config", metavar="FILE", help="vmnav TOML config")
+    chance.set_defaults(run=runner("chance"))
     # Registered last: ``all`` runs what ``bench_sub.choices`` holds when it runs.
     every = bench_sub.add_parser(
         "all",

@@ -11,9 +11,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    import numpy as np
-    import numpy.typing as npt
-
     from shared.memory import VisualMemory
 
 
@@ -21,11 +18,11 @@ def add_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     """Register ``vmnav memory localize DIR IMAGE.png``."""
     localize = memory_sub.add_parser(
         "localize",
-        help="the key image of a memory that an image shows, its matches and the time taken",
+        help="the key image of a memory that an image shows, its scores and the time taken",
         description="Localize IMAGE (a grey or colour 8-bit image of the memory camera's size) "
         "in the visual memory in DIR: a global prefilter over every key image, then Harris + "
-        "ZNCC matching on the best candidates; the key image with the most matches wins "
-        "(Courbon et al. 2008, sec. II-D). Prints it, its match count and the time taken.",
+        "ZNCC matching and a relative pose on the best candidates; the key image verified "
+        "with the most inliers wins. Prints it, its matches and inliers and the time taken.",
     )
     localize.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
     localize.add_argument("image", type=Path, metavar="IMAGE", help="the query image (PNG, ...)")
@@ -47,29 +44,23 @@ def run_localize(args: argparse.Namespace) -> int:
 
     from robot.config import load_config
     from robot.memory import Localizer
+    from robot.memory.localize_report import localization_json, read_query_image
     from shared.memory import read_memory
 
     config = load_config(args.config)
     memory = read_memory(args.directory)
     image = read_query_image(args.image, memory.camera.width, memory.camera.height)
     t0 = time.perf_counter()
-    localizer = Localizer.from_memory(memory, config.features, config.localize)
+    localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
+                                      config.localize)
     t1 = time.perf_counter()
     result = localizer.localize(image)
     t2 = time.perf_counter()
-    report: dict[str, object] = {
-        "keyframe_id": result.keyframe_id,
-        "matches": result.matches,
-        "ok": result.ok,
+    report: dict[str, Any] = {
+        **localization_json(memory, result),
         "localize_ms": round((t2 - t1) * 1e3, 2),
         "build_ms": round((t1 - t0) * 1e3, 2),
         "keyframes": len(memory.keyframes),
-        "query_features": result.query_features,
-        "candidates": [
-            {"keyframe_id": c.keyframe_id, "similarity": round(c.similarity, 4),
-             "matches": c.matches}
-            for c in result.candidates
-        ],
     }
     if args.exhaustive:
         t3 = time.perf_counter()
@@ -77,41 +68,12 @@ def run_localize(args: argparse.Namespace) -> int:
         report["exhaustive"] = {
             "keyframe_id": baseline.keyframe_id,
             "matches": baseline.matches,
+            "inliers": baseline.inliers,
+            "ok": baseline.ok,
             "localize_ms": round((time.perf_counter() - t3) * 1e3, 2),
         }
     print(json.dumps(report, indent=2) if args.json else localize_text(memory, report))
     return 0
-
-
-def read_query_image(path: Path, width: int, height: int) -> npt.NDArray[np.uint8]:
-    """An 8-bit image file as a grey (height, width) array (colour is converted to grey).
-
-    Raises:
-        InputError: the file is missing, unreadable, not an 8-bit image or not
-            ``width`` x ``height`` px.
-    """
-    import cv2
-    import numpy as np
-
-    from shared.errors import InputError
-
-    if not path.is_file():
-        raise InputError(path, "no such image file")
-    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    if image is None or image.size == 0:
-        raise InputError(path, "cannot be decoded as an image")
-    if image.dtype != np.uint8:
-        raise InputError(path, f"expected 8-bit pixels, got {image.dtype}")
-    if image.ndim == 3:
-        code = cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        image = cv2.cvtColor(image, code)
-    if image.shape != (height, width):
-        raise InputError(
-            path,
-            f"is {image.shape[1]}x{image.shape[0]} px; the memory's camera takes "
-            f"{width}x{height} px",
-        )
-    return image
 
 
 def localize_text(memory: VisualMemory, report: dict[str, Any]) -> str:
@@ -121,17 +83,20 @@ def localize_text(memory: VisualMemory, report: dict[str, Any]) -> str:
         return "the memory has no key images"
     keyframe = memory.keyframes[keyframe_id]
     path = memory.paths[keyframe.path_id]
-    verdict = "" if report["ok"] else " (too few matches: not localized)"
+    verdict = "" if report["ok"] else f" ({report['verdict']}: not localized)"
+    verified = sum(c["verdict"] is not None for c in report["candidates"])
     lines = [
         f"key image {keyframe_id} (path {path.id} {path.name!r}, index {keyframe.index}, "
-        f"{keyframe.distance_m:.2f} m along): {report['matches']} matches{verdict}",
+        f"{keyframe.distance_m:.2f} m along): {report['matches']} matches, "
+        f"{report['inliers']} verified inliers{verdict}",
         f"  {report['localize_ms']:.1f} ms for {report['keyframes']} key images "
-        f"({len(report['candidates'])} verified; localizer built in {report['build_ms']:.1f} ms)",
+        f"({len(report['candidates'])} matched, {verified} verified; localizer built in "
+        f"{report['build_ms']:.1f} ms)",
     ]
     if "exhaustive" in report:
         e = report["exhaustive"]
         lines.append(
             f"  exhaustive (every key image): key image {e['keyframe_id']} with {e['matches']} "
-            f"matches in {e['localize_ms']:.1f} ms"
+            f"matches, {e['inliers']} verified inliers in {e['localize_ms']:.1f} ms"
         )
     return "\n".join(lines)

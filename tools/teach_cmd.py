@@ -86,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         log_stats = None if teach_log is None else teach_log.close()
     path = memory.add_path(route.name, [k.record for k in taught.key_images])
-    attempts = join_path(memory, path, config.features, config.localize, config.teach)
+    attempts = join_path(memory, path, config.camera.mount, config.features, config.localize,
+                  config.teach)
     write_memory(args.memory, memory)
     wall_s = time.perf_counter() - started
     print(summary_text(taught, path, memory, attempts, config, args.memory, wall_s))

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import argparse
 
-from tools import vision_pair_cmd
+from tools import vision_localize_cmd, vision_pair_cmd
 
 #: The modules of the subcommands, each with ``add_parser(vision_sub)``.
-SUBCOMMANDS = (vision_pair_cmd,)
+SUBCOMMANDS = (vision_pair_cmd, vision_localize_cmd)
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -115,6 +115,12 @@ MOVED_TABLES: tuple[tuple[str, str, str], ...] = (
      "the camera mount is the robot's; a simulation places its camera there too"),
     ("teach_driver", f"{SIM_TABLE}.teach_driver", "the scripted teach driver is the simulator's"),
 )
+#: Keys that no longer exist: the old dotted key and what replaced it, and why.
+REPLACED_KEYS: tuple[tuple[str, str], ...] = (
+    ("localize.min_matches",
+     "localize.min_inliers and localize.min_inlier_ratio (a key image is accepted on the "
+     "inliers of a relative pose, never on a match count)"),
+)
 
 
 def load_config(path: str | Path | None) -> VmnavConfig:
@@ -123,7 +129,8 @@ def load_config(path: str | Path | None) -> VmnavConfig:
     Raises:
         ConfigError: naming the file, table and key at fault; a table of
             :data:`MOVED_TABLES` names where it lives now, a pixel-valued vision key
-            (:data:`robot.config.vision.RENAMED_VISION_KEYS`) its angle.
+            (:data:`robot.config.vision.RENAMED_VISION_KEYS`) its angle, a key of
+            :data:`REPLACED_KEYS` what replaced it.
     """
     if path is None:
         return VmnavConfig()
@@ -135,6 +142,9 @@ def load_config(path: str | Path | None) -> VmnavConfig:
     if renamed is not None:
         raise ConfigError(path, f"{renamed[0]}: renamed to {renamed[1]} (vision windows are "
                                 "angles on the sphere now, docs/front-end.md)")
+    for old, new in REPLACED_KEYS:
+        if _lookup(data, old) is not None:
+            raise ConfigError(path, f"{old}: no longer exists, replaced by {new}")
     return from_mapping(VmnavConfig, {k: v for k, v in data.items() if k != SIM_TABLE},
                         str(path))
 
@@ -146,7 +156,8 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
     too (``sim``, ``teach_driver``) and the camera mount in ``sim.camera``: the mount
     becomes ``camera.mount`` and the simulator's tables, which the robot never used,
     are dropped, so such a log replays as it ran. Vision windows logged in pixels
-    become the angles they were on the default lens (:func:`migrate_vision_keys`).
+    become the angles they were on the default lens (:func:`migrate_vision_keys`). Keys
+    of :data:`REPLACED_KEYS` are dropped: their replacements take their defaults.
 
     Raises:
         ConfigError: a key unknown in both layouts, a bad value (at ``key_path``).
@@ -159,7 +170,22 @@ def config_from_log(data: Mapping[str, Any], source: str, key_path: str) -> Vmna
         if isinstance(sim, Mapping) and "camera" in sim and isinstance(camera, Mapping):
             old["camera"] = {**camera, "mount": sim["camera"]}
         data = old
+    for dotted, _ in REPLACED_KEYS:
+        data = _without(data, dotted)
     return from_mapping(VmnavConfig, migrate_vision_keys(data), source, key_path)
+
+
+def _without(data: Mapping[str, Any], dotted: str) -> Mapping[str, Any]:
+    """``data`` without the dotted key ``dotted`` (copied where it changes)."""
+    head, _, rest = dotted.partition(".")
+    if head not in data:
+        return data
+    if not rest:
+        return {k: v for k, v in data.items() if k != head}
+    inner = data[head]
+    if not isinstance(inner, Mapping):
+        return data
+    return {**data, head: _without(inner, rest)}
 
 
 def _lookup(data: Mapping[str, Any], dotted: str) -> Any:

@@ -1,6 +1,7 @@
 """The robot's use of the visual memory: localization of a view among the key images
-(:mod:`.localize`), joining a new path to the others (:mod:`.junctions`), and a path built
-from a recorded teach drive (:mod:`.path_from_log`, ``vmnav memory build``)."""
+(:mod:`.localize`), accepted on geometric verification (:mod:`.verification`), joining a
+new path to the others (:mod:`.junctions`), and a path built from a recorded teach drive
+(:mod:`.path_from_log`, ``vmnav memory build``)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,15 @@ from robot.memory.localize import (
     Localization,
     Localizer,
     localize,
+    verify_matches,
 )
+from robot.memory.verification import Verification
 
-__all__ = ["Candidate", "Localization", "Localizer", "localize"]
+__all__ = [
+    "Candidate",
+    "Localization",
+    "Localizer",
+    "Verification",
+    "localize",
+    "verify_matches",
+]

@@ -29,6 +29,7 @@ from pathlib import Path
 
 from robot.config import FeatureConfig, LocalizeConfig, TeachConfig
 from robot.memory.localize import Localizer
+from shared.config import CameraMountConfig
 from shared.memory import Junction, VisualMemory, VisualPath
 
 
@@ -37,6 +38,7 @@ class JunctionOutcome(enum.Enum):
 
     JOINED = "joined"  #: a junction to add
     TOO_FEW_MATCHES = "too few matches"  #: below the threshold: not the same place
+    NOT_VERIFIED = "not verified"  #: refused by localization's geometric verification
     ALREADY_JOINED = "already joined to that path"  #: one of the two is linked to the other's path
 
 
@@ -72,15 +74,16 @@ class JunctionAttempt:
         return Junction(from_id=self.end_id, to_id=self.best_id, matches=self.matches)
 
 
-def join_path(memory: VisualMemory, path: VisualPath, feature_config: FeatureConfig,
-              localize_config: LocalizeConfig, teach_config: TeachConfig) -> list[JunctionAttempt]:
+def join_path(memory: VisualMemory, path: VisualPath, mount: CameraMountConfig,
+              feature_config: FeatureConfig, localize_config: LocalizeConfig,
+              teach_config: TeachConfig) -> list[JunctionAttempt]:
     """Localize the new path's ends in the memory (and the others' along it) and add the
     junctions found (:func:`junction_attempts` with ``teach_config.junction_min_matches``).
 
     Returns:
         Every attempt, the accepted ones added to ``memory``.
     """
-    attempts = junction_attempts(memory, path.id, feature_config, localize_config,
+    attempts = junction_attempts(memory, path.id, mount, feature_config, localize_config,
                                  teach_config.junction_min_matches)
     for attempt in attempts:
         if attempt.accepted:
@@ -91,6 +94,7 @@ def join_path(memory: VisualMemory, path: VisualPath, feature_config: FeatureCon
 def junction_attempts(
     memory: VisualMemory,
     path_id: int,
+    mount: CameraMountConfig,
     feature_config: FeatureConfig,
     localize_config: LocalizeConfig,
     min_matches: int,
@@ -100,9 +104,11 @@ def junction_attempts(
     Args:
         memory: the memory holding the new path (and perhaps others).
         path_id: the new path.
+        mount: where the camera sits on the robot (for the geometric verification).
         feature_config: corner detection, as when the memory was taught.
         localize_config: the localization parameters.
-        min_matches: an end joins a key image with at least this many matches.
+        min_matches: an end joins a key image with at least this many matches (and
+            only if localization's geometric verification accepts it).
 
     Returns:
         One attempt per end localized: the new path's two ends (one if it has a
@@ -123,14 +129,17 @@ def junction_attempts(
         for end in _ends(other.keyframe_ids)
     ]
     found: list[tuple[int, int | None, int]] = []
+    verified: list[bool] = []
     for ends, candidates in (
         (_ends(path.keyframe_ids), others),
         (other_ends, list(path.keyframe_ids)),
     ):
-        localizer = Localizer.from_memory(memory, feature_config, localize_config, candidates)
+        localizer = Localizer.from_memory(memory, mount, feature_config, localize_config,
+                                          candidates)
         for end in ends:
             result = localizer.localize(memory.keyframe(end).image)
             found.append((end, result.keyframe_id, result.matches))
+            verified.append(result.ok)
     all_ends = {e for p in memory.paths.values() for e in _ends(p.keyframe_ids)}
     links = {link for j in memory.junctions for link in _links(memory, j.from_id, j.to_id)}
     outcomes = [JunctionOutcome.TOO_FEW_MATCHES] * len(found)
@@ -139,6 +148,9 @@ def junction_attempts(
     ):
         end, best, matches = found[k]
         if best is None or matches < min_matches:
+            continue
+        if not verified[k]:
+            outcomes[k] = JunctionOutcome.NOT_VERIFIED
             continue
         new_links = _links(memory, end, best)
         if links.isdisjoint(new_links):

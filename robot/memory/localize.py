@@ -5,8 +5,10 @@ image are matched. The distance between these images is the inverse of the
 number of matched points", and the key image with the most matches is the
 localization result (sec. IV: 306 matches, 6.5 s against 280 key images).
 
-That rule costs one full matching per key image. Here it is kept as the final
-decision but applied to a few candidates picked by a cheap global prefilter:
+That rule costs one full matching per key image, and on real images a match
+count cannot tell places apart (unrelated views share a median 30 chance
+matches, issue 16). Here a cheap global prefilter picks a few candidates and
+each is verified geometrically:
 
 1. **Prefilter** (vectorised over the whole memory, descriptors precomputed
    once in :class:`Localizer`). Each key image's 80x60 thumbnail is patch
@@ -17,14 +19,18 @@ decision but applied to a few candidates picked by a cheap global prefilter:
    unit-normalised. The query's descriptor is compared shifted sideways by up to
    ``prefilter_max_shift_px`` (a turn of the robot shifts the view): similarity =
    the best cosine over the shifts, one (S, D) x (D, N) product.
-2. **Verification**: Harris corners of the query matched by ZNCC with the
-   mutual-best check (no search window by default) against the
-   ``candidates`` most similar key images' stored corners; the winner has the
-   most matches (ties: the more similar thumbnail). It is a localization
-   (``ok``) with at least ``min_matches``.
+2. **Verification**: the query's features (:mod:`robot.vision.front_end`, the
+   ``[features]`` method) matched with the mutual-best check (no search window by
+   default) against the ``candidates`` most similar key images' stored features; the
+   matched bearings are rotated into the mount's level frame and a relative pose is fitted
+   (:mod:`robot.memory.verification`). A candidate is accepted on enough inliers,
+   a high enough inlier ratio and a motion a ground robot can make. The accepted
+   candidate with the most inliers wins (ties: the more similar thumbnail); the
+   result is a localization (``ok``) only if one was accepted.
 
-:meth:`Localizer.localize_exhaustive` applies the paper's rule to every key
-image, the baseline the benchmark compares speed and answers with.
+:meth:`Localizer.localize_exhaustive` applies the paper's rule (most matches) to
+every key image and verifies its winner, the baseline the benchmark compares speed
+and answers with.
 """
 
 from __future__ import annotations
@@ -37,9 +43,13 @@ import numpy as np
 import numpy.typing as npt
 
 from robot.config import FeatureConfig, LocalizeConfig
+from robot.memory.verification import Verification, verify_bearings
 from robot.vision.features import Features, GreyImage
 from robot.vision.front_end import make_front_end
+from robot.vision.matching import Matches
 from shared.camera_model import CameraModel
+from shared.camera_mount import rotation_level_cam
+from shared.config import CameraMountConfig
 from shared.memory import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,
@@ -56,17 +66,30 @@ _NORMALISE_EPS = 2.0
 
 @dataclass(frozen=True, slots=True)
 class Candidate:
-    """A key image verified by full matching.
+    """A key image matched with the query, and its geometric verification.
 
     Attributes:
         keyframe_id: the key image.
         similarity: the prefilter's score, cosine in [-1, 1] (nan when not prefiltered).
-        matches: ZNCC matches with the query (the paper's rule).
+        matches: matches with the query (the front end's method).
+        verification: the relative pose's inliers and the verdict; None when not
+            verified (the exhaustive baseline verifies only its winner).
     """
 
     keyframe_id: int
     similarity: float
     matches: int
+    verification: Verification | None
+
+    @property
+    def inliers(self) -> int:
+        """Verified inliers (0 when not verified)."""
+        return 0 if self.verification is None else self.verification.inliers
+
+    @property
+    def accepted(self) -> bool:
+        """Whether the verification accepted this key image as the query's place."""
+        return self.verification is not None and self.verification.accepted
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,20 +97,39 @@ class Localization:
     """Where a query image is in the memory.
 
     Attributes:
-        keyframe_id: the candidate with the most matches; None when there were no
-            key images to compare with.
+        keyframe_id: the best candidate (accepted, then most inliers); None when
+            there were no key images to compare with.
         matches: its number of matches (0 when ``keyframe_id`` is None).
-        ok: whether ``matches`` reaches ``LocalizeConfig.min_matches``.
-        candidates: the verified key images, most similar thumbnail first (all key
-            images, in id order, for the exhaustive baseline).
-        query_features: corners found in the query.
+        inliers: its verified inliers (0 when ``keyframe_id`` is None).
+        ok: whether it passed the geometric verification (a localization).
+        candidates: the key images matched, best first: accepted ones, then by
+            inliers, then by matches (equal ones in prefilter order; all key images
+            in id order for the exhaustive baseline).
+        query_features: features found in the query.
     """
 
     keyframe_id: int | None
     matches: int
+    inliers: int
     ok: bool
     candidates: tuple[Candidate, ...]
     query_features: int
+
+    @property
+    def verdict(self) -> str:
+        """The winner's verdict (:mod:`robot.memory.verification`), or why there is none."""
+        winner = next((c for c in self.candidates if c.keyframe_id == self.keyframe_id), None)
+        if winner is None or winner.verification is None:
+            return "no key images"
+        return winner.verification.verdict
+
+    @property
+    def detail(self) -> str:
+        """One line for people: the best key image, its scores and the verdict."""
+        if self.keyframe_id is None:
+            return "no key images to compare with"
+        return (f"key image {self.keyframe_id}: {self.matches} matches, {self.inliers} verified "
+                f"inliers ({self.verdict})")
 
 
 class Localizer:
@@ -95,7 +137,7 @@ class Localizer:
 
     Building it precomputes the prefilter's descriptors (one pass over the
     thumbnails); each query then costs one corner detection, one matrix product
-    and ``config.candidates`` matchings.
+    and ``config.candidates`` matchings and relative pose fits.
 
     Args:
         keyframe_ids: (N,) ids of the key images.
@@ -103,8 +145,12 @@ class Localizer:
             (:func:`shared.memory.thumbnail_from_image`), in the same order.
         features: their Harris corners and ZNCC patches, in the same order.
         camera: the camera of the key images and of the queries.
+        mount: where that camera sits on the robot (its level frame is where the
+            verification measures yaw and tilt).
         feature_config: how corners are detected in queries (as in the key images).
         config: prefilter and verification parameters.
+        seed: seeds the verification's RANSAC afresh for every query, so that one
+            image always gets the same answer.
 
     Raises:
         ValueError: the three sequences differ in length, or a thumbnail has the wrong shape.
@@ -116,8 +162,10 @@ class Localizer:
         thumbnails: Sequence[GreyImage],
         features: Sequence[Features],
         camera: CameraModel,
+        mount: CameraMountConfig,
         feature_config: FeatureConfig,
         config: LocalizeConfig,
+        seed: int = 0,
     ) -> None:
         if not len(keyframe_ids) == len(thumbnails) == len(features):
             raise ValueError(
@@ -127,8 +175,10 @@ class Localizer:
         self._ids = tuple(int(i) for i in keyframe_ids)
         self._features = tuple(features)
         self._camera = camera
+        self._R_level_cam = rotation_level_cam(mount)
         self._front_end = make_front_end(feature_config, camera)
         self._config = config
+        self._seed = seed
         self._mask = self._front_end.mask
         self._prefilter = _Prefilter(self._mask, config)
         self._descriptors = self._prefilter.describe_all(thumbnails)
@@ -137,6 +187,7 @@ class Localizer:
     def from_memory(
         cls,
         memory: VisualMemory,
+        mount: CameraMountConfig,
         feature_config: FeatureConfig,
         config: LocalizeConfig,
         keyframe_ids: Iterable[int] | None = None,
@@ -154,6 +205,7 @@ class Localizer:
             [k.thumbnail for k in keyframes],
             [front_end.features_from_keyframe(k) for k in keyframes],
             memory.camera,
+            mount,
             feature_config,
             config,
         )
@@ -163,61 +215,74 @@ class Localizer:
         """The key images this localizer chooses from."""
         return self._ids
 
-    def localize(self, image: GreyImage) -> Localization:
-        """The key image that best fits ``image``: prefilter, then the paper's rule on candidates.
+    def localize(self, image: GreyImage, verify_all: bool = False) -> Localization:
+        """The key image that best fits ``image``: prefilter, then verification of the candidates.
+
+        Candidates are verified in order of their match counts, most first; one that
+        cannot beat the best accepted so far (no more matches than its inliers) is
+        left unverified unless ``verify_all``.
 
         Args:
             image: (H, W) uint8 grey query of the camera's size.
+            verify_all: verify every candidate (to show each one's scores).
 
         Raises:
             ValueError: the image has the wrong size or type, or is empty.
         """
         query = self._query_features(image)
         if not self._ids:
-            return Localization(None, 0, False, (), len(query))
+            return Localization(None, 0, 0, False, (), len(query))
         similarity = self._prefilter.similarity(thumbnail_from_image(image), self._descriptors)
         count = min(self._config.candidates, len(self._ids))
         # argpartition picks the best `count` in O(N); only those are sorted.
         best = np.argpartition(-similarity, count - 1)[:count]
         best = best[np.argsort(-similarity[best], kind="stable")]
-        return self._decide(query, best, similarity)
+        matches = [self._front_end.match(query, self._features[k], self._config.matching)
+                   for k in best]
+        verifications: list[Verification | None] = [None] * count
+        rng = np.random.default_rng(self._seed)
+        winner_inliers = -1
+        for i in sorted(range(count), key=lambda i: -len(matches[i])):
+            if not verify_all and len(matches[i]) <= winner_inliers:
+                break
+            verification = self._verify(query, int(best[i]), matches[i], rng)
+            verifications[i] = verification
+            if verification.accepted:
+                winner_inliers = max(winner_inliers, verification.inliers)
+        candidates = [
+            Candidate(self._ids[k], float(similarity[k]), len(m), v)
+            for k, m, v in zip(best, matches, verifications, strict=True)
+        ]
+        return _ranked(candidates, len(query))
 
     def localize_exhaustive(self, image: GreyImage) -> Localization:
-        """The paper's rule over every key image: the one with the most matches (the baseline).
+        """The paper's rule over every key image: the one with the most matches (the baseline),
+        verified alone.
 
         Raises:
             ValueError: the image has the wrong size or type, or is empty.
         """
         query = self._query_features(image)
         if not self._ids:
-            return Localization(None, 0, False, (), len(query))
-        return self._decide(query, np.arange(len(self._ids)), None)
+            return Localization(None, 0, 0, False, (), len(query))
+        matches = [self._front_end.match(query, f, self._config.matching) for f in self._features]
+        # argmax keeps the first of equals: ties go to the lower id.
+        k = int(np.argmax([len(m) for m in matches]))
+        verification = self._verify(query, k, matches[k], np.random.default_rng(self._seed))
+        candidates = [
+            Candidate(i, float("nan"), len(m), verification if j == k else None)
+            for j, (i, m) in enumerate(zip(self._ids, matches, strict=True))
+        ]
+        winner = candidates[k]
+        return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
+                            tuple(candidates), len(query))
 
-    def _decide(
-        self,
-        query: Features,
-        order: npt.NDArray[np.intp],
-        similarity: npt.NDArray[np.float32] | None,
-    ) -> Localization:
-        """Match ``query`` with the key images at positions ``order``; the most matches wins."""
-        candidates = tuple(
-            Candidate(
-                keyframe_id=self._ids[k],
-                similarity=float("nan") if similarity is None else float(similarity[k]),
-                matches=len(self._front_end.match(query, self._features[k],
-                                                  self._config.matching)),
-            )
-            for k in order
-        )
-        # max() keeps the first of equals: ties go to the more similar thumbnail.
-        winner = max(candidates, key=lambda c: c.matches)
-        return Localization(
-            keyframe_id=winner.keyframe_id,
-            matches=winner.matches,
-            ok=winner.matches >= self._config.min_matches,
-            candidates=candidates,
-            query_features=len(query),
-        )
+    def _verify(
+        self, query: Features, k: int, matches: Matches, rng: np.random.Generator
+    ) -> Verification:
+        """Verify ``matches`` of ``query`` with the key image at position ``k``."""
+        return verify_matches(query, self._features[k], matches, self._R_level_cam,
+                              self._config, rng)
 
     def _query_features(self, image: GreyImage) -> Features:
         image = np.asarray(image)
@@ -229,6 +294,40 @@ class Localizer:
                 f"dtype {image.dtype}",
             )
         return self._front_end.describe(image)
+
+
+def verify_matches(
+    query: Features,
+    key: Features,
+    matches: Matches,
+    R_level_cam: npt.NDArray[np.float64],
+    config: LocalizeConfig,
+    rng: np.random.Generator,
+) -> Verification:
+    """Localization's acceptance test of one query / key image pair (step 2 of the module
+    docstring): the matched points' bearings in the level frame, a relative pose judged.
+
+    Args:
+        query: the query's features (bearings through the camera model).
+        key: the key image's features (same camera).
+        matches: their matches (``idx_a`` into ``query``, ``idx_b`` into ``key``).
+        R_level_cam: (3, 3) camera -> level frame of the mount
+            (:func:`shared.camera_mount.rotation_level_cam`).
+        config: the acceptance thresholds.
+        rng: draws RANSAC's samples.
+    """
+    R = np.asarray(R_level_cam, dtype=np.float64)
+    return verify_bearings(query.bearings[matches.idx_a] @ R.T,
+                           key.bearings[matches.idx_b] @ R.T, rng, config)
+
+
+def _ranked(candidates: Sequence[Candidate], query_features: int) -> Localization:
+    """The localization of verified candidates in prefilter order (see :class:`Localization`)."""
+    # sorted(reverse=True) is stable: equals keep the prefilter's order (the more similar first).
+    ranked = sorted(candidates, key=lambda c: (c.accepted, c.inliers, c.matches), reverse=True)
+    winner = ranked[0]
+    return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
+                        tuple(ranked), query_features)
 
 
 class _Prefilter:
@@ -291,6 +390,7 @@ def _unit(rows: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
 def localize(
     memory: VisualMemory,
     image: GreyImage,
+    mount: CameraMountConfig,
     feature_config: FeatureConfig,
     config: LocalizeConfig,
 ) -> Localization:
@@ -299,10 +399,11 @@ def localize(
     Args:
         memory: the visual memory.
         image: (H, W) uint8 grey query of the memory camera's size.
+        mount: where the camera sits on the robot.
         feature_config: corner detection, as when the memory was taught.
         config: prefilter and verification parameters.
 
     Raises:
         ValueError: the image has the wrong size or type, or is empty.
     """
-    return Localizer.from_memory(memory, feature_config, config).localize(image)
+    return Localizer.from_memory(memory, mount, feature_config, config).localize(image)

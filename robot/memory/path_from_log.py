@@ -231,7 +231,8 @@ def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: st
         raise InputError(series_name(files), f"no camera frame lies within the odometry's span "
                          f"({frames.without_odometry} frames without a pose)")
     path = memory.add_path(name, [k.record for k in key_images])
-    attempts = join_path(memory, path, config.features, config.localize, config.teach)
+    attempts = join_path(memory, path, config.camera.mount, config.features, config.localize,
+                  config.teach)
     write_memory(directory, memory)
     return BuiltPath(path, files, tuple(key_images), frames.frames, frames.without_odometry,
                      tuple(attempts)), memory

@@ -63,7 +63,8 @@ def test_find_photo_refuses_a_bomb_with_a_notice(
     # allocated 2 GB for the second.
     camera = CameraModel.default()
     config = VmnavConfig()
-    localizer = Localizer.from_memory(VisualMemory(camera), config.features, config.localize)
+    localizer = Localizer.from_memory(VisualMemory(camera), config.camera.mount, config.features,
+                                      config.localize)
     path = tmp_path / "7.png"
     path.write_bytes(bomb())
     assert find_photo(path, localizer, camera) == PhotoNotFound(

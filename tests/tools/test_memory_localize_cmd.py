@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from shared.memory import write_memory
-from tests.robot.memory.textured import Place, make_places, memory_of
+from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
 from tools.cli import main
 
@@ -33,7 +33,13 @@ def memory_dir(tmp_path: Path, places: list[Place]) -> Path:
         {"west": [p.key_image for p in places[:3]], "east": [p.key_image for p in places[3:]]}
     )
     write_memory(tmp_path / "mem", memory)
-    (tmp_path / "vmnav.toml").write_text("[localize]\ncandidates = 3\nmin_matches = 10\n")
+    # The memory's front end (the paper's, sized for the small lens), and a localization.
+    features = (f'[features]\nmethod = "{FEATURES.method}"\n'
+                f"patch_size_deg = {FEATURES.patch_size_deg!r}\n"
+                f"min_distance_deg = {FEATURES.min_distance_deg!r}\n")
+    (tmp_path / "features.toml").write_text(features)
+    (tmp_path / "vmnav.toml").write_text(
+        features + "[localize]\ncandidates = 3\nmin_inliers = 10\n")
     return tmp_path / "mem"
 
 
@@ -54,29 +60,48 @@ class TestLocalize:
         assert code == 0, err
         first, second = out.splitlines()
         assert first.startswith("key image 4 (path 1 'east', index 1, 0.50 m along): ")
-        assert first.endswith(" matches") and "not localized" not in first
-        assert " ms for 6 key images (3 verified; localizer built in " in second
+        assert first.endswith(" verified inliers") and "not localized" not in first
+        assert " ms for 6 key images (3 matched, " in second
+        assert " verified; localizer built in " in second
 
     def test_json_and_the_exhaustive_baseline(
         self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
     ) -> None:
         query = query_file(memory_dir.parent, places[1].query)
         code, out, _ = run(
-            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json"], capsys
+            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json",
+             "--config", str(memory_dir.parent / "features.toml")], capsys
         )
         assert code == 0
         report = json.loads(out)
         assert report["keyframe_id"] == 1 and report["keyframes"] == 6
         assert report["exhaustive"]["keyframe_id"] == 1
         assert report["exhaustive"]["matches"] == report["matches"]
+        assert report["exhaustive"]["inliers"] == report["inliers"] > 0
+        assert report["ok"] and report["verdict"] == "accepted"
         assert report["localize_ms"] > 0 and len(report["candidates"]) == 6
+        best = report["candidates"][0]
+        assert best["keyframe_id"] == 1 and best["path"] == "west" and best["index"] == 1
+        assert best["inliers"] == report["inliers"] and best["verdict"] == "accepted"
+
+    def test_an_image_of_nowhere_is_not_localized(
+        self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
+    ) -> None:
+        other = make_places(np.random.default_rng(99), 1, small_camera())[0].query
+        query = query_file(memory_dir.parent, other)
+        config = str(memory_dir.parent / "vmnav.toml")
+        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--config",
+                            config], capsys)
+        assert code == 0
+        assert ": not localized)" in out.splitlines()[0]
 
     def test_a_colour_image_is_read_as_grey(
         self, memory_dir: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
     ) -> None:
         colour = cv2.cvtColor(places[2].query, cv2.COLOR_GRAY2BGR)
         query = query_file(memory_dir.parent, colour)
-        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json"], capsys)
+        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json",
+                            "--config", str(memory_dir.parent / "features.toml")], capsys)
         assert code == 0 and json.loads(out)["keyframe_id"] == 2
 
 

@@ -8,8 +8,11 @@ within 2 px of A's corner mapped through the true homography.
 
 Pipelines:
 
-* ``harris_zncc``: the paper's pipeline with the given configs (the default);
+* ``harris_zncc``: the paper's pipeline with the given configs (``method`` set to
+  ``harris-zncc``);
 * ``harris_zncc_integer``: the same without sub-pixel refinement;
+* ``orb``, ``teblid``, ``beblid``: the front end's bit-string methods (FAST corners on a
+  grid, upright descriptors), the same configs otherwise (``orb`` is the default);
 * ``orb500_bf_crosscheck``: OpenCV ORB (500) + brute-force Hamming with cross
   check, the reference's fastest descriptor pipeline, for comparison only.
 
@@ -82,10 +85,14 @@ def bench_features(
     features = features or FeatureConfig()
     matching = matching or MatchConfig()
     camera = _camera(width, height)
+    paper = dataclasses.replace(features, method="harris-zncc")
     pipelines = {
-        "harris_zncc": _front_end(make_front_end(features, camera), matching),
+        "harris_zncc": _front_end(make_front_end(paper, camera), matching),
         "harris_zncc_integer": _front_end(make_front_end(
-            dataclasses.replace(features, subpixel_half_window_px=0), camera), matching),
+            dataclasses.replace(paper, subpixel_half_window_px=0), camera), matching),
+        **{method: _front_end(make_front_end(dataclasses.replace(features, method=method),
+                                             camera), matching)
+           for method in ("orb", "teblid", "beblid")},
         "orb500_bf_crosscheck": _orb_bf(500),
     }
     rng = np.random.default_rng(seed)

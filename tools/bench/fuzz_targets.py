@@ -61,7 +61,7 @@ from shared.aria import (
 from shared.aria.commands import ArgType
 from shared.camera_model import CameraModel
 from shared.clock import NS_PER_S, ManualClock
-from shared.config import LogConfig
+from shared.config import CameraMountConfig, LogConfig
 from shared.errors import InputError
 from shared.logs import topics
 from shared.logs.reader import log_info, read_messages, recover
@@ -392,7 +392,8 @@ class PhotoTarget:
     def __init__(self, work: Path) -> None:
         memory = _tiny_memory(work / "memory")
         self.camera = memory.camera
-        self.localizer = Localizer.from_memory(memory, FeatureConfig(), LocalizeConfig())
+        self.localizer = Localizer.from_memory(memory, CameraMountConfig(), FeatureConfig(),
+                                               LocalizeConfig())
         image = memory.keyframe(0).image
         self.seeds = [cv2.imencode(ext, image)[1].tobytes() for ext in (".png", ".jpg")]
         self.path = work / "upload" / "1.png"

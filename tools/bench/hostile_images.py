@@ -174,7 +174,8 @@ def _child(photo: Path, seed: int) -> dict[str, object]:
     memory.add_path("scene", [KeyframeRecord(t_ns=0, odom_pose=(0.0, 0.0, 0.0), distance_m=0.0,
                                              image=image, pixels_xy=np.array(features.pixels_xy),
                                              patches=stored_descriptors(features))])
-    localizer = Localizer.from_memory(memory, config.features, config.localize)
+    localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
+                                      config.localize)
     rss_before_kb = status_kb("VmRSS")
     start = time.perf_counter()
     event = find_photo(photo, localizer, camera)

@@ -3,7 +3,8 @@
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
 6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
 input crashes or hangs a decoder, and every attack of ``bench hostile`` is met, 16: real
-images in ``bench real``; DESIGN.md sec. 6 gathers them). The simulator's, the vision
+images in ``bench real``, and unrelated real images never pass localization's acceptance
+test in ``bench chance``; DESIGN.md sec. 6 gathers them). The simulator's, the vision
 benchmark's, the real images' and the hostile parts' own modules hold theirs (their JSON
 prints them) and are read from there, not copied.
 
@@ -86,6 +87,9 @@ TARGETS: tuple[Target, ...] = (
     _follow("heading_rms_deg_max", "<=", 1.5),
     _follow("loop_ms_p50_median", "<", 20.0),
     Target("log", "log_overhead_core_fraction", "<", 0.10, "issue 7"),
+    Target("chance", "accepted", "<=", 0, "issue 16"),
+    Target("chance", "paper_front_end.accepted", "<=", 0, "issue 16"),
+    Target("vision", "localize_relit_top1_rate", ">=", 0.90, "issue 16"),
     Target("link", "dispatch_ack_ms_p95", "<", 50.0, "issue 6"),
     Target("link", "ground_cpu_fraction_20_vehicles", "<", 0.30, "issue 6"),
     *(Target("faults", f"{case}.passed", ">=", f"{case}.runs", "issue 8")

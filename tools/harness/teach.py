@@ -221,7 +221,8 @@ def teach_memory(
         taught = teach_in_sim(world, route, config, sim_config, camera)
         path = memory.add_path(route.name, [k.record for k in taught.key_images])
         if join:
-            join_path(memory, path, config.features, config.localize, config.teach)
+            join_path(memory, path, config.camera.mount, config.features, config.localize,
+                      config.teach)
         true_poses.update(zip(path.keyframe_ids, taught.true_poses, strict=True))
         path_ids.append(path.id)
         taught_routes.append(taught)

@@ -70,6 +70,10 @@ class TestLoadConfig:
             ("[teach_driver]\nspeed_m_s = 0.2\n",
              "teach_driver: moved to [sim.teach_driver] (the scripted teach driver is the "
              "simulator's)"),
+            ("[localize]\nmin_matches = 25\n",
+             "localize.min_matches: no longer exists, replaced by localize.min_inliers and "
+             "localize.min_inlier_ratio (a key image is accepted on the inliers of a relative "
+             "pose, never on a match count)"),
             ("[control\n", "not valid TOML"),
         ],
     )
@@ -120,6 +124,11 @@ class TestConfigFromLog:
         config = config_from_log(data, "log.mcap", "config")
         assert config.camera.mount == CameraMountConfig(x_m=0.3, pitch_deg=-7.5)
         assert config.camera.source == data["camera"]["source"]
+
+    def test_a_replaced_key_is_dropped(self) -> None:
+        data = dataclasses.asdict(VmnavConfig())
+        data["localize"] = {**data["localize"], "min_matches": 25}
+        assert config_from_log(data, "log.mcap", "config") == VmnavConfig()
 
     def test_a_key_unknown_in_both_layouts_is_refused(self) -> None:
         data = {**old_layout(), "warp_drive": {}}

@@ -7,12 +7,14 @@ import pytest
 
 from robot.config import LocalizeConfig
 from robot.memory.junctions import JunctionAttempt, JunctionOutcome, junction_attempts
+from shared.config import CameraMountConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
 
-CONFIG = LocalizeConfig(candidates=4, min_matches=10)
+CONFIG = LocalizeConfig(candidates=4, min_inliers=10)
 MIN_MATCHES = 20  # the synthetic places share at most 15 chance matches
+MOUNT = CameraMountConfig()
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +23,7 @@ def places() -> list[Place]:
 
 
 def attempts_of(memory: VisualMemory, path_id: int) -> list[JunctionAttempt]:
-    return junction_attempts(memory, path_id, FEATURES, CONFIG, MIN_MATCHES)
+    return junction_attempts(memory, path_id, MOUNT, FEATURES, CONFIG, MIN_MATCHES)
 
 
 def accepted_pairs(attempts: list[JunctionAttempt]) -> list[set[int]]:

@@ -11,11 +11,13 @@ import pytest
 from robot.config import LocalizeConfig
 from robot.memory import Localizer, localize
 from robot.vision.front_end import make_front_end
+from shared.config import CameraMountConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
 from tests.shared.memory.builders import small_camera
 
-CONFIG = LocalizeConfig(candidates=4, min_matches=10)
+CONFIG = LocalizeConfig(candidates=4, min_inliers=10)
+MOUNT = CameraMountConfig()
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +35,7 @@ def memory(places: list[Place]) -> VisualMemory:
 
 @pytest.fixture(scope="module")
 def localizer(memory: VisualMemory) -> Localizer:
-    return Localizer.from_memory(memory, FEATURES, CONFIG)
+    return Localizer.from_memory(memory, MOUNT, FEATURES, CONFIG)
 
 
 class TestLocalize:
@@ -41,14 +43,26 @@ class TestLocalize:
         self, places: list[Place], localizer: Localizer
     ) -> None:
         for place_id, place in enumerate(places):
-            result = localizer.localize(place.query)
-            assert result.keyframe_id == place_id
-            runner_up = sorted(c.matches for c in result.candidates)[-2]
-            assert result.ok and result.matches >= 2 * runner_up
-            assert len(result.candidates) == CONFIG.candidates
-            similarities = [c.similarity for c in result.candidates]
-            assert similarities == sorted(similarities, reverse=True)
-            assert result.matches == max(c.matches for c in result.candidates)
+            result = localizer.localize(place.query, verify_all=True)
+            assert result.keyframe_id == place_id and result.ok
+            assert result.verdict == "accepted"
+            winner, *others = result.candidates
+            assert winner.keyframe_id == place_id and winner.accepted
+            assert result.inliers == winner.inliers >= 0.5 * winner.matches
+            assert len(others) == CONFIG.candidates - 1
+            assert not any(c.accepted for c in others)
+            assert result.inliers >= 2 * max(c.inliers for c in others)
+
+    def test_candidates_that_cannot_win_are_not_verified(
+        self, places: list[Place], localizer: Localizer
+    ) -> None:
+        result = localizer.localize(places[6].query)
+        assert result.keyframe_id == 6 and result.ok
+        for c in result.candidates[1:]:
+            assert c.verification is None or not c.accepted
+            if c.verification is None:
+                assert c.matches <= result.inliers
+        assert "key image 6:" in result.detail and "(accepted)" in result.detail
 
     def test_a_key_image_is_its_own_best_thumbnail(
         self, places: list[Place], localizer: Localizer
@@ -56,6 +70,8 @@ class TestLocalize:
         result = localizer.localize(places[3].key_image)
         assert result.candidates[0].keyframe_id == 3
         assert result.candidates[0].similarity == pytest.approx(1.0, abs=1e-5)
+        assert result.candidates[0].verification is not None
+        assert result.candidates[0].verification.yaw_deg == pytest.approx(0.0, abs=0.1)
 
     def test_exhaustive_agrees_and_verifies_every_key_image(
         self, places: list[Place], localizer: Localizer
@@ -64,30 +80,37 @@ class TestLocalize:
         assert result.keyframe_id == 9
         assert [c.keyframe_id for c in result.candidates] == list(range(12))
         assert all(math.isnan(c.similarity) for c in result.candidates)
+        assert [c.verification is not None for c in result.candidates].count(True) == 1
+        assert result.verdict == "accepted"
         fast = localizer.localize(places[9].query)
-        assert fast.matches == result.matches
+        assert fast.matches == result.matches and fast.inliers == result.inliers
+        assert result.ok
 
     def test_one_candidate_is_the_prefilter_alone(
         self, places: list[Place], memory: VisualMemory
     ) -> None:
-        one = Localizer.from_memory(memory, FEATURES, dataclasses.replace(CONFIG, candidates=1))
+        one = Localizer.from_memory(memory, MOUNT, FEATURES,
+                                    dataclasses.replace(CONFIG, candidates=1))
         result = one.localize(places[5].query)
         assert len(result.candidates) == 1 and result.keyframe_id == 5
 
     def test_a_subset_of_key_images(self, places: list[Place], memory: VisualMemory) -> None:
-        subset = Localizer.from_memory(memory, FEATURES, CONFIG, keyframe_ids=[0, 1, 2])
+        subset = Localizer.from_memory(memory, MOUNT, FEATURES, CONFIG, keyframe_ids=[0, 1, 2])
         assert subset.keyframe_ids == (0, 1, 2)
         result = subset.localize(places[8].query)
         assert result.keyframe_id in (0, 1, 2)
         assert not result.ok  # place 8 is none of them: chance matches only
+        assert result.verdict != "accepted"
+        assert result.detail.startswith(f"key image {result.keyframe_id}: ")
 
     def test_the_convenience_function(self, places: list[Place], memory: VisualMemory) -> None:
-        assert localize(memory, places[2].query, FEATURES, CONFIG).keyframe_id == 2
+        assert localize(memory, places[2].query, MOUNT, FEATURES, CONFIG).keyframe_id == 2
 
     def test_an_empty_set_of_key_images(self, places: list[Place], memory: VisualMemory) -> None:
-        nothing = Localizer.from_memory(memory, FEATURES, CONFIG, keyframe_ids=[])
+        nothing = Localizer.from_memory(memory, MOUNT, FEATURES, CONFIG, keyframe_ids=[])
         result = nothing.localize(places[0].query)
         assert result.keyframe_id is None and result.matches == 0 and not result.ok
+        assert result.inliers == 0 and result.verdict == "no key images"
         assert nothing.localize_exhaustive(places[0].query).candidates == ()
 
 
@@ -95,9 +118,9 @@ class TestPrefilter:
     def test_a_sideways_shift_is_forgiven(self, places: list[Place], memory: VisualMemory) -> None:
         # 8 px of the 160 px image is 4 thumbnail px: within the default 6 px of shifts.
         shifted = np.roll(places[4].key_image, 8, axis=1)
-        tolerant = Localizer.from_memory(memory, FEATURES, CONFIG)
+        tolerant = Localizer.from_memory(memory, MOUNT, FEATURES, CONFIG)
         rigid = Localizer.from_memory(
-            memory, FEATURES, dataclasses.replace(CONFIG, prefilter_max_shift_px=0)
+            memory, MOUNT, FEATURES, dataclasses.replace(CONFIG, prefilter_max_shift_px=0)
         )
         best = tolerant.localize(shifted).candidates[0]
         assert best.keyframe_id == 4 and best.similarity > 0.8
@@ -124,10 +147,10 @@ class TestBadInput:
     def test_inconsistent_inputs(self, memory: VisualMemory) -> None:
         keyframe = memory.keyframe(0)
         with pytest.raises(ValueError, match="2 key image ids, 1 thumbnails"):
-            Localizer([0, 1], [keyframe.thumbnail], [], memory.camera, FEATURES, CONFIG)
+            Localizer([0, 1], [keyframe.thumbnail], [], memory.camera, MOUNT, FEATURES, CONFIG)
         features = [make_front_end(FEATURES, memory.camera).features_from_keyframe(keyframe)]
         with pytest.raises(ValueError, match="thumbnail 0: expected 80x60 uint8, got shape"):
-            Localizer([0], [keyframe.image], features, memory.camera, FEATURES, CONFIG)
+            Localizer([0], [keyframe.image], features, memory.camera, MOUNT, FEATURES, CONFIG)
 
 
 def test_localize_config_is_validated() -> None:

@@ -13,8 +13,10 @@ class TestBenchFeatures:
         result = bench_features(runs=1, width=320, height=240)
         assert cv2.getNumThreads() == threads
         assert result["runs"] == 1 and result["image_size"] == [320, 240]
-        assert set(result) >= {"harris_zncc", "harris_zncc_integer", "orb500_bf_crosscheck"}
+        assert set(result) >= {"harris_zncc", "harris_zncc_integer", "orb", "teblid", "beblid",
+                               "orb500_bf_crosscheck"}
         harris = result["harris_zncc"]
         assert set(harris) == {"detect_ms", "match_ms", "pair_ms", "matches", "inlier_fraction",
                                "median_error_px"}
         assert harris["matches"] > 20 and harris["inlier_fraction"] > 0.9
+        assert result["orb"]["matches"] > 20 and result["orb"]["inlier_fraction"] > 0.8

@@ -14,6 +14,7 @@ import pytest
 from robot.config import VmnavConfig
 from robot.memory import Localizer
 from shared.camera_model import CameraModel
+from shared.errors import InputError
 from shared.memory import VisualMemory
 from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer
@@ -26,6 +27,7 @@ from tools.bench.localize import (
     accepted_answers,
     nearest_keyframe,
     rate_summary,
+    relit_summary,
     run_queries,
     sample_query_pose,
     timing_summary,
@@ -52,7 +54,8 @@ def test_random_views_near_the_path_find_the_nearest_key_image(
 ) -> None:
     sim = Simulation(world, SimConfig())
     renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
-    localizer = Localizer.from_memory(taught.memory, CONFIG.features, CONFIG.localize)
+    localizer = Localizer.from_memory(taught.memory, CONFIG.camera.mount, CONFIG.features,
+                                      CONFIG.localize)
     outcomes = run_queries(taught, localizer, sim, renderer, 12, np.random.default_rng(4))
     summary = rate_summary(outcomes)
     assert summary["localize_queries"] == 12
@@ -115,3 +118,28 @@ def test_timing_summary_has_the_benchmark_keys(taught: TaughtMemory, world: Worl
         for size in (8, 16)
     } | {"localize_speedup_vs_exhaustive"}
     assert summary["localize_speedup_vs_exhaustive"] == summary["localize_speedup_8"] > 0
+
+
+@pytest.mark.slow
+class TestRelit:
+    def test_the_same_views_with_half_the_light(self, taught: TaughtMemory, world: World) -> None:
+        localizer = Localizer.from_memory(taught.memory, CONFIG.camera.mount, CONFIG.features,
+                                          CONFIG.localize)
+        relit = relit_summary(taught, world, localizer, SimConfig(), CameraModel.default(), 8, 4,
+                              "scale=0.5")
+        assert relit["localize_relit"] == "scale=0.5"
+        assert relit["localize_relit_top1_rate"] == 1.0, relit["localize_relit_failures"]
+        assert relit["localize_relit_wrong_accepted"] == 0
+
+    @pytest.mark.parametrize(("lighting", "message"), [
+        ("dusk=1", "--lighting: unknown change"),
+        ("scale=1000", "--lighting: light scale 1000"),
+    ])
+    def test_a_bad_lighting_change_is_one_line(
+        self, taught: TaughtMemory, world: World, lighting: str, message: str
+    ) -> None:
+        localizer = Localizer.from_memory(taught.memory, CONFIG.camera.mount, CONFIG.features,
+                                          CONFIG.localize)
+        with pytest.raises(InputError, match=message):
+            relit_summary(taught, world, localizer, SimConfig(), CameraModel.default(), 2, 0,
+                          lighting)
