@@ -306,10 +306,11 @@ class FisheyeRenderer:
         depth_m: npt.NDArray[np.float32],
     ) -> None:
         """Draw the people as textured figures (:mod:`sim.person_figure`), hidden per pixel
-        by what the depth image shows nearer."""
+        by what the depth image shows nearer, lit by the light map where they stand."""
         if len(sim.people) == 0:
             return
         if self._figures is None:
             self._figures = PersonFigures(self.camera, TextureLibrary.builtin(),
                                           self._brightness, self._rng.spawn(1)[0])
-        self._figures.draw_people(sim, image, R_cam_world, centre_w, depth_m)
+        self._figures.draw_people(sim, image, R_cam_world, centre_w, depth_m,
+                                  self.scene.light.at)

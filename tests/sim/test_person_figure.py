@@ -177,3 +177,19 @@ class TestInTheSimulation:
         centre = (slice(200, 300), slice(395, 405))  # the near person's torso
         assert np.array_equal(both[centre], near_only[centre])
         assert (both != BACKGROUND).sum() > (near_only != BACKGROUND).sum()  # the far one shows
+
+    def test_people_are_lit_by_the_light_where_they_stand(self) -> None:
+        config = dataclasses.replace(SimConfig(seed=2), people=PeopleConfig(count=1))
+        sim = Simulation(box_room(), config)
+        sim.place_robot(Pose2(2.0, 3.0, 0.0))
+        sim.people.place(0, (4.0, 3.0), (4.0, 3.0))
+        T = camera_pose_world(sim.body.pose_w, config.camera_mount)
+        canvases = []
+        for light_at in (None, lambda xy: np.full(len(np.atleast_2d(xy)), 0.5)):
+            fig = PersonFigures(CAMERA, TextureLibrary.builtin(), 110.0, np.random.default_rng(0))
+            canvas = np.zeros((CAMERA.height, CAMERA.width), dtype=np.float32)
+            fig.draw_people(sim, canvas, T[:3, :3].T, T[:3, 3], None, light_at)
+            canvases.append(canvas)
+        drawn = canvases[0] > 0
+        assert drawn.sum() > 500
+        np.testing.assert_allclose(canvases[1][drawn], 0.5 * canvases[0][drawn], rtol=1e-5)
