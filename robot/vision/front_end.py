@@ -129,7 +129,9 @@ class FrontEnd:
                 f"key image {keyframe.id}",
                 f"descriptors have {keyframe.descriptor_length} values, the front end "
                 f"{self.method!r} on this lens makes {self.descriptor_length}: the memory was "
-                f"taught with another [features] method or lens")
+                f"taught with another [features] method or lens (set that method, e.g. "
+                f"'harris-zncc' for memories taught before ORB became the default, or teach "
+                f"again)")
         return self.features(keyframe.pixels_xy, self.descriptors_from_stored(keyframe.patches))
 
     def descriptors_from_stored(self, stored: npt.NDArray[np.float32]) -> Descriptors:
