@@ -33,6 +33,8 @@ from tools.bench.camera_effects import bench_camera_effects
 from tools.bench.corners import picture_corner_errors_px
 
 RENDER_FPS_TARGET = 60.0
+CORNER_ERROR_TARGET_PX = 0.5
+"""Textured corners found in the frame agree with the camera model's projection (median)."""
 CORNER_RANGE_M = 4.0
 """Picture corners farther than this are too small on the image to refine, m."""
 
@@ -87,7 +89,7 @@ def bench_render(
         "corners_refined": int(err.shape[0]),
         "corner_error_px_median": round(float(np.median(err)), 3) if err.size else None,
         "corner_error_px_p90": round(float(np.percentile(err, 90)), 3) if err.size else None,
-        "corner_error_px_target": 0.5,
+        "corner_error_px_target": CORNER_ERROR_TARGET_PX,
         "render_fps_median": round(1000.0 / float(np.median(frame_ms)), 1),
         "render_fps_target": RENDER_FPS_TARGET,
         "frame_ms_median": round(float(np.median(frame_ms)), 3),
