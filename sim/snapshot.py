@@ -20,7 +20,7 @@ from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
 from sim.topdown import draw_topdown
-from sim.world import load_world
+from sim.world import World, load_world
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,7 +41,8 @@ class Snapshot:
 
 
 def take_snapshot(
-    config: SimConfig, camera: CameraModel, out_dir: Path, pose: Pose2 | None = None
+    config: SimConfig, camera: CameraModel, out_dir: Path, pose: Pose2 | None = None,
+    world: World | None = None,
 ) -> Snapshot:
     """Build the world, place the robot, render one frame and write the showcase files.
 
@@ -50,13 +51,14 @@ def take_snapshot(
         camera: the simulated lens.
         out_dir: folder for ``frame.png``, ``map.png`` and ``snapshot.json`` (created).
         pose: where to put the robot; None = the world's start pose.
+        world: the world to film (a changed one: :mod:`sim.scene_change`); None =
+            ``config.world``.
 
     Raises:
         ConfigError: unknown or malformed world, or a pose inside an obstacle.
         InputError: the output folder cannot be written.
     """
-    world = load_world(config.world)
-    sim = Simulation(world, config)
+    sim = Simulation(load_world(config.world) if world is None else world, config)
     if pose is not None:
         sim.place_robot(pose)
     renderer = FisheyeRenderer.for_simulation(sim, camera)

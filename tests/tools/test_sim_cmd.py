@@ -75,6 +75,7 @@ class TestSnapshot:
             (["--x", "0.0", "--y", "10.0"], ""),  # inside the west wall
             (["--camera", "/nonexistent/camera.json"], "/nonexistent/camera.json"),
             (["--config", "/nonexistent/vmnav.toml"], "/nonexistent/vmnav.toml"),
+            (["--doors", "nosuch=open"], "scene change: world 'lab' has no door named 'nosuch'"),
         ],
     )
     def test_bad_input_is_one_line_and_exit_1(
