@@ -1,4 +1,4 @@
-"""Worlds: floor plans (walls, furniture), ceilings, landmark densities, lighting, start, routes.
+"""Worlds: floor plans (walls, furniture), ceilings, textures and decor, lighting, start, routes.
 
 A world is plain data: frozen dataclasses, written by hand as a TOML file (the
 built-in ``sim/worlds/lab.toml`` and ``sim/worlds/campus.toml`` are commented
@@ -16,7 +16,14 @@ raises :class:`ConfigError` naming the file and the problem):
 * the start pose, every route waypoint and every route leg stay at least
   :data:`CLEARANCE_M` from the surface of walls and furniture, and every waypoint
   is reachable from the start;
-* route names are unique and a route has at least two distinct waypoints.
+* route names are unique and a route has at least two distinct waypoints;
+* every texture named exists in the world's texture set (the built-in one plus
+  ``texture_set``), every scale is > 0, every picture fits on the wall nearest its
+  ``at`` (:mod:`sim._world_checks`), every lamp is under a ceiling; placed objects
+  (as they stand: doors open or closed) and tree trunks are obstacles like furniture.
+
+What the surfaces carry (textures, pictures, objects, lamps, trees, sky) is in
+:mod:`sim.decor`.
 """
 
 from __future__ import annotations

@@ -57,6 +57,16 @@ class TestSnapshot:
         assert code == 0
         assert json.loads((tmp_path / "snapshot.json").read_text())["world"] == "campus"
 
+    @pytest.mark.parametrize(("world", "x", "y"), [("campus", "22", "10"), ("building", "20", "6")])
+    def test_the_readme_pictures(
+        self, tmp_path: Path, capsys: pytest.CaptureFixture[str], world: str, x: str, y: str
+    ) -> None:
+        code, _, _ = run(["sim", "snapshot", "--world", world, "--seed", "1", "--x", x, "--y", y,
+                          "--yaw", "0", "--out", str(tmp_path)], capsys)
+        assert code == 0
+        summary = json.loads((tmp_path / "snapshot.json").read_text())
+        assert summary["world"] == world and summary["visible_landmarks"] > 5
+
     @pytest.mark.parametrize(
         ("args", "fragment"),
         [

@@ -15,6 +15,7 @@ def test_bench_sim_prints_json_with_the_figures(capsys: pytest.CaptureFixture[st
     assert result["render_fps_median"] > 0
     assert result["visible_corners_median"] > 0
     assert result["sensor_ms_median"] > 0 and result["people_in_view_frames"] == 5
+    assert result["corner_poses"] == 5 and result["corner_error_px_target"] == 0.5
     assert result["camera_roundtrip_max_px"] < 1e-6
     assert result["camera_roundtrip_max_px_beyond_90deg"] < 1e-6
     assert result["camera_vs_cv2_max_px"] < 1e-6
