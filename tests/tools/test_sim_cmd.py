@@ -100,6 +100,41 @@ class TestSnapshot:
         assert str(world) in err and err.count("\n") == 1
 
 
+class TestChangedSnapshot:
+    ROOM = """
+name = "room"
+start = { x_m = 1.0, y_m = 2.0 }
+walls = [
+    { start = [0.0, 0.0], end = [8.0, 0.0], height_m = 2.5 },
+    { start = [8.0, 0.0], end = [8.0, 4.0], height_m = 2.5 },
+    { start = [8.0, 4.0], end = [0.0, 4.0], height_m = 2.5 },
+    { start = [0.0, 4.0], end = [0.0, 0.0], height_m = 2.5 },
+]
+pictures = [{ at = [7.8, 2.0], texture = "poster_rocket", height_m = 1.4, name = "rocket" }]
+objects = [
+    { kind = "box", center = [4.0, 1.2], size = [0.8, 0.8], height_m = 1.5, movable = true },
+]
+"""
+
+    def snapshot(self, tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str,
+                 *change: str) -> tuple[int, object]:
+        world = tmp_path / "room.toml"
+        world.write_text(self.ROOM)
+        code, _, _ = run(["sim", "snapshot", "--world", str(world), "--out", str(tmp_path / name),
+                          *change], capsys)
+        return code, cv2.imread(str(tmp_path / name / "frame.png"), cv2.IMREAD_GRAYSCALE)
+
+    def test_the_frame_shows_the_change(self, tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+        code_a, taught = self.snapshot(tmp_path, capsys, "taught")
+        code_b, again = self.snapshot(tmp_path, capsys, "again")
+        code_c, changed = self.snapshot(tmp_path, capsys, "changed", "--moved", "1",
+                                        "--removed", "rocket")
+        assert code_a == code_b == code_c == 0
+        assert (taught == again).all()
+        assert (cv2.absdiff(taught, changed) > 40).sum() > 500
+
+
 def test_help_lists_only_working_commands(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as exit_:
         main(["--help"])
