@@ -36,6 +36,7 @@ once per person from the generator given, so they are fixed for a seed.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -49,6 +50,8 @@ from sim.texture_library import Texture, TextureLibrary
 FloatArray = npt.NDArray[np.float64]
 Canvas = npt.NDArray[np.uint8] | npt.NDArray[np.float32]
 """(H, W) grey levels a figure is drawn into: a frame, or the renderer's radiance."""
+LightAt = Callable[[npt.ArrayLike], npt.ArrayLike]
+"""Light on the floor plan at points (N, 2), world frame, m -> (N,) relative light."""
 
 _REFERENCE_HEIGHT_M = 1.75
 """The figure's heights below are for a person this tall, m; others scale."""
@@ -159,7 +162,7 @@ class PersonFigures:
 
     def draw_people(self, sim: Simulation, image: Canvas, R_cam_world: FloatArray,
                     centre_w: FloatArray, depth_m: npt.NDArray[np.float32] | None = None,
-                    ) -> None:
+                    light_at: LightAt | None = None) -> None:
         """Draw every person of ``sim`` into ``image`` (in place), far to near.
 
         Args:
@@ -170,6 +173,8 @@ class PersonFigures:
             depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m
                 (inf: nothing); given, it hides the figures per pixel instead of the
                 walls and furniture met along their centre lines.
+            light_at: the light falling on the floor plan at points (N, 2) m, relative
+                to the world's plain lighting (1); None: 1 everywhere.
         """
         positions, radius, height = sim.people_state()
         headings, walked = sim.people.headings(), sim.people.walked_m()
@@ -184,12 +189,14 @@ class PersonFigures:
                 for info in sim.space.segment_query((cx, cy), (px, py), 0.0, OCCLUDER_FILTER)
                 if info.shape is not None and not sim.is_person(info.shape)]
             pose = FigurePose(px, py, float(headings[k]), float(walked[k]), height, radius)
-            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders, depth_m)
+            light = 1.0 if light_at is None else float(np.asarray(light_at([(px, py)])).ravel()[0])
+            self.draw(image, pose, self.look(k), R_cam_world, centre_w, occluders, depth_m,
+                      light)
 
     def draw(self, image: Canvas, pose: FigurePose, look: PersonLook,
              R_cam_world: FloatArray, centre_w: FloatArray,
              occluders: list[tuple[float, float]],
-             depth_m: npt.NDArray[np.float32] | None = None) -> None:
+             depth_m: npt.NDArray[np.float32] | None = None, light: float = 1.0) -> None:
         """Draw one figure into ``image`` (in place).
 
         Args:
@@ -202,6 +209,8 @@ class PersonFigures:
                 wall or piece of furniture between the camera and the figure.
             depth_m: (H, W) distance along each pixel's ray to what ``image`` shows, m:
                 the figure shows only where it is nearer.
+            light: the light falling on the figure, relative to the world's plain
+                lighting.
         """
         distance = math.hypot(pose.x_m - float(centre_w[0]), pose.y_m - float(centre_w[1]))
         near = max(distance - pose.radius_m, 1e-6)
@@ -225,7 +234,7 @@ class PersonFigures:
                 depth = cv2.resize(depth, sampled, interpolation=cv2.INTER_NEAREST)
         grey, cover = self._shade(rays_w, pose, look, centre_w, occluders,
                                   self._px_per_rad * scale / distance, depth)
-        grey *= cover
+        grey *= cover * np.float32(light)
         if sampled != size:
             shrink = cv2.INTER_AREA if scale > 1.0 else cv2.INTER_LINEAR
             grey = cv2.resize(grey, size, interpolation=shrink)

@@ -1,30 +1,27 @@
-"""The fisheye renderer: grey frames of the landmark field through the shared camera model.
+"""The fisheye renderer: textured grey frames of a world through the shared camera model.
 
-Per frame (all vectorised except the per-patch paint):
+Per frame:
 
 1. The camera pose follows from the robot's true pose and the camera mount.
-2. Landmarks are culled: behind the patch (normal facing away), outside the lens
-   field of view, or smaller than ``_MIN_PATCH_PX`` on the image.
-3. Occlusion: one pymunk segment query per remaining landmark, from the camera to
-   the landmark on the floor plan, against walls, furniture and people. A hit
-   occludes when the line of sight at the hit is lower than the occluder (a line
-   of sight may pass over a desk or a person).
-4. Each visible patch is painted far-to-near with ``cv2.warpAffine``: the
-   affine map is the local Jacobian of the projection (the images of the patch's
-   horizontal and vertical half-sides), so patches foreshorten and turn with the
-   fisheye distortion, and their centres land at sub-pixel positions.
-5. People are drawn as textured figures (:mod:`sim.person_figure`).
-6. A global illumination gain (slow sinusoid, times the scene's light change
-   ``Simulation.light_gain_at``) is applied, then the camera's flaws
-   (:class:`sim.camera_effects.CameraEffects`: motion blur, vignetting, auto-exposure,
-   noise, clipping; outside the lens's image circle stays black).
+2. Every pixel's ray (its bearing from :meth:`CameraModel.lift`, computed once) is
+   traced against the world's textured surfaces (:mod:`sim.surfaces` compiles them,
+   :mod:`sim._raycast` traces them): the nearest wall face, piece of furniture,
+   placed object, picture, tree, floor, ceiling, lamp or the sky, textured with
+   trilinear mip-mapping from the pixel's footprint (no aliasing shimmer) and lit
+   by the light map (:mod:`sim.lightmap`: lamps, daylight through windows, open sky).
+   The image is a float radiance, grey levels (lamps and sky may exceed 255).
+3. People are drawn as textured figures (:mod:`sim.person_figure`, hidden per pixel
+   by the depth image), then the legacy landmark patches of a world that asks for them.
+4. The post-process stage (:meth:`FisheyeRenderer._post_process`) turns radiance into
+   the uint8 frame: a global illumination gain (slow sinusoid, times the scene's
+   light change ``Simulation.light_gain_at``), then the camera's flaws
+   (:class:`sim.camera_effects.CameraEffects`: motion blur, vignetting,
+   auto-exposure, noise, clipping; outside the lens's image circle stays black).
 
-Behind the patches, the world's walls, furniture, floor, ceilings and sky are
-shaded from the true pose (:mod:`sim.surfaces`: 2D ray casting on a coarse grid,
-soft edges), so frames read like a corridor or courtyard seen through the lens;
-their edges are blurred so that Harris corners stay on the landmark centres (or
-people's outlines). Ground truth is exact: the true pose, the ids of the visible
-landmarks and their projected centres.
+Ground truth is exact: the true pose, the depth along each pixel's ray, and the
+"landmarks" in view: the corners of the pictures on the walls (their 3D corners
+projected by the camera model, where the depth image shows the picture there), or
+in a world with landmark patches, the patches' centres.
 """
 
 from __future__ import annotations
@@ -32,7 +29,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -40,25 +36,28 @@ from shared.camera_model import CameraModel
 from shared.camera_mount import camera_pose_world, rotation_base_cam
 from shared.config import CameraMountConfig
 from shared.pose import Pose2
+from sim._atlas import Atlas
+from sim._patches import NEAR_M, PatchPainter
+from sim._raycast import bin_primitives, trace
 from sim.camera_effects import CameraEffects, camera_motion
 from sim.config import RenderConfig, SensorConfig
 from sim.landmarks import LandmarkField
 from sim.person_figure import PersonFigures
-from sim.simulation import OCCLUDER_FILTER, Simulation
-from sim.surfaces import SurfaceShader
+from sim.simulation import Simulation
+from sim.surfaces import Scene, build_scene
 from sim.texture_library import TextureLibrary
-from sim.world import Lighting, World
+from sim.world import World
 
 FloatArray = npt.NDArray[np.float64]
 
-_MIN_PATCH_PX = 3.0
-"""Patches smaller than this on the image (px, longest side) are not drawn."""
-_NEAR_M = 0.15
-"""Landmarks closer than this to the optical centre are not drawn, m."""
-_QUERY_END_MARGIN_M = 0.12
-"""A line of sight stops this short of its landmark, so the surface carrying it does not hit."""
+WEDGES = 1024
+"""Azimuth wedges of the ray kernel's candidate lists (see :mod:`sim._raycast`)."""
 _RENDER_STREAM = 0x52454E44
 """Mixed with the simulation seed for the renderer's own random stream."""
+_CORNER_DEPTH_TOLERANCE = 0.05
+"""A picture corner is in view when the depth image there is within this fraction of its
+distance (+ 2 cm) of it, m / m."""
+
 
 @dataclass(frozen=True, eq=False)
 class RenderedFrame:
@@ -69,10 +68,14 @@ class RenderedFrame:
         image: (H, W) uint8 grey image.
         pose_w: true robot pose in the world frame.
         T_world_cam: (4, 4) float64 true camera pose (camera frame -> world frame).
-        visible_ids: (K,) int64 ids of the landmarks drawn, near to far.
-        visible_pixels_xy: (K, 2) float64 projected centres of those landmarks, px.
+        visible_ids: (K,) int64 ids of the landmarks in view, near to far: picture
+            corners ``4 * picture + corner`` (corners top-left, top-right,
+            bottom-right, bottom-left), or the patch ids of a world with patches.
+        visible_pixels_xy: (K, 2) float64 their projections by the camera model, px.
         visible_distances_m: (K,) float64 their distances to the optical centre, m.
         illumination_gain: the global gain applied to this frame.
+        depth_m: (H, W) float32 distance along each pixel's ray to the surface it
+            shows, m (inf: sky, or outside the image circle); people not included.
     """
 
     t_ns: int
@@ -83,19 +86,7 @@ class RenderedFrame:
     visible_pixels_xy: FloatArray
     visible_distances_m: FloatArray
     illumination_gain: float
-
-
-def _texture_pyramid(textures: npt.NDArray[np.uint8]) -> tuple[npt.NDArray[np.uint8], ...]:
-    """Each landmark's texture at 16, 8 and 4 px, area-averaged (no aliasing when shrunk)."""
-    n, s, _ = textures.shape
-    levels = [textures]
-    while levels[-1].shape[1] > 4:
-        half = levels[-1].shape[1] // 2
-        levels.append(
-            levels[-1].reshape(n, half, 2, half, 2).mean(axis=(2, 4)).round().astype(np.uint8)
-        )
-    assert s == 16, "landmark textures are 16x16"
-    return tuple(levels)
+    depth_m: npt.NDArray[np.float32] | None = None
 
 
 class FisheyeRenderer:
@@ -106,13 +97,16 @@ class FisheyeRenderer:
         mount: the camera's pose on the robot.
         config: illumination.
         sensor: the camera's flaws.
-        world: the surfaces shaded behind the landmarks, and the lighting.
-        landmarks: the landmark field to draw.
-        rng: seeds the illumination phase, people's grey and the sensor's noise.
+        world: the textured surfaces and their lighting.
+        landmarks: legacy landmark patches to paint over them (usually none).
+        rng: seeds the illumination phase, people's looks and the sensor's noise.
 
     Attributes:
         effects: the camera's flaws, applied to every frame (its ``last`` says how
             the last frame was exposed).
+
+    Raises:
+        ConfigError: a texture the world names is missing from its set.
     """
 
     def __init__(
@@ -129,11 +123,11 @@ class FisheyeRenderer:
         self.mount = mount
         self.config = config
         self.landmarks = landmarks
+        self.scene: Scene = build_scene(world, Atlas(world.textures()))
+        self._patches = PatchPainter(camera, landmarks, world.lighting) if len(landmarks) else None
         self._rng = rng
-        self._levels = _texture_pyramid(self._contrast_adjusted(landmarks.textures, world.lighting))
-        self._tangents_h, self._tangents_v = _patch_axes(landmarks.normals_w)
-        self._surfaces = SurfaceShader(world, camera, rotation_base_cam(mount), mount.height_m)
         self._brightness = world.lighting.brightness
+        self._rays(rotation_base_cam(mount))
         self.effects = CameraEffects(camera, mount, sensor, rng.spawn(1)[0])
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
         self._figures: PersonFigures | None = None
@@ -146,6 +140,37 @@ class FisheyeRenderer:
         return cls(camera, sim.config.camera_mount, sim.config.render, sim.config.sensor,
                    sim.world, sim.landmarks, rng)
 
+    @property
+    def landmark_count(self) -> int:
+        """How many landmarks the frames' ground truth may list: the pictures' corners, or
+        in a world with patches, the patches."""
+        if self._patches is not None:
+            return len(self.landmarks)
+        return int(self.scene.picture_corners_w.shape[0] * 4)
+
+    def _rays(self, R_base_cam: FloatArray) -> None:
+        """Per valid pixel: index, bearing, wedge of its azimuth, angular size (once)."""
+        cam = self.camera
+        u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height))
+        pixels = np.column_stack([u.ravel(), v.ravel()])
+        bearings, valid = cam.lift(pixels)
+        self._pixels = np.flatnonzero(valid)
+        rays = bearings[self._pixels]
+        self._rays_c = np.ascontiguousarray(rays)
+        base = rays @ R_base_cam.T
+        azimuth = np.arctan2(base[:, 1], base[:, 0])
+        self._wedge = np.clip(((azimuth + math.pi) / (2 * math.pi) * WEDGES).astype(np.int64),
+                              0, WEDGES - 1)
+        # Angular size: the angle between the bearings half a pixel to either side.
+        sizes = []
+        for du, dv in ((0.5, 0.0), (0.0, 0.5)):
+            a, ok_a = cam.lift(pixels[self._pixels] - (du, dv))
+            b, ok_b = cam.lift(pixels[self._pixels] + (du, dv))
+            cos = np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0)
+            sizes.append(np.where(ok_a & ok_b, np.arccos(cos), np.nan))
+        size = np.sqrt(sizes[0] * sizes[1])
+        self._pix_angle = np.where(np.isfinite(size), size, np.nanmedian(size))
+
     def render(self, sim: Simulation) -> RenderedFrame:
         """Render the simulation's current state from the robot's camera.
 
@@ -156,26 +181,113 @@ class FisheyeRenderer:
         T_world_cam = camera_pose_world(pose_w, self.mount)
         R_cam_world = T_world_cam[:3, :3].T
         centre_w = T_world_cam[:3, 3]
-        image = self._surfaces.shade(centre_w[:2], pose_w[2])
+        radiance, depth = self.trace(T_world_cam, pose_w[2])
 
-        ids, pix, dist, affines = self._visible_patches(sim, R_cam_world, centre_w)
-        self._draw_people(sim, image, R_cam_world, centre_w)
-        self._paint_all(image, ids, affines, dist)
+        self._draw_people(sim, radiance, R_cam_world, centre_w, depth)
+        if self._patches is not None:
+            ids, pix, dist, affines = self._patches.visible(sim, R_cam_world, centre_w)
+            self._patches.paint(radiance, ids, affines, dist)
+            ids = self.landmarks.ids[ids]
+        else:
+            ids, pix, dist = self._picture_corners(R_cam_world, centre_w, depth)
 
         gain = self.illumination_gain(sim.now_ns) * sim.light_gain_at(sim.now_ns)
-        image = self.effects.apply(image, sim.now_ns,
-                                   camera_motion(sim.body.velocity_base, self.mount), gain)
-        near = np.argsort(dist)
+        image = self._post_process(radiance, sim, gain)
+        near = np.argsort(dist, kind="stable")
         return RenderedFrame(
             t_ns=sim.now_ns,
             image=image,
             pose_w=pose_w,
             T_world_cam=T_world_cam,
-            visible_ids=self.landmarks.ids[ids[near]],
+            visible_ids=ids[near],
             visible_pixels_xy=pix[near],
             visible_distances_m=dist[near],
             illumination_gain=gain,
+            depth_m=depth,
         )
+
+    def trace(
+        self, T_world_cam: FloatArray, yaw_rad: float
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """Radiance and depth images of the world from a camera pose (no people, no noise).
+
+        Args:
+            T_world_cam: (4, 4) camera pose (camera frame -> world frame).
+            yaw_rad: the robot's heading, rad (the wedges turn with it).
+
+        Returns:
+            radiance: (H, W) float32 grey levels (may exceed 255), 0 outside the circle.
+            depth: (H, W) float32 distance along each ray, m (inf: sky or outside).
+        """
+        sc = self.scene
+        R = np.ascontiguousarray(T_world_cam[:3, :3])
+        o = np.ascontiguousarray(T_world_cam[:3, 3])
+        start, ids = bin_primitives(
+            o[0], o[1], yaw_rad, WEDGES, sc.max_height_m, sc.quad_a, sc.quad_d, sc.quad_len,
+            sc.quad_n, sc.quad_z, sc.flat_c, sc.flat_ax, sc.flat_half, sc.cyl_c, sc.cyl_r,
+            sc.sph_c, sc.sph_r)
+        cam = self.camera
+        radiance = np.zeros(cam.height * cam.width, np.float32)
+        depth = np.full(cam.height * cam.width, np.inf, np.float32)
+        atlas, light = sc.atlas, sc.light
+        trace(
+            self._pixels, self._rays_c, self._wedge, self._pix_angle, R, yaw_rad, WEDGES, o,
+            start, ids,
+            (sc.quad_a, sc.quad_d, sc.quad_len, sc.quad_n, sc.quad_z, sc.quad_tex, sc.quad_uv,
+             sc.quad_shade, sc.quad_emit),
+            (sc.flat_c, sc.flat_ax, sc.flat_half, sc.flat_z, sc.flat_up, sc.flat_tex, sc.flat_uv),
+            (sc.cyl_c, sc.cyl_r, sc.cyl_z, sc.cyl_tex, sc.cyl_uv),
+            (sc.sph_c, sc.sph_r, sc.sph_tex, sc.sph_uv),
+            (sc.grid_origin, sc.floor_map, sc.floor_tex, sc.floor_uv, sc.ceil_lo, sc.ceil_hi,
+             sc.ceil_z, sc.ceil_tex, sc.ceil_uv),
+            (sc.lamp_map, sc.lamp_c, sc.lamp_ax, sc.lamp_half, sc.lamp_tex, sc.lamp_emit),
+            (atlas.texels, atlas.levels, atlas.level_count, atlas.wraps),
+            (light.values, light.origin, light.res_m),
+            sc.sky, sc.sun_w, self._brightness / 128.0, cam.width, radiance, depth)
+        return radiance.reshape(cam.height, cam.width), depth.reshape(cam.height, cam.width)
+
+    def _picture_corners(
+        self, R_cam_world: FloatArray, centre_w: FloatArray, depth: npt.NDArray[np.float32]
+    ) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray]:
+        """Picture corners in view: ids, projections (K, 2) px, distances (K,) m.
+
+        A corner is in view when its picture faces the camera, it projects inside
+        the image, and the depth image at its pixel or one of its 8 neighbours (a
+        corner lies on the picture's edge) is its distance within
+        :data:`_CORNER_DEPTH_TOLERANCE`.
+        """
+        corners = self.scene.picture_corners_w.reshape(-1, 3)
+        rel_c = (corners - centre_w) @ R_cam_world.T
+        dist = np.linalg.norm(rel_c, axis=1)
+        pix, ok = self.camera.project(rel_c)
+        normals = np.repeat(self.scene.picture_normals_w, 4, axis=0)
+        ok &= (dist > NEAR_M) & (np.einsum("ij,ij->i", normals, centre_w - corners) > 0.0)
+        cam = self.camera
+        col = np.clip(np.round(pix[:, 0]).astype(int), 1, cam.width - 2)
+        row = np.clip(np.round(pix[:, 1]).astype(int), 1, cam.height - 2)
+        seen = np.zeros(corners.shape[0], bool)
+        tolerance = _CORNER_DEPTH_TOLERANCE * dist + 0.02
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                seen |= np.abs(depth[row + dr, col + dc] - dist) <= tolerance
+        keep = np.flatnonzero(ok & seen)
+        return keep.astype(np.int64), pix[keep], dist[keep]
+
+    def _post_process(
+        self, radiance: npt.NDArray[np.float32], sim: Simulation, gain: float
+    ) -> npt.NDArray[np.uint8]:
+        """The camera's effects, radiance to frame: the one post-process stage.
+
+        Args:
+            radiance: (H, W) float32 grey levels of the scene (people drawn in).
+            sim: the simulation (the body's motion during the exposure).
+            gain: the scene's light relative to ``radiance`` this frame.
+
+        Returns:
+            (H, W) uint8 frame, 0 outside the image circle.
+        """
+        motion = camera_motion(sim.body.velocity_base, self.mount)
+        return self.effects.apply(radiance, sim.now_ns, motion, gain)
 
     def illumination_gain(self, t_ns: int) -> float:
         """The global illumination gain at time ``t_ns`` (1 ± amplitude, slow sinusoid)."""
@@ -185,170 +297,19 @@ class FisheyeRenderer:
         )
         return 1.0 + self.config.illumination_amplitude * math.sin(phase)
 
-    # -- visibility -----------------------------------------------------------------
-
-    def _visible_patches(
-        self, sim: Simulation, R_cam_world: FloatArray, centre_w: FloatArray
-    ) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
-        """Visible patches: indices, centres (K, 2) px, distances (K,) m, affine maps (K, 2, 3)."""
-        lm = self.landmarks
-        rel_w = lm.positions_w - centre_w
-        dist = np.sqrt(np.einsum("ij,ij->i", rel_w, rel_w))
-        facing = np.einsum("ij,ij->i", lm.normals_w, rel_w) < 0.0
-        rel_c = rel_w @ R_cam_world.T
-        in_cone = rel_c[:, 2] > self.camera.min_z_s * dist
-        idx = np.flatnonzero(facing & in_cone & (dist > _NEAR_M))
-
-        half = 0.5 * lm.sizes_m[idx, None]  # (K, 1) half side of each patch, m
-        p0, ok0 = self.camera.project(rel_c[idx])
-        ph, okh = self.camera.project(rel_c[idx] + half * (self._tangents_h[idx] @ R_cam_world.T))
-        pv, okv = self.camera.project(rel_c[idx] - half * (self._tangents_v[idx] @ R_cam_world.T))
-        a = ph - p0  # image of the half-side along the patch's horizontal axis (texture +x)
-        b = pv - p0  # image of the half-side along the patch's downward axis (texture +y)
-        size_px = 2.0 * np.maximum(np.hypot(a[:, 0], a[:, 1]), np.hypot(b[:, 0], b[:, 1]))
-        keep = ok0 & okh & okv & (size_px >= _MIN_PATCH_PX)
-        idx, p0, a, b, size_px = idx[keep], p0[keep], a[keep], b[keep], size_px[keep]
-
-        unoccluded = self._unoccluded(sim, idx, centre_w, dist[idx])
-        idx, p0, a, b, size_px = (
-            idx[unoccluded],
-            p0[unoccluded],
-            a[unoccluded],
-            b[unoccluded],
-            size_px[unoccluded],
-        )
-        affines = np.stack([a, b, p0], axis=2)  # dst = p0 + a * tx + b * ty, (tx, ty) in [-1, 1]
-        return idx, p0, dist[idx], affines
-
-    def _unoccluded(
-        self, sim: Simulation, idx: npt.NDArray[np.int64], centre_w: FloatArray, dist: FloatArray
-    ) -> npt.NDArray[np.bool_]:
-        """Which landmarks no wall, furniture or person hides (one pymunk ray query each).
-
-        A query runs on the floor plan from the camera to ``_QUERY_END_MARGIN_M``
-        short of the landmark. A hit hides the landmark when the occluder is at
-        least as tall as the line of sight where it meets it; when the first hit
-        is lower, every hit on the way is checked.
-        """
-        out = np.ones(idx.shape[0], dtype=bool)
-        lm = self.landmarks.positions_w[idx]
-        cx, cy, cz = (float(v) for v in centre_w)
-        dxy = lm[:, :2] - centre_w[:2]
-        d2 = np.hypot(dxy[:, 0], dxy[:, 1])
-        far = d2 > _QUERY_END_MARGIN_M
-        f = np.where(far, (d2 - _QUERY_END_MARGIN_M) / np.where(far, d2, 1.0), 0.0)
-        ends = (centre_w[:2] + f[:, None] * dxy).tolist()
-        fractions = f.tolist()
-        heights = lm[:, 2].tolist()
-        query_first, query_all = sim.space.segment_query_first, sim.space.segment_query
-        height_of = sim.occluder_height
-        start = (cx, cy)
-        for k in np.flatnonzero(far).tolist():
-            hit = query_first(start, ends[k], 0.0, OCCLUDER_FILTER)
-            if hit is None:
-                continue
-            rise = heights[k] - cz
-            if height_of(hit.shape) >= cz + hit.alpha * fractions[k] * rise:
-                out[k] = False
-                continue
-            # The line of sight passes over the first thing it meets: check everything on the way.
-            out[k] = all(
-                height_of(info.shape) < cz + info.alpha * fractions[k] * rise
-                for info in query_all(start, ends[k], 0.0, OCCLUDER_FILTER)
-            )
-        return out
-
-    # -- painting -------------------------------------------------------------------
-
-    def _paint_all(
-        self,
-        image: npt.NDArray[np.uint8],
-        ids: npt.NDArray[np.int64],
-        affines: FloatArray,
-        dist: FloatArray,
-    ) -> None:
-        """Warp each patch's texture into ``image``, far to near.
-
-        Args:
-            image: (H, W) uint8, painted in place.
-            ids: (K,) landmark indices.
-            affines: (K, 2, 3) columns ``a``, ``b``, ``p0``: texture offset (tx, ty)
-                in [-1, 1]^2 lands at ``p0 + a tx + b ty`` (px).
-            dist: (K,) distances to the optical centre, m (painting order).
-        """
-        if ids.shape[0] == 0:
-            return
-        a, b, p0 = affines[:, :, 0], affines[:, :, 1], affines[:, :, 2]
-        size_px = 2.0 * np.maximum(np.hypot(a[:, 0], a[:, 1]), np.hypot(b[:, 0], b[:, 1]))
-        level = np.where(size_px >= 12.0, 0, np.where(size_px >= 6.0, 1, 2))
-        n = np.array([lvl.shape[1] for lvl in self._levels], dtype=np.float64)[level]
-        h, w = image.shape
-        ext = np.abs(a) + np.abs(b)  # (K, 2) half extents of the warped patch, px
-        lo = np.maximum(np.floor(p0 - ext), 0).astype(np.int64)
-        hi = np.minimum(np.ceil(p0 + ext).astype(np.int64) + 1, (w, h))
-        # Texture pixel s (centre c = (n - 1) / 2) lands at p0 + (a (sx - c) + b (sy - c)) / (n/2).
-        half = (n / 2.0)[:, None]
-        c = ((n - 1.0) / 2.0)[:, None]
-        M = np.empty((ids.shape[0], 2, 3))
-        M[:, :, 0] = a / half
-        M[:, :, 1] = b / half
-        M[:, :, 2] = p0 - lo - (a + b) * c / half
-        levels = self._levels
-        for k in np.argsort(-dist):
-            (x0, y0), (x1, y1) = lo[k], hi[k]
-            if x1 > x0 and y1 > y0:
-                cv2.warpAffine(
-                    levels[level[k]][ids[k]],
-                    M[k],
-                    (int(x1 - x0), int(y1 - y0)),
-                    dst=image[y0:y1, x0:x1],
-                    flags=cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_TRANSPARENT,
-                )
-
     def _draw_people(
         self,
         sim: Simulation,
-        image: npt.NDArray[np.uint8],
+        image: npt.NDArray[np.float32],
         R_cam_world: FloatArray,
         centre_w: FloatArray,
+        depth_m: npt.NDArray[np.float32],
     ) -> None:
-        """Draw the people as textured figures (:mod:`sim.person_figure`)."""
+        """Draw the people as textured figures (:mod:`sim.person_figure`), hidden per pixel
+        by what the depth image shows nearer."""
         if len(sim.people) == 0:
             return
         if self._figures is None:
             self._figures = PersonFigures(self.camera, TextureLibrary.builtin(),
                                           self._brightness, self._rng.spawn(1)[0])
-        self._figures.draw_people(sim, image, R_cam_world, centre_w)
-
-    # -- fixed images -------------------------------------------------------------------
-
-    @staticmethod
-    def _contrast_adjusted(
-        textures: npt.NDArray[np.uint8], lighting: Lighting
-    ) -> npt.NDArray[np.uint8]:
-        """Textures scaled about the scene's mean grey level by the world's contrast."""
-        t = textures.astype(np.float32)
-        out = lighting.brightness + lighting.contrast * (t - 128.0)
-        return np.clip(out, 0, 255).round().astype(np.uint8)
-
-
-def _patch_axes(normals_w: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Unit horizontal and upward in-plane axes of each patch (world frame).
-
-    The horizontal axis is up x normal (to the right as one faces the patch);
-    a patch facing straight up or down (ceiling) takes world x instead.
-
-    Returns:
-        tangents_h, tangents_v: (N, 3) float64 unit rows.
-    """
-    up = np.array([0.0, 0.0, 1.0])
-    h = np.cross(up, normals_w)
-    norm = np.linalg.norm(h, axis=1)
-    flat = norm < 1e-6
-    h[flat] = np.array([1.0, 0.0, 0.0])
-    norm[flat] = 1.0
-    h /= norm[:, None]
-    v = np.cross(normals_w, h)
-    v /= np.linalg.norm(v, axis=1)[:, None]
-    return h, v
+        self._figures.draw_people(sim, image, R_cam_world, centre_w, depth_m)

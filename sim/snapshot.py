@@ -20,7 +20,7 @@ from sim.config import SimConfig
 from sim.renderer import FisheyeRenderer, RenderedFrame
 from sim.simulation import Simulation
 from sim.topdown import draw_topdown
-from sim.world import load_world
+from sim.world import World, load_world
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,7 +41,8 @@ class Snapshot:
 
 
 def take_snapshot(
-    config: SimConfig, camera: CameraModel, out_dir: Path, pose: Pose2 | None = None
+    config: SimConfig, camera: CameraModel, out_dir: Path, pose: Pose2 | None = None,
+    world: World | None = None,
 ) -> Snapshot:
     """Build the world, place the robot, render one frame and write the showcase files.
 
@@ -50,20 +51,21 @@ def take_snapshot(
         camera: the simulated lens.
         out_dir: folder for ``frame.png``, ``map.png`` and ``snapshot.json`` (created).
         pose: where to put the robot; None = the world's start pose.
+        world: the world to film (a changed one: :mod:`sim.scene_change`); None =
+            ``config.world``.
 
     Raises:
         ConfigError: unknown or malformed world, or a pose inside an obstacle.
         InputError: the output folder cannot be written.
     """
-    world = load_world(config.world)
-    sim = Simulation(world, config)
+    sim = Simulation(load_world(config.world) if world is None else world, config)
     if pose is not None:
         sim.place_robot(pose)
     renderer = FisheyeRenderer.for_simulation(sim, camera)
     frame = renderer.render(sim)
     topdown = draw_topdown(sim, frame, camera.fov_deg)
 
-    summary = _summary(config, camera, sim, frame)
+    summary = _summary(config, camera, sim, renderer, frame)
     if renderer.effects.last is not None:
         reading = renderer.effects.last
         summary["sensor"] = {"exposure_ms": round(reading.exposure_s * 1e3, 3),
@@ -85,7 +87,11 @@ def take_snapshot(
 
 
 def _summary(
-    config: SimConfig, camera: CameraModel, sim: Simulation, frame: RenderedFrame
+    config: SimConfig,
+    camera: CameraModel,
+    sim: Simulation,
+    renderer: FisheyeRenderer,
+    frame: RenderedFrame,
 ) -> dict[str, Any]:
     x, y, yaw = frame.pose_w
     return {
@@ -94,7 +100,7 @@ def _summary(
         "t_ns": frame.t_ns,
         "pose_w": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_deg": round(math.degrees(yaw), 3)},
         "camera": {"width": camera.width, "height": camera.height, "fov_deg": camera.fov_deg},
-        "landmarks_total": int(sim.landmarks.ids.shape[0]),
+        "landmarks_total": renderer.landmark_count,
         "visible_landmarks": int(frame.visible_ids.shape[0]),
         "people": int(config.people.count),
         "illumination_gain": round(frame.illumination_gain, 4),

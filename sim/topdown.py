@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from sim._world_checks import place_picture
 from sim.landmarks import Surface
 from sim.renderer import RenderedFrame
 from sim.simulation import OCCLUDER_FILTER, Simulation
@@ -32,6 +33,7 @@ _LANDMARK = {
     Surface.CEILING: (170, 170, 170),
 }
 _VISIBLE = (30, 30, 220)
+_TREE = (60, 150, 60)
 _PERSON = (60, 60, 160)
 _ROBOT = (200, 80, 20)
 
@@ -81,20 +83,22 @@ def draw_topdown(
         corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
         cv2.fillPoly(img, [canvas.px(corners)], _CEILING)
     cv2.fillPoly(img, [canvas.px(_fov_polygon(sim, frame, fov_deg))], _FOV, lineType=cv2.LINE_AA)
-    for corners in sim.world.furniture_corners():
+    for corners in np.concatenate([sim.world.furniture_corners(), sim.world.object_corners()]):
         cv2.fillPoly(img, [canvas.px(corners)], _FURNITURE, lineType=cv2.LINE_AA)
+    for tree in sim.world.trees:
+        (u, v), = canvas.px([tree.at])
+        cv2.circle(img, (int(u), int(v)), max(int(tree.crown_radius_m * px_per_m), 2), _TREE, 1,
+                   cv2.LINE_AA)
+        cv2.circle(img, (int(u), int(v)), max(int(tree.trunk_radius_m * px_per_m), 2),
+                   _FURNITURE, -1, cv2.LINE_AA)
     for wall in sim.world.walls:
         a, b = canvas.px([wall.start, wall.end])
         cv2.line(img, tuple(int(v) for v in a), tuple(int(v) for v in b), _WALL, 3, cv2.LINE_AA)
 
-    lm = sim.landmarks
-    pts = canvas.px(lm.positions_w[:, :2])
-    for surface, colour in _LANDMARK.items():
-        for u, v in pts[lm.surface == surface]:
-            img[max(v - 1, 0) : v + 1, max(u - 1, 0) : u + 1] = colour
-    visible = np.isin(lm.ids, frame.visible_ids)
-    for u, v in pts[visible]:
-        cv2.circle(img, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
+    if len(sim.landmarks):
+        _draw_patches(canvas, sim, frame)
+    else:
+        _draw_pictures(canvas, sim, frame)
 
     positions, radius, _ = sim.people_state()
     for p in canvas.px(positions) if len(positions) else []:
@@ -104,6 +108,33 @@ def draw_topdown(
 
     _draw_robot(canvas, sim)
     return img
+
+
+def _draw_patches(canvas: MapCanvas, sim: Simulation, frame: RenderedFrame) -> None:
+    """Legacy landmark patches, coloured by surface; those in view circled."""
+    lm = sim.landmarks
+    pts = canvas.px(lm.positions_w[:, :2])
+    for surface, colour in _LANDMARK.items():
+        for u, v in pts[lm.surface == surface]:
+            canvas.image[max(v - 1, 0) : v + 1, max(u - 1, 0) : u + 1] = colour
+    for u, v in pts[np.isin(lm.ids, frame.visible_ids)]:
+        cv2.circle(canvas.image, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
+
+
+def _draw_pictures(canvas: MapCanvas, sim: Simulation, frame: RenderedFrame) -> None:
+    """Pictures on the walls as short strokes; those with a corner in view in red."""
+    seen = set((np.asarray(frame.visible_ids) // 4).tolist())
+    for i, picture in enumerate(sim.world.pictures):
+        place = place_picture(sim.world.walls, picture)
+        wall = sim.world.walls[place.wall]
+        d = np.subtract(wall.end, wall.start) / wall.length_m
+        n = place.side * np.array([-d[1], d[0]]) * 0.12
+        width = (picture.size or sim.world.textures().get(picture.texture).size_m)[0]
+        centre = np.asarray(wall.start) + place.along_m * d + n
+        a, b = canvas.px([centre - 0.5 * width * d, centre + 0.5 * width * d])
+        colour = _VISIBLE if i in seen else _LANDMARK[Surface.WALL]
+        cv2.line(canvas.image, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), colour, 2,
+                 cv2.LINE_AA)
 
 
 def _fov_polygon(sim: Simulation, frame: RenderedFrame, fov_deg: float) -> npt.NDArray[np.float64]:

@@ -63,7 +63,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                    help="calibration JSON to write")
     p.add_argument(
         "--fov",
-        default="185",
         metavar="DEG",
         help="full field of view of the lens, degrees (from its data sheet) [default: 185]",
     )
@@ -81,6 +80,11 @@ def run(args: argparse.Namespace) -> int:
     if args.from_equidistant is not None:
         from tools.calibrate_equidistant_cmd import import_equidistant
 
+        for option, value in (("--pattern", args.pattern), ("--square", args.square),
+                              ("--fov", args.fov)):
+            if value is not None:
+                raise CalibrationError(option, "not used with --from-equidistant (the field "
+                                               "of view comes from the image's corners)")
         return import_equidistant(args.from_equidistant, args.output, WRITER)
     return _calibrate(args)
 
@@ -93,7 +97,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     if args.pattern is None or args.square is None:
         raise CalibrationError("--pattern/--square", "both are needed to calibrate from images")
     board = _board(args.pattern, args.square)
-    fov_deg = _number("--fov", args.fov)
+    fov_deg = _number("--fov", "185" if args.fov is None else args.fov)
     if not 0.0 < fov_deg < 360.0:
         raise CalibrationError("--fov", f"must be in (0, 360) degrees, got {args.fov}")
     paths = _image_paths(args.images_dir)

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from tools import sim_serve_cmd
+from tools.harness.scene_args import add_change_arguments, scene_change_from_args
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 
@@ -39,6 +40,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         metavar="DEG",
         help="robot heading, degrees CCW from +x [default: 0 with --x/--y]",
     )
+    add_change_arguments(snap)
     snap.set_defaults(run=run_snapshot)
     sim_serve_cmd.add_parser(sim_sub)
 
@@ -48,14 +50,21 @@ def run_snapshot(args: argparse.Namespace) -> int:
     from shared.errors import InputError
     from shared.pose import Pose2
     from sim.snapshot import take_snapshot
+    from sim.world import load_world
+    from tools.harness.demo import changed_world
 
+    change = scene_change_from_args(args)
     config, camera = sim_config_from_args(args)
     pose = None
     if args.x is not None or args.y is not None or args.yaw is not None:
         if args.x is None or args.y is None:
             raise InputError("--x/--y", "give both --x and --y to place the robot")
         pose = Pose2(args.x, args.y, math.radians(args.yaw) if args.yaw is not None else 0.0)
-    snap = take_snapshot(config, camera, args.out, pose)
+    world = load_world(config.world)
+    if not change.is_none:  # as a repeat would see it, nothing moved onto the robot
+        at = world.start if pose is None else pose
+        world = changed_world(world, change, config.seed, (at.x_m, at.y_m)).world
+    snap = take_snapshot(config, camera, args.out, pose, world)
     s = snap.summary
     p = s["pose_w"]
     print(

@@ -77,8 +77,22 @@ def detect_grid_fast(image: GreyImage, config: FeatureConfig, mask: BoolImage | 
     if config.fast_threshold_low < config.fast_threshold:
         pixels, response = _search_weak_cells(image, allowed, grid, pixels, response, config)
     keep = grid.spread(pixels, response)
-    pixels, response = pixels[keep], response[keep]
-    return refine_subpixel(image, pixels, config.subpixel_half_window_px), response
+    pixels = refine_subpixel(image, pixels[keep], config.subpixel_half_window_px)
+    distinct = _distinct(pixels)
+    return pixels[distinct], response[keep][distinct]
+
+
+#: Two refined corners closer than this are one corner, px.
+_SAME_CORNER_PX = 1.0
+
+
+def _distinct(pixels: npt.NDArray[np.float64]) -> npt.NDArray[np.bool_]:
+    """(N,) False for a corner within ``_SAME_CORNER_PX`` of a stronger (earlier) one:
+    FAST fires a few pixels around one saddle, and sub-pixel refinement moves them all
+    onto it (same point, same descriptor: a tie no matching can break)."""
+    d2 = ((pixels[:, None, :] - pixels[None, :, :]) ** 2).sum(axis=2)
+    close = np.tril(d2 < _SAME_CORNER_PX ** 2, k=-1)
+    return ~close.any(axis=1)
 
 
 def _fast(image: GreyImage, allowed: npt.NDArray[np.uint8], threshold: int,

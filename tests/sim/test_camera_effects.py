@@ -246,3 +246,23 @@ class TestInTheRenderer:
         # At least the centre's blur: omega x exposure x the lens's scale there.
         assert turning.blur_px >= 0.95 * turning.exposure_s * PX_PER_RAD
         assert turning.mean_grey == pytest.approx(SensorConfig().target_grey, abs=10.0)
+
+
+class TestAnotherLens:
+    def test_a_smaller_lens_with_distortion_gets_its_own_circle_blur_and_falloff(self) -> None:
+        K = np.array([[260.0, 0.0, 321.0], [0.0, 262.0, 238.0], [0.0, 0.0, 1.0]])
+        lens = CameraModel(640, 480, K, xi=1.2, D=np.array([-0.05, 0.01, 0.0, 0.0]),
+                           fov_deg=170.0)
+        fx = CameraEffects(lens, MOUNT, dataclasses.replace(IDEAL, motion_blur=True,
+                                                            vignetting_rim=0.5),
+                           np.random.default_rng(0))
+        scene = np.full((480, 640), 200, dtype=np.uint8)
+        image = fx.apply(scene, 0, yaw(1.0))
+        assert image.shape == (480, 640)
+        _, valid = lens.lift([[321.0, 238.0], [0.0, 0.0]])
+        assert image[238, 321] == pytest.approx(200, abs=1) and valid[0]
+        assert (image[0, 0] == 0) == (not valid[1])
+        assert fx.last is not None and fx.last.blur_px > 0.5 * 0.008 * K[0, 0] / (1.0 + 1.2)
+        ((u, v),), _ = lens.project([[math.sin(math.radians(84.0)), 0.0,
+                                      math.cos(math.radians(84.0))]])
+        assert image[round(v), round(u)] < 0.6 * 200

@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cv2
@@ -60,7 +61,8 @@ def assert_no_overlap_on_walls(world: World, field: LandmarkField) -> None:
 
 @pytest.fixture(scope="module")
 def lab() -> World:
-    return load_world("lab")
+    """The lab's floor plan with the patch densities it had before it was textured."""
+    return dataclasses.replace(load_world("lab"), landmarks=LandmarkDensity(8.0, 8.0, 3.0, 0.15))
 
 
 @pytest.fixture(scope="module")

@@ -115,6 +115,18 @@ class TestDraw:
         assert canvas[foot_v, foot_u] == BACKGROUND != alone[foot_v, foot_u]
         assert canvas[head_v, head_u] != round(canvas[head_v, head_u])  # not rounded
 
+    def test_the_light_where_it_stands_scales_it(self) -> None:
+        fig = figures()
+        pose = facing_camera(3.0)
+        canvases = []
+        for light in (1.0, 0.5):
+            canvas = np.zeros((CAMERA.height, CAMERA.width), dtype=np.float32)
+            fig.draw(canvas, pose, fig.look(0), R_CAM_WORLD, CENTRE_W, [], None, light)
+            canvases.append(canvas)
+        drawn = canvases[0] > 0
+        assert drawn.sum() > 500
+        np.testing.assert_allclose(canvases[1][drawn], 0.5 * canvases[0][drawn], rtol=1e-5)
+
     def test_a_figure_behind_the_camera_or_too_near_draws_nothing(self) -> None:
         fig = figures()
         behind = dataclasses.replace(facing_camera(-3.0), heading_rad=0.0)

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -14,7 +15,39 @@ from sim._geometry import segments_cross
 from sim.config import PeopleConfig, RenderConfig, SensorConfig, SimConfig
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
-from sim.world import load_world
+from sim.world import LandmarkDensity, World, load_world
+from tests.sim.rooms import box_room
+from tools.bench.corners import picture_corner_errors_px
+
+
+def poster_room(folder: Path) -> World:
+    """A 6 x 4 m room with white walls and four black posters (a texture set of its own)."""
+    cv2.imwrite(str(folder / "white.png"), np.full((16, 16), 230, np.uint8))
+    cv2.imwrite(str(folder / "black.png"), np.full((64, 64), 20, np.uint8))
+    entry = 'size_m = [{}, {}]\nkind = "{}"\nsource = "test"\nlicence = "CC0-1.0"\n'
+    (folder / "textures.toml").write_text(
+        '[white]\nfile = "white.png"\ntiles = true\n' + entry.format(1.0, 1.0, "wall")
+        + '\n[black]\nfile = "black.png"\n' + entry.format(0.5, 0.5, "picture"))
+    walls = "\n".join(
+        f'    {{ start = {a}, end = {b}, height_m = 2.5, texture = "white" }},'
+        for a, b in [([0, 0], [6, 0]), ([6, 0], [6, 4]), ([6, 4], [0, 4]), ([0, 4], [0, 0])])
+    (folder / "world.toml").write_text(f"""name = "posters"
+texture_set = "textures.toml"
+start = {{ x_m = 1.0, y_m = 2.0 }}
+walls = [
+{walls}
+]
+ceilings = [{{ min_corner = [0.0, 0.0], max_corner = [6.0, 4.0], height_m = 2.5 }}]
+lamps = [{{ center = [3.0, 2.0] }}]
+pictures = [
+    {{ at = [5.8, 1.0], texture = "black", height_m = 1.0 }},
+    {{ at = [5.8, 2.5], texture = "black", height_m = 0.6 }},
+    {{ at = [3.0, 3.8], texture = "black", height_m = 1.2 }},
+    {{ at = [3.0, 0.2], texture = "black", height_m = 0.8 }},
+]
+landmarks = {{ wall_per_m2 = 0.0, furniture_per_m2 = 0.0, ceiling_per_m2 = 0.0 }}
+""")
+    return load_world(folder / "world.toml")
 
 
 def make(
@@ -59,18 +92,19 @@ def test_camera_pose_world_places_the_optical_centre() -> None:
 
 
 class TestRender:
-    def test_frame_and_ground_truth_agree_with_the_camera_model(self) -> None:
+    def test_picture_corners_in_view_agree_with_the_camera_model(self) -> None:
         sim, renderer = make(pose=CORRIDOR)
         frame = renderer.render(sim)
         assert frame.image.shape == (600, 800) and frame.image.dtype == np.uint8
-        assert frame.visible_ids.shape[0] > 100
-        idx = np.searchsorted(sim.landmarks.ids, frame.visible_ids)
+        assert frame.visible_ids.shape[0] > 20
+        corners = renderer.scene.picture_corners_w.reshape(-1, 3)[frame.visible_ids]
         T = frame.T_world_cam
-        points_c = (sim.landmarks.positions_w[idx] - T[:3, 3]) @ T[:3, :3]
-        pixels, valid = CameraModel.default().project(points_c)
+        pixels, valid = CameraModel.default().project((corners - T[:3, 3]) @ T[:3, :3])
         assert valid.all()
         np.testing.assert_allclose(pixels, frame.visible_pixels_xy, atol=1e-9)
         assert np.all(np.diff(frame.visible_distances_m) >= 0)  # near to far
+        assert frame.depth_m is not None
+        assert np.isinf(frame.depth_m[0, 0]) and 0.3 < frame.depth_m[560, 400] < 1.5  # floor
 
     def test_outside_the_image_circle_is_black(self) -> None:
         sim, renderer = make(pose=CORRIDOR)
@@ -78,37 +112,42 @@ class TestRender:
         assert image[0, 0] == image[0, -1] == image[-1, 0] == image[-1, -1] == 0
         assert image[300, 400] > 0
 
-    def test_harris_finds_the_landmarks_where_ground_truth_says(self) -> None:
-        sim, renderer = make(pose=CORRIDOR)
-        frame = renderer.render(sim)
-        corners = cv2.goodFeaturesToTrack(
-            frame.image, maxCorners=2000, qualityLevel=0.005, minDistance=3, useHarrisDetector=True
-        )
-        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 30, 0.01)
-        corners = cv2.cornerSubPix(frame.image, corners, (3, 3), (-1, -1), criteria).reshape(-1, 2)
-        truth = frame.visible_pixels_xy[frame.visible_distances_m < 3.0]  # patches >= ~8 px
-        assert truth.shape[0] > 30
-        nearest = np.min(np.linalg.norm(truth[:, None, :] - corners[None, :, :], axis=2), axis=1)
-        # Patches seen at grazing angles are squeezed to a few pixels: corners move up to ~2 px.
-        assert np.mean(nearest < 2.5) > 0.85
-        assert np.median(nearest) < 1.0
+    def test_textured_corners_land_where_the_camera_model_projects_them(
+        self, tmp_path: Path
+    ) -> None:
+        world = poster_room(tmp_path)
+        quiet = dataclasses.replace(
+            SimConfig(), render=RenderConfig(illumination_amplitude=0.0),
+            sensor=SensorConfig.ideal())
+        sim = Simulation(world, quiet)
+        renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
+        errors = []
+        for x, y, yaw in [(1.0, 2.0, 0.0), (2.0, 2.0, 20.0), (3.0, 2.0, -40.0), (4.0, 2.0, -10.0)]:
+            sim.place_robot(Pose2(x, y, math.radians(yaw)))
+            frame = renderer.render(sim)
+            errors.append(picture_corner_errors_px(
+                frame.image, CameraModel.default(), frame.T_world_cam,
+                renderer.scene.picture_corners_w, frame.visible_ids))
+        found = np.concatenate(errors)
+        assert found.shape[0] >= 30
+        assert np.median(found) < 0.5
+        assert np.percentile(found, 90) < 1.0
 
-    def test_no_visible_landmark_is_behind_a_wall(self) -> None:
+    def test_no_visible_corner_is_behind_a_wall(self) -> None:
         sim, renderer = make(pose=CORRIDOR)
         frame = renderer.render(sim)
         walls = sim.world.walls
         a = np.array([w.start for w in walls])
         b = np.array([w.end for w in walls])
         cam = frame.T_world_cam[:3, 3]
-        idx = np.searchsorted(sim.landmarks.ids, frame.visible_ids)
-        for p in sim.landmarks.positions_w[idx]:
-            # Stop just short of the landmark: the wall carrying it does not count.
+        for p in renderer.scene.picture_corners_w.reshape(-1, 3)[frame.visible_ids]:
+            # Stop just short of the corner: the wall carrying it does not count.
             end = cam[:2] + (p[:2] - cam[:2]) * (
-                1.0 - 0.05 / max(np.hypot(*(p[:2] - cam[:2])), 0.05)
+                1.0 - 0.12 / max(np.hypot(*(p[:2] - cam[:2])), 0.12)
             )
             assert not segments_cross(cam[:2], end, a, b).any()
 
-    def test_a_person_in_front_hides_landmarks_and_shows_up(self) -> None:
+    def test_a_person_in_front_shows_up(self) -> None:
         config = dataclasses.replace(SimConfig(), people=PeopleConfig(count=1),
                                      sensor=SensorConfig.ideal())
         sim, renderer = make(config, pose=CORRIDOR)
@@ -117,11 +156,33 @@ class TestRender:
         with_person = renderer.render(sim)
         sim.people.place(0, (1.0, 10.0), (1.0, 10.0))  # behind the robot
         without = renderer.render(sim)
-        assert with_person.visible_ids.shape[0] < without.visible_ids.shape[0]
         centre = (slice(150, 330), slice(385, 415))
         changed = np.abs(with_person.image[centre].astype(float) - without.image[centre])
         assert np.mean(changed > 5) > 0.7  # the person covers the middle of the image
 
+
+class TestLegacyPatches:
+    def test_harris_finds_the_patches_where_ground_truth_says(self) -> None:
+        world = box_room(density=LandmarkDensity(wall_per_m2=8.0, furniture_per_m2=0.0,
+                                                 ceiling_per_m2=0.0))
+        sim = Simulation(world, SimConfig())
+        renderer = FisheyeRenderer.for_simulation(sim, CameraModel.default())
+        frame = renderer.render(sim)
+        assert frame.visible_ids.shape[0] > 50
+        idx = np.searchsorted(sim.landmarks.ids, frame.visible_ids)
+        T = frame.T_world_cam
+        points_c = (sim.landmarks.positions_w[idx] - T[:3, 3]) @ T[:3, :3]
+        pixels, _ = CameraModel.default().project(points_c)
+        np.testing.assert_allclose(pixels, frame.visible_pixels_xy, atol=1e-9)
+        corners = cv2.goodFeaturesToTrack(
+            frame.image, maxCorners=2000, qualityLevel=0.005, minDistance=3, useHarrisDetector=True
+        ).reshape(-1, 2)
+        truth = frame.visible_pixels_xy[frame.visible_distances_m < 3.0]
+        nearest = np.min(np.linalg.norm(truth[:, None, :] - corners[None, :, :], axis=2), axis=1)
+        assert np.median(nearest) < 1.5
+
+
+class TestNoise:
     def test_deterministic_for_a_seed(self) -> None:
         images = []
         for seed in (3, 3, 4):

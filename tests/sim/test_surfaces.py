@@ -1,267 +1,194 @@
+"""The compiled surfaces (sim/surfaces.py) and the ray kernel that traces them (sim/_raycast.py)."""
+
 from __future__ import annotations
 
 import dataclasses
 import math
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 import pytest
-from hypothesis import assume, given, settings
-from hypothesis import strategies as st
 
 from shared.camera_model import CameraModel
-from shared.camera_mount import camera_pose_world, rotation_base_cam
+from shared.camera_mount import camera_pose_world
 from shared.config import CameraMountConfig
-from shared.errors import ShapeError
 from shared.pose import Pose2
-from sim._geometry import point_segment_distances, points_in_polygons
 from sim.config import RenderConfig, SensorConfig, SimConfig
+from sim.decor import Lamp, Picture, PlacedObject, Tree
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
-from sim.surfaces import SurfaceShader
-from sim.world import Box, Ceiling, Wall, World, load_world
+from sim.surfaces import PICTURE_PROUD_M, Scene
+from sim.world import Box, Ceiling, LandmarkDensity, Wall, World, load_world
 
 CAMERA = CameraModel.default()
-H_CAM = 0.3
-WALL_H = 2.5
-ROOM = (10.0, 6.0)
-COLUMN = 400  # the image's centre column (cx = 399.5)
-LAB = load_world("lab")
+NO_PATCHES = LandmarkDensity(0.0, 0.0, 0.0)
+QUIET = RenderConfig(illumination_amplitude=0.0)
 
 
-def room(*, ceiling: bool = True, furniture: tuple[Box, ...] = ()) -> World:
-    """A 10 x 6 m room, walls 2.5 m high, optionally roofed at the walls' height."""
-    w, h = ROOM
-    corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)]
-    walls = tuple(
-        Wall(a, b, WALL_H) for a, b in zip(corners, corners[1:] + corners[:1], strict=True)
-    )
-    ceilings = (Ceiling((0.0, 0.0), ROOM, WALL_H),) if ceiling else ()
-    return World(
-        name="room", walls=walls, start=Pose2(1.0, 1.0), furniture=furniture, ceilings=ceilings
-    )
+def room(**decor: object) -> World:
+    """A 10 x 6 m room, walls 2.5 m high, roofed, with ``decor`` (World fields)."""
+    corners = [(0.0, 0.0), (10.0, 0.0), (10.0, 6.0), (0.0, 6.0)]
+    walls = tuple(Wall(a, b, 2.5) for a, b in zip(corners, corners[1:] + corners[:1], strict=True))
+    return World(name="room", walls=walls, start=Pose2(1.0, 3.0),
+                 ceilings=(Ceiling((0.0, 0.0), (10.0, 6.0), 2.5),), landmarks=NO_PATCHES,
+                 **decor)  # type: ignore[arg-type]
 
 
-def exact_shader(world: World, mount: CameraMountConfig | None = None) -> SurfaceShader:
-    """One cell per pixel, no blur: every pixel is shaded by its own ray."""
-    mount = mount or CameraMountConfig(height_m=H_CAM)
-    return SurfaceShader(
-        world, CAMERA, rotation_base_cam(mount), mount.height_m, downsample=1, blur_sigma_cells=0.0
-    )
+def renderer_for(world: World, pose: Pose2) -> tuple[Simulation, FisheyeRenderer]:
+    sim = Simulation(world, dataclasses.replace(SimConfig(), render=QUIET,
+                                                sensor=SensorConfig.ideal()))
+    sim.place_robot(pose)
+    return sim, FisheyeRenderer.for_simulation(sim, CAMERA)
 
 
-def column_elevations_deg() -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
-    """Rows of the centre column that look forward, and their rays' elevations (level camera)."""
-    rows = np.arange(CAMERA.height)
-    bearings, valid = CAMERA.lift(np.column_stack([np.full(rows.shape, COLUMN), rows]))
-    base = bearings @ rotation_base_cam(CameraMountConfig()).T
-    forward = valid & (base[:, 0] > 0)
-    elevation = np.degrees(np.arctan2(base[:, 2], np.hypot(base[:, 0], base[:, 1])))
-    return rows[forward], elevation[forward]
-
-
-def band(image: npt.NDArray[np.uint8], lo_deg: float, hi_deg: float) -> npt.NDArray[np.uint8]:
-    """Greys of the centre column's pixels with elevations in (lo, hi), clear of the ends."""
-    rows, elevation = column_elevations_deg()
-    inside = (elevation > lo_deg + 0.05) & (elevation < hi_deg - 0.05)
-    assert inside.sum() >= 3, (lo_deg, hi_deg)
-    return image[rows[inside], COLUMN]
-
-
-def el(height_above_camera_m: float, distance_m: float) -> float:
-    return math.degrees(math.atan2(height_above_camera_m, distance_m))
-
-
-def facing_wall(distance_m: float) -> tuple[float, float]:
-    """Camera position facing +x with the east wall's face ``distance_m`` ahead."""
-    return (ROOM[0] - WALL_HALF_THICKNESS_M - distance_m, 3.0)
-
-
-class TestKnownAnswers:
-    @pytest.mark.parametrize(
-        ("xy", "yaw_deg", "distance_m"),
-        [
-            (facing_wall(2.0), 0.0, 2.0),  # the brief's case: a wall 2 m ahead
-            ((5.0, 4.45), 90.0, 1.5),  # north wall's face at y = 5.95
-            ((3.05, 3.0), 180.0, 3.0),  # west wall's face at x = 0.05
-            ((5.0, 2.55), -90.0, 2.5),  # south wall's face at y = 0.05
-        ],
-    )
-    def test_facing_a_wall(
-        self, xy: tuple[float, float], yaw_deg: float, distance_m: float
-    ) -> None:
-        image = exact_shader(room()).shade(xy, math.radians(yaw_deg))
-        lo, hi = el(-H_CAM, distance_m), el(WALL_H - H_CAM, distance_m)
-        wall = band(image, lo, hi)
-        floor = band(image, -89.0, lo)
-        ceiling = band(image, hi, 89.0)
-        assert wall.max() - wall.min() <= 1  # one distance, one incidence
-        assert floor.max() < wall.min()
-        assert ceiling.min() > wall.max()
-        # The boundaries are where the geometry puts them: just outside the band, no wall.
-        assert band(image, lo - 1.5, lo).max() < wall.min()
-        assert band(image, hi, hi + 1.5).min() > wall.max()
-
-    def test_a_ray_passes_over_a_desk_to_the_wall_behind(self) -> None:
-        desk_h, desk_d, wall_d = 0.75, 1.0, 3.0
-        x, y = facing_wall(wall_d)
-        desk = Box((x + desk_d + 0.3, y), (0.6, 1.6), 0.0, desk_h)  # front face desk_d ahead
-        image = exact_shader(room(furniture=(desk,))).shade((x, y), 0.0)
-        foot, top = el(-H_CAM, desk_d), el(desk_h - H_CAM, desk_d)
-        front = band(image, foot, top)
-        # Over the desk's top edge the ray meets the wall, up to the wall's top.
-        wall = band(image, top, el(WALL_H - H_CAM, wall_d))
-        assert front.max() - front.min() <= 1 and wall.max() - wall.min() <= 1
-        assert abs(int(front[0]) - int(wall[0])) > 5
-        floor = band(image, foot - 2.0, foot)  # at the desk's foot
-        assert np.abs(floor.astype(int) - int(front[0])).min() > 5
-        assert band(image, el(WALL_H - H_CAM, wall_d), 89.0).min() > wall.max()  # ceiling
-
-    def test_mount_yaw_and_robot_yaw_agree(self) -> None:
-        world = room()
-        turned_mount = exact_shader(world, CameraMountConfig(height_m=H_CAM, yaw_deg=90.0))
-        turned_robot = exact_shader(world)
-        xy = (5.0, 3.0)
-        a = turned_mount.shade(xy, 0.0).astype(int)
-        b = turned_robot.shade(xy, math.pi / 2).astype(int)
-        # Bins sit at fixed azimuths from the heading, so a pixel can change bin: compare broadly.
-        assert np.mean(np.abs(a - b) <= 2) > 0.99
-
-    def test_open_sky_and_ceilings_in_the_campus(self) -> None:
-        world = load_world("campus")
-        mount = CameraMountConfig()
-        shader = SurfaceShader(world, CAMERA, rotation_base_cam(mount), mount.height_m)
-        zenith = (40, 400)  # near the top of the image circle, looking up
-        courtyard = shader.shade((26.0, 10.0), 0.0)
-        corridor = shader.shade((10.0, 10.0), 0.0)
-        sky = courtyard[zenith]
-        assert sky >= courtyard.max() - 2  # the sky is the brightest surface
-        assert corridor[zenith] < sky - 20  # under the corridor's roof: ceiling
-        assert corridor[zenith] > corridor[560, 400]  # ceiling brighter than floor
-
-
-class TestImage:
-    def test_shape_mask_and_determinism(self) -> None:
-        world = load_world("lab")
-        mount = CameraMountConfig()
-        shaders = [
-            SurfaceShader(world, CAMERA, rotation_base_cam(mount), mount.height_m) for _ in range(2)
-        ]
-        a, b = (shader.shade((8.2, 10.0), 0.3) for shader in shaders)
-        assert a.shape == (CAMERA.height, CAMERA.width) and a.dtype == np.uint8
-        assert np.array_equal(a, b)
-        assert a[0, 0] == a[0, -1] == a[-1, 0] == a[-1, -1] == 0
-        assert a[300, 400] > 0
-
-    def test_edges_make_weak_corners_next_to_landmarks(self) -> None:
-        # Harris responses of the shaded surfaces alone stay far below those of the landmark
-        # patches' corners, so the detector keeps finding landmarks.
-        config = dataclasses.replace(SimConfig(), render=RenderConfig(illumination_amplitude=0.0),
-                                     sensor=SensorConfig.ideal())
-        sim = Simulation(load_world("lab"), config)
-        pose = Pose2(8.0, 10.0, 0.0)
-        sim.place_robot(pose)
-        renderer = FisheyeRenderer.for_simulation(sim, CAMERA)
-        frame = renderer.render(sim)
-        T = camera_pose_world(frame.pose_w, config.camera_mount)
-        shader = SurfaceShader(sim.world, CAMERA, rotation_base_cam(config.camera_mount), T[2, 3])
-        background = shader.shade(T[:2, 3], frame.pose_w[2])
-
-        def harris(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]:
-            return cv2.cornerHarris(image.astype(np.float32), 3, 3, 0.04)
-
-        circle = cv2.erode((background > 0).astype(np.uint8), np.ones((15, 15), np.uint8)) > 0
-        surfaces_max = harris(background)[circle].max()
-        near = np.round(frame.visible_pixels_xy[frame.visible_distances_m < 3.0]).astype(int)
-        assert near.shape[0] > 30
-        peaks = cv2.dilate(harris(frame.image), np.ones((5, 5), np.uint8))[near[:, 1], near[:, 0]]
-        assert surfaces_max < 0.01 * np.median(peaks)
-
-
-class TestBadInput:
-    def test_rotation_shape(self) -> None:
-        with pytest.raises(ShapeError):
-            SurfaceShader(room(), CAMERA, np.eye(2), H_CAM)
-
-    @pytest.mark.parametrize(
-        ("name", "value"),
-        [
-            ("downsample", 0),
-            ("azimuth_bins", 4),
-            ("blur_sigma_cells", -1.0),
-            ("blur_sigma_cells", math.nan),
-        ],
-    )
-    def test_out_of_range(self, name: str, value: float) -> None:
-        with pytest.raises(ValueError, match=name):
-            SurfaceShader(room(), CAMERA, np.eye(3), H_CAM, **{name: value})
-
-    def test_camera_height(self) -> None:
-        with pytest.raises(ValueError, match="camera_height_m"):
-            SurfaceShader(room(), CAMERA, np.eye(3), 0.0)
-
-
-def lab_segments() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """Starts and ends (S, 2) of the lab's walls, then of its furniture's edges."""
-    corners = LAB.furniture_corners()
-    a = np.concatenate([np.array([w.start for w in LAB.walls]), corners.reshape(-1, 2)])
-    b = np.concatenate(
-        [np.array([w.end for w in LAB.walls]), np.roll(corners, -1, axis=1).reshape(-1, 2)]
-    )
-    return a, b
-
-
-def brute_force_hits(
-    xy: tuple[float, float], yaw: float, bins: int
-) -> list[list[tuple[float, float, float, bool]]]:
-    """Per bin ray in the lab: the visible hits near to far, as (centre-line distance,
-    top height, cos of incidence, is a wall).
-
-    Every wall and furniture edge is intersected with every ray (no culling, no bin
-    ranges), and a hit is visible when its top is seen higher than every nearer hit's.
-    """
-    a, b = lab_segments()
-    heights = [w.height_m for w in LAB.walls] + [f.height_m for f in LAB.furniture for _ in "abcd"]
-    az = yaw - math.pi + (np.arange(bins) + 0.5) * 2 * math.pi / bins
-    r = np.column_stack([np.cos(az), np.sin(az)])[:, None, :]  # (B, 1, 2)
-    e, rel = (b - a)[None], (a - np.asarray(xy))[None]  # (1, S, 2)
-    denom = r[..., 0] * e[..., 1] - r[..., 1] * e[..., 0]
+def brute_force_depth(scene: Scene, o: npt.NDArray[np.float64],
+                      rays: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """Nearest hit along each ray (N, 3) over every primitive, the floor and the ceilings."""
+    n = rays.shape[0]
+    best = np.full(n, np.inf)
+    rx, ry, rz = rays.T
     with np.errstate(divide="ignore", invalid="ignore"):
-        d = (rel[..., 0] * e[..., 1] - rel[..., 1] * e[..., 0]) / denom
-        s = (rel[..., 0] * r[..., 1] - rel[..., 1] * r[..., 0]) / denom
-    cos_i = np.abs(denom) / np.hypot(e[..., 0], e[..., 1])
-    out = []
-    for k in range(bins):
-        hit = np.flatnonzero((d[k] > 0) & (s[k] >= 0) & (s[k] <= 1))
-        visible, best = [], -math.inf
-        for i in hit[np.argsort(d[k, hit])]:
-            if (heights[i] - H_CAM) / d[k, i] > best:
-                best = (heights[i] - H_CAM) / d[k, i]
-                visible.append((d[k, i], heights[i], cos_i[k, i], i < len(LAB.walls)))
-        out.append(visible[:3])
-    return out
+        for a, d, length, nrm, (z0, z1) in zip(scene.quad_a, scene.quad_d, scene.quad_len,
+                                               scene.quad_n, scene.quad_z, strict=True):
+            if (o[0] - a[0]) * nrm[0] + (o[1] - a[1]) * nrm[1] <= 0:
+                continue
+            den = rx * d[1] - ry * d[0]
+            px, py = a[0] - o[0], a[1] - o[1]
+            t = (px * d[1] - py * d[0]) / den
+            s = (px * ry - py * rx) / den
+            z = o[2] + t * rz
+            ok = (t > 1e-4) & (s >= 0) & (s <= length) & (z >= z0) & (z <= z1)
+            best = np.where(ok & (t < best), t, best)
+        for c, ax, half, zf, up in zip(scene.flat_c, scene.flat_ax, scene.flat_half, scene.flat_z,
+                                       scene.flat_up, strict=True):
+            if (o[2] - zf) * up <= 0:
+                continue
+            t = (zf - o[2]) / rz
+            lx, ly = o[0] + t * rx - c[0], o[1] + t * ry - c[1]
+            ok = ((t > 1e-4) & (np.abs(lx * ax[0] + ly * ax[1]) <= half[0])
+                  & (np.abs(-lx * ax[1] + ly * ax[0]) <= half[1]))
+            best = np.where(ok & (t < best), t, best)
+        for c, r, (z0, z1) in zip(scene.cyl_c, scene.cyl_r, scene.cyl_z, strict=True):
+            qx, qy = o[0] - c[0], o[1] - c[1]
+            a2 = rx**2 + ry**2
+            b2 = qx * rx + qy * ry
+            disc = b2**2 - a2 * (qx**2 + qy**2 - r**2)
+            t = (-b2 - np.sqrt(disc)) / a2
+            z = o[2] + t * rz
+            ok = (disc >= 0) & (t > 1e-4) & (z >= z0) & (z <= z1)
+            best = np.where(ok & (t < best), t, best)
+        for c, r in zip(scene.sph_c, scene.sph_r, strict=True):
+            q = o - c
+            b2 = rays @ q
+            disc = b2**2 - (q @ q - r**2)
+            t = -b2 - np.sqrt(disc)
+            ok = (disc >= 0) & (t > 1e-4)
+            best = np.where(ok & (t < best), t, best)
+        floor = np.where(rz < 0, -o[2] / rz, np.inf)
+        best = np.minimum(best, floor)
+        for lo, hi, zc in zip(scene.ceil_lo, scene.ceil_hi, scene.ceil_z, strict=True):
+            t = (zc - o[2]) / rz
+            x, y = o[0] + t * rx, o[1] + t * ry
+            ok = (rz > 0) & (x >= lo[0]) & (x <= hi[0]) & (y >= lo[1]) & (y <= hi[1])
+            best = np.where(ok & (t < best), t, best)
+    return best
 
 
-class TestRayCast:
-    @settings(max_examples=40, deadline=None)
-    @given(x=st.floats(1.0, 29.0), y=st.floats(1.0, 19.0), yaw=st.floats(-math.pi, math.pi))
-    def test_matches_brute_force(self, x: float, y: float, yaw: float) -> None:
-        point = np.array([[x, y]])
-        assume(point_segment_distances(point, *lab_segments()).min() > 0.2)
-        assume(not points_in_polygons(point, LAB.furniture_corners()).any())
-        bins = 90
-        shader = SurfaceShader(LAB, CAMERA, np.eye(3), H_CAM, downsample=8, azimuth_bins=bins)
-        c, s = math.cos(yaw), math.sin(yaw)
-        rays = shader._bin_dirs @ np.array([[c, s], [-s, c]])  # private: the core under test
-        env = shader._cast(point[0], yaw, rays)
-        inv_dist = env.inv_dist.reshape(bins, -1)
-        top = env.top.reshape(bins, -1)
-        for k, hits in enumerate(brute_force_hits((x, y), yaw, bins)):
-            assert np.count_nonzero(inv_dist[k] > 0) == len(hits), k
-            for level, (d, height, cos_i, wall) in enumerate(hits):
-                face = d - (WALL_HALF_THICKNESS_M / max(cos_i, 0.05) if wall else 0.0)
-                assert 1.0 / inv_dist[k, level] == pytest.approx(max(face, 1e-3), rel=1e-4)
-                rise = (height - H_CAM) * inv_dist[k, level]
-                assert top[k, level] == pytest.approx(rise, rel=1e-5)
+class TestBuildScene:
+    def test_walls_are_slabs_with_faces_pointing_out(self) -> None:
+        _, renderer = renderer_for(room(), Pose2(1.0, 3.0))
+        scene = renderer.scene
+        assert scene.quad_a.shape == (16, 2)  # 4 walls x (2 faces + 2 end caps)
+        # The south wall's inner face (its left) points north, 5 cm north of its line.
+        north = np.flatnonzero((scene.quad_n[:, 1] > 0.99) & (np.abs(scene.quad_a[:, 1]) < 0.1))
+        assert north.size == 1
+        assert scene.quad_a[north[0], 1] == pytest.approx(WALL_HALF_THICKNESS_M)
+        np.testing.assert_allclose(np.linalg.norm(scene.quad_d, axis=1), 1.0)
+        # The viewer's right (d) is the normal turned clockwise... seen from the front.
+        np.testing.assert_allclose(scene.quad_n[:, 0], scene.quad_d[:, 1])
+        np.testing.assert_allclose(scene.quad_n[:, 1], -scene.quad_d[:, 0])
+
+    def test_pictures_stand_proud_and_report_their_corners(self) -> None:
+        world = room(pictures=(Picture((5.0, 5.8), "poster_rocket", 1.5),))
+        _, renderer = renderer_for(world, Pose2(1.0, 3.0))
+        scene = renderer.scene
+        corners = scene.picture_corners_w[0]
+        y = 6.0 - WALL_HALF_THICKNESS_M - PICTURE_PROUD_M
+        np.testing.assert_allclose(corners[:, 1], y)
+        # Facing the poster (looking north), its top-left corner is on the viewer's left (west).
+        np.testing.assert_allclose(corners[0], [4.7, y, 1.8])
+        np.testing.assert_allclose(corners[2], [5.3, y, 1.2])
+        np.testing.assert_allclose(scene.picture_normals_w[0], [0.0, -1.0, 0.0])
+
+    def test_boxes_have_tops_and_raised_ones_bottoms(self) -> None:
+        world = room(furniture=(Box((5.0, 1.0), (1.6, 0.8), 0.0, 0.75, kind="desk"),),
+                     objects=(PlacedObject("board", (5.0, 4.0), (1.2, 0.05), 1.0,
+                                           elevation_m=0.7),))
+        _, renderer = renderer_for(world, Pose2(1.0, 3.0))
+        np.testing.assert_allclose(sorted(renderer.scene.flat_z), [0.7, 0.75, 1.7])
+
+
+class TestTrace:
+    @pytest.mark.parametrize(("name", "poses"), [
+        ("lab", [(8.0, 10.0, 0.0), (15.0, 6.0, 100.0), (26.6, 13.0, 45.0), (19.6, 12.0, -80.0)]),
+        ("campus", [(1.5, 10.0, 0.0), (30.0, 10.0, 200.0), (25.0, 4.0, 60.0)]),
+    ])
+    def test_depth_is_the_nearest_hit_of_every_ray(
+        self, name: str, poses: list[tuple[float, float, float]]
+    ) -> None:
+        world = load_world(name)
+        sim, renderer = renderer_for(world, Pose2(*poses[0][:2], math.radians(poses[0][2])))
+        rng = np.random.default_rng(7)
+        pick = rng.choice(renderer._pixels.shape[0], 4000, replace=False)
+        for x, y, yaw_deg in poses:
+            yaw = math.radians(yaw_deg)
+            T = camera_pose_world((x, y, yaw), sim.config.camera_mount)
+            _, depth = renderer.trace(T, yaw)
+            rays = renderer._rays_c[pick] @ T[:3, :3].T
+            expected = brute_force_depth(renderer.scene, T[:3, 3], rays)
+            got = depth.ravel()[renderer._pixels[pick]]
+            np.testing.assert_allclose(got, expected, rtol=1e-5)
+
+    def test_facing_a_wall_at_a_known_distance(self) -> None:
+        _, renderer = renderer_for(room(), Pose2(1.0, 3.0))
+        T = camera_pose_world((1.0, 3.0, 0.0), CameraMountConfig())
+        _, depth = renderer.trace(T, 0.0)
+        # Optical centre 0.2 m ahead of the body's centre; the east wall's face at 9.95 m.
+        assert depth[300, 400] == pytest.approx(9.95 - 1.2, abs=2e-3)
+
+    def test_trees_and_open_sky(self) -> None:
+        corners = [(0.0, 0.0), (20.0, 0.0), (20.0, 20.0), (0.0, 20.0)]
+        walls = tuple(Wall(a, b, 3.0, texture="facade_brick")
+                      for a, b in zip(corners, corners[1:] + corners[:1], strict=True))
+        world = World(name="yard", walls=walls, start=Pose2(5.0, 10.0), landmarks=NO_PATCHES,
+                      trees=(Tree((9.0, 10.0)),))
+        sim, renderer = renderer_for(world, Pose2(5.0, 10.0))
+        frame = renderer.render(sim)
+        assert frame.depth_m is not None
+        assert np.isinf(frame.depth_m[5:60, 400]).any()  # sky straight up
+        trunk = 9.0 - 0.15 - 5.2
+        assert frame.depth_m[300, 400] == pytest.approx(trunk, abs=0.01)
+        assert frame.image[300, 400] > 0
+
+
+class TestLight:
+    def test_a_lamp_switched_off_darkens_the_room(self) -> None:
+        lit = room(lamps=(Lamp((4.0, 3.0)),), lighting=dataclasses.replace(
+            World.__dataclass_fields__["lighting"].default, ambient=0.3))
+        dark = dataclasses.replace(lit, lamps=(Lamp((4.0, 3.0), on=False),))
+        (sim_lit, lit_renderer), (sim_dark, dark_renderer) = (
+            renderer_for(w, Pose2(1.0, 3.0)) for w in (lit, dark))
+        under = [(4.0, 3.0)]
+        assert lit_renderer.scene.light.at(under)[0] > 2.5 * dark_renderer.scene.light.at(under)[0]
+        lit_image = lit_renderer.render(sim_lit).image
+        dark_image = dark_renderer.render(sim_dark).image
+        assert lit_image.mean() > 1.3 * dark_image.mean()
+
+    def test_a_window_lights_its_side_of_the_wall(self) -> None:
+        world = room(pictures=(Picture((5.0, 5.8), "window_wide", 1.5),),
+                     lighting=dataclasses.replace(
+                         World.__dataclass_fields__["lighting"].default, ambient=0.2))
+        _, renderer = renderer_for(world, Pose2(1.0, 3.0))
+        light = renderer.scene.light
+        assert light.at([(5.0, 5.0)])[0] > 2 * light.at([(5.0, 1.0)])[0]

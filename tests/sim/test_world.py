@@ -62,7 +62,7 @@ def polyline_distance(
 
 class TestBuiltinWorlds:
     def test_names(self) -> None:
-        assert builtin_world_names() == ("campus", "lab")
+        assert builtin_world_names() == ("building", "campus", "lab")
 
     @pytest.mark.parametrize("name", ["lab", "campus"])
     def test_loads_with_routes_that_join(self, name: str) -> None:
@@ -99,18 +99,31 @@ class TestBuiltinWorlds:
         assert corridor.max_corner[0] - corridor.min_corner[0] == pytest.approx(20.0)
         assert max(w.height_m for w in campus.walls) >= 8.0
         assert campus.lighting.brightness > lab.lighting.brightness
-        assert campus.landmarks.wall_per_m2 < lab.landmarks.wall_per_m2
 
-    def test_campus_facades_have_big_patches_and_the_lab_the_default(self) -> None:
-        lab, campus = load_world("lab"), load_world("campus")
-        assert lab.landmarks.patch_size_m == 0.15
-        assert all(w.patch_size_m is None for w in lab.walls)
+    def test_the_lab_is_textured_without_patches(self) -> None:
+        lab = load_world("lab")
+        assert lab.landmarks.wall_per_m2 == lab.landmarks.furniture_per_m2 == 0.0
+        assert all(w.left and w.right for w in lab.walls)
+        assert len(lab.lamps) >= 30 and len(lab.pictures) >= 40
+        assert {p.texture for p in lab.pictures} >= {"whiteboard", "light_switch", "window_wide"}
+        assert any(o.movable for o in lab.objects) and any(o.kind == "door" for o in lab.objects)
+
+    def test_campus_has_textured_facades_trees_and_open_sky(self) -> None:
+        campus = load_world("campus")
         facades = [w for w in campus.walls if w.height_m >= 8.0]
         assert len(facades) == 5
-        assert all(0.6 <= (w.patch_size_m or 0.0) <= 0.8 for w in facades)
-        corridor = [w for w in campus.walls if w.height_m < 8.0]
-        assert all(w.patch_size_m is None for w in corridor)
-        assert campus.landmarks.patch_size_m == 0.15
+        assert all((w.left + w.right).count("facade_") == 1 for w in facades)
+        assert len(campus.trees) == 4 and campus.landmarks.wall_per_m2 == 0.0
+
+    def test_building_goes_from_a_corridor_out_through_a_door(self) -> None:
+        building = load_world("building")
+        route = building.routes[0].waypoints
+        ceiling = building.ceilings[0]
+        inside = [ceiling.min_corner[0] <= x <= ceiling.max_corner[0]
+                  and ceiling.min_corner[1] <= y <= ceiling.max_corner[1] for x, y in route]
+        assert inside[0] and not inside[-1]
+        doors = [o for o in building.objects if o.kind == "door"]
+        assert len(doors) == 2 and all(d.open_deg != 0 for d in doors)
 
     def test_route_start_pose_faces_the_second_waypoint(self) -> None:
         route = Route("r", ((1.0, 1.0), (1.0, 3.0)))
@@ -153,7 +166,8 @@ class TestLoadWorld:
         assert all(w.patch_size_m is None for w in plain.walls)
 
     def test_unknown_name(self) -> None:
-        with pytest.raises(ConfigError, match=r"^moon: unknown world \(built-in: campus, lab"):
+        known = r"\(built-in: building, campus, lab"
+        with pytest.raises(ConfigError, match=r"^moon: unknown world " + known):
             load_world("moon")
 
     def test_missing_file(self, tmp_path: Path) -> None:

@@ -289,3 +289,6 @@ class TestFromEquidistant:
         assert_fails(code, capsys, "give a folder of board images or --from-equidistant YAML")
         code = main(["calibrate", str(tmp_path), "--out", str(tmp_path / "c.json")])
         assert_fails(code, capsys, "--pattern/--square: both are needed")
+        code = main(["calibrate", "--from-equidistant", str(FISHEYE_LEFT_YAML), "--fov", "190",
+                     "--out", str(tmp_path / "c.json")])
+        assert_fails(code, capsys, "--fov: not used with --from-equidistant")

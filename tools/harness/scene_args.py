@@ -18,6 +18,7 @@ and objects.
 from __future__ import annotations
 
 import argparse
+import logging
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError
@@ -31,6 +32,8 @@ DROPOUT_REMOVED = ("was removed: the fiducial landmarks are gone; say what chang
                    "--lighting, --moved, --removed, --doors and --people")
 
 _LIGHTING_KEYS = ("scale", "lamps-off", "hour", "step")
+
+_log = logging.getLogger(__name__)
 
 
 def add_change_arguments(parser: argparse.ArgumentParser) -> None:
@@ -84,17 +87,30 @@ def scene_change_from_args(args: argparse.Namespace) -> SceneChange:
 
 
 def check_change_fits(change: SceneChange, sim_config: SimConfig) -> None:
-    """Refuse a change the world cannot take (no lamps, no such door, a door closed across
-    a route...) before minutes of teaching.
+    """Refuse a change the world cannot take (no such door, a door closed across a route,
+    an unknown name...) before minutes of teaching; warn about a share that picks nothing
+    (``--moved 0.2`` in a world with two movable objects or none).
 
     Raises:
         InputError: one line naming what does not fit; ConfigError: a bad world.
     """
+    from sim.scene_change import movable_indices
     from sim.world import load_world
     from tools.harness.demo import changed_world
 
-    if not change.is_none:
-        changed_world(load_world(sim_config.world), change, sim_config.seed)
+    if change.is_none:
+        return
+    world = load_world(sim_config.world)
+    changed_world(world, change, sim_config.seed)
+    shares = (("--lighting lamps-off", change.lighting.lamps_off, "lit lamps",
+               sum(lamp.on for lamp in world.lamps)),
+              ("--moved", change.moved_fraction, "movable objects", len(movable_indices(world))),
+              ("--removed", change.removed_fraction, "movable pictures",
+               sum(p.movable for p in world.pictures)))
+    for option, share, things, count in shares:
+        if share > 0 and round(share * count) == 0:
+            _log.warning("%s %g changes nothing: world '%s' has %d %s", option, share,
+                         world.name, count, things)
 
 
 def lighting_from_text(text: str) -> LightingChange:

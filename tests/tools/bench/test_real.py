@@ -34,11 +34,14 @@ def test_the_fisheye_pair_rows(result: dict) -> None:
         assert row["corners_a"] >= row["matches"] >= row["inliers"] > 20 and row["ok"]
         assert row["ms_per_pair_median"] >= row["ms_per_pair_min"] > 0
         assert 0 <= row["rotation_error_deg"] < 180 and 0 <= row["direction_error_deg"] <= 180
-    # Every target has its figure (whether the default front end meets them is the
-    # benchmark's verdict; tests/robot/vision/test_two_view.py holds the pipeline to them).
+    # Every target has its figure; the default front end meets the accuracy ones (the time
+    # is the benchmark's verdict: tests run on busy machines).
     checks = {t.figure: check(t, result) for t in targets_of("real")}
     assert set(checks) == set(TARGETS)
     assert all(c.value is not None for c in checks.values())
+    for figure in ("fisheye_pair.default.rotation_error_deg",
+                   "fisheye_pair.default.direction_error_deg"):
+        assert checks[figure].met, checks[figure]
 
 
 def test_the_equidistant_fits(result: dict) -> None:

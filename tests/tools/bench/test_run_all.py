@@ -164,4 +164,4 @@ def test_every_benchmark_has_targets_from_the_issues() -> None:
     assert figures[("log", "log_overhead_core_fraction")] == "< 0.1"
     assert figures[("follow", "aggregate.paper+ff.lateral_rms_m_max")] == "<= 0.03"
     assert figures[("follow", "aggregate.paper+ff.loop_ms_p50_median")] == "< 20"
-    assert figures[("sim", "render_fps_median")] == ">= 100"
+    assert figures[("sim", "render_fps_median")] == ">= 60"

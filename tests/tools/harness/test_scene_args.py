@@ -4,18 +4,25 @@ follow``: parsed into a SceneChange, bad values refused in one line."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import logging
+from pathlib import Path
 
 import pytest
 
 from shared.errors import InputError
+from sim.config import SimConfig
 from sim.scene_change import LightingChange, SceneChange
 from tools.cli import main
 from tools.harness.scene_args import (
     add_change_arguments,
+    check_change_fits,
     doors_from_text,
     lighting_from_text,
     scene_change_from_args,
 )
+
+EMPTY_ROOM = Path(__file__).parent / "empty_room.toml"
 
 
 class TestLightingFromText:
@@ -94,3 +101,12 @@ def test_bad_options_are_one_line(tmp_path, capsys, command, args, message) -> N
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1 and message in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_share_of_nothing_is_warned_about(caplog) -> None:
+    with caplog.at_level(logging.WARNING):
+        check_change_fits(SceneChange(moved_fraction=0.2, lighting=LightingChange(lamps_off=0.1)),
+                          dataclasses.replace(SimConfig(), world=str(EMPTY_ROOM)))
+    assert [r.getMessage() for r in caplog.records] == [
+        "--lighting lamps-off 0.1 changes nothing: world 'room' has 0 lit lamps",
+        "--moved 0.2 changes nothing: world 'room' has 0 movable objects"]

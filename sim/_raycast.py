@@ -1,0 +1,515 @@
+"""The per-pixel ray kernel: nearest surface, textured, lit (numba, compiled once to disk).
+
+Two steps per frame, both on one core:
+
+1. :func:`bin_primitives`: the azimuths around the robot are cut into ``W`` wedges
+   (fixed to the robot's heading). Each primitive facing the camera is listed in
+   the wedges its floor-plan outline spans, with its least distance from the
+   camera; a wall face that spans a whole wedge from the floor to above every
+   other surface hides what lies beyond its far end in that wedge, so farther
+   primitives are left out. A few candidates per wedge remain.
+2. :func:`trace`: each pixel's ray (the camera model's bearing, precomputed, turned
+   by the camera's rotation) is tested against its wedge's candidates, the floor,
+   the ceilings and the sky; the nearest hit is textured (bilinear in the two mip
+   levels around the pixel's footprint, blended: trilinear filtering) and lit.
+
+Primitive ids: vertical quads ``[0, Q)``, horizontal quads ``[Q, Q+F)``, cylinders,
+then spheres (see :mod:`sim.surfaces` for what they are).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_EPS = 1e-9
+_MIN_T = 1e-4
+_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
+"""Fast-math flags without "no infinities, no NaN" (the kernel compares with inf)."""
+_SKY = -1_000_000
+_LAMP = -2_000_000
+_OUTSIDE = -3_000_000
+_AA = 2
+"""Edge pixels are the mean of _AA x _AA rays on a regular grid inside the pixel."""
+_BLEND_BAND = 0.3
+"""Width of the band of mip levels (in levels) over which two levels are blended."""
+
+
+@numba.njit(cache=True)
+def _wedges_of(a0: float, a1: float, wedges: int) -> tuple[int, int]:
+    """First wedge and count of wedges the angular interval [a0, a0 + (a1 - a0) mod ...] spans.
+
+    ``a0``, ``a1``: azimuths relative to the robot heading, rad; the interval is the
+    shorter way from ``a0`` to ``a1``.
+    """
+    turn = (a1 - a0 + math.pi) % (2.0 * math.pi) - math.pi
+    lo = a0 if turn > 0 else a0 + turn
+    width = 2.0 * math.pi / wedges
+    k0 = math.floor((lo + math.pi) / width)
+    k1 = math.floor((lo + abs(turn) + math.pi) / width)
+    return k0, k1 - k0 + 1
+
+
+@numba.njit(cache=True)
+def _seg_dist(px: float, py: float, ax: float, ay: float, dx: float, dy: float,
+              length: float) -> float:
+    s = min(max((px - ax) * dx + (py - ay) * dy, 0.0), length)
+    return math.hypot(px - ax - s * dx, py - ay - s * dy)
+
+
+@numba.njit(cache=True)
+def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, quad_n, quad_z,
+                   flat_c, flat_ax, flat_half, cyl_c, cyl_r, sph_c, sph_r):
+    """Candidates per wedge (step 1 of the module docstring).
+
+    Returns:
+        start: (W + 1,) int64, wedge k's candidates are ``ids[start[k]:start[k+1]]``.
+        ids: (E,) int64 primitive ids.
+    """
+    nq, nf, nc, ns = quad_a.shape[0], flat_c.shape[0], cyl_c.shape[0], sph_c.shape[0]
+    n = nq + nf + nc + ns
+    first = np.zeros(n, np.int64)
+    count = np.zeros(n, np.int64)
+    dmin = np.zeros(n)
+    width = 2.0 * math.pi / wedges
+    occ = np.full(wedges, np.inf)
+    for q in range(nq):
+        ax, ay = quad_a[q, 0], quad_a[q, 1]
+        if (ox - ax) * quad_n[q, 0] + (oy - ay) * quad_n[q, 1] <= 0.0:
+            continue
+        dx, dy, length = quad_d[q, 0], quad_d[q, 1], quad_len[q]
+        bx, by = ax + length * dx, ay + length * dy
+        d = _seg_dist(ox, oy, ax, ay, dx, dy, length)
+        dmin[q] = d
+        if d < 1e-6:
+            first[q], count[q] = 0, wedges
+            continue
+        k0, c = _wedges_of(math.atan2(ay - oy, ax - ox) - yaw,
+                           math.atan2(by - oy, bx - ox) - yaw, wedges)
+        first[q], count[q] = k0, c
+        if quad_z[q, 0] > 0.0 or quad_z[q, 1] < max_height or c < 3:
+            continue
+        # A full-height face hides what lies beyond it in the wedges it spans wholly.
+        qx, qy = ax - ox, ay - oy
+        cross_qd = qx * dy - qy * dx
+        for j in range(1, c - 1):
+            k = k0 + j
+            far = 0.0
+            for edge in range(2):
+                ang = -math.pi + (k + edge) * width + yaw
+                rx, ry = math.cos(ang), math.sin(ang)
+                den = rx * dy - ry * dx
+                far = max(far, cross_qd / den if abs(den) > _EPS else np.inf)
+            kk = k % wedges
+            if far < occ[kk]:
+                occ[kk] = far
+    for f in range(nf):
+        cx, cy = flat_c[f, 0], flat_c[f, 1]
+        reach = math.hypot(flat_half[f, 0], flat_half[f, 1])
+        d = math.hypot(cx - ox, cy - oy)
+        i = nq + f
+        dmin[i] = max(d - reach, 0.0)
+        if d <= reach:
+            first[i], count[i] = 0, wedges
+            continue
+        half = math.asin(min(reach / d, 1.0))
+        centre = math.atan2(cy - oy, cx - ox) - yaw
+        first[i], count[i] = _wedges_of(centre - half, centre + half, wedges)
+    for t in range(nc + ns):
+        if t < nc:
+            cx, cy, r = cyl_c[t, 0], cyl_c[t, 1], cyl_r[t]
+        else:
+            cx, cy, r = sph_c[t - nc, 0], sph_c[t - nc, 1], sph_r[t - nc]
+        i = nq + nf + t
+        d = math.hypot(cx - ox, cy - oy)
+        dmin[i] = max(d - r, 0.0)
+        if d <= r * 1.001:
+            first[i], count[i] = 0, wedges
+            continue
+        half = math.asin(r / d)
+        centre = math.atan2(cy - oy, cx - ox) - yaw
+        first[i], count[i] = _wedges_of(centre - half, centre + half, wedges)
+    sizes = np.zeros(wedges, np.int64)
+    for i in range(n):
+        for j in range(count[i]):
+            k = (first[i] + j) % wedges
+            if dmin[i] <= occ[k]:
+                sizes[k] += 1
+    start = np.zeros(wedges + 1, np.int64)
+    for k in range(wedges):
+        start[k + 1] = start[k] + sizes[k]
+    ids = np.empty(start[wedges], np.int64)
+    fill = start[:-1].copy()
+    for i in range(n):
+        for j in range(count[i]):
+            k = (first[i] + j) % wedges
+            if dmin[i] <= occ[k]:
+                ids[fill[k]] = i
+                fill[k] += 1
+    return start, ids
+
+
+@numba.njit(cache=True, fastmath=_FAST, inline="always")
+def _bilinear(texels, off, w, h, u, v, wraps):
+    """Bilinear sample at texture coordinates (u, v) in [0, 1) of a ``w`` x ``h`` level.
+
+    A tiling level wraps around (``u``, ``v`` any real); another clamps at its border.
+    No integer division: the wrap is done on the float coordinate.
+    """
+    if wraps:
+        u -= math.floor(u)
+        v -= math.floor(v)
+    x = u * w - 0.5
+    y = v * h - 0.5
+    x0 = math.floor(x)
+    y0 = math.floor(y)
+    fx, fy = x - x0, y - y0
+    xa, xb, ya, yb = x0, x0 + 1, y0, y0 + 1
+    if wraps:
+        if xa < 0:
+            xa += w
+        if xb >= w:
+            xb -= w
+        if ya < 0:
+            ya += h
+        if yb >= h:
+            yb -= h
+    else:
+        xa, xb = min(max(xa, 0), w - 1), min(max(xb, 0), w - 1)
+        ya, yb = min(max(ya, 0), h - 1), min(max(yb, 0), h - 1)
+    row_a, row_b = off + ya * w, off + yb * w
+    top = texels[row_a + xa] + (texels[row_a + xb] - texels[row_a + xa]) * fx
+    bottom = texels[row_b + xa] + (texels[row_b + xb] - texels[row_b + xa]) * fx
+    return top + (bottom - top) * fy
+
+
+@numba.njit(cache=True, fastmath=_FAST, inline="always")
+def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv):
+    """Sample of texture ``tex`` at (u, v) for a footprint of ``footprint_uv`` (u units).
+
+    "Brilinear" filtering: the mip level is ``log2(footprint in texels)``; within
+    :data:`_BLEND_BAND` of the middle between two levels both are sampled and blended
+    (no visible seam where the level changes), elsewhere the nearer one alone
+    (half the cost of trilinear filtering, as GPUs do).
+    """
+    lod = math.log2(max(footprint_uv * levels[tex, 0, 1], 1e-6))
+    last = level_count[tex] - 1
+    lod = min(max(lod, 0.0), float(last))
+    l0 = int(lod)
+    f = (lod - l0 - 0.5) / _BLEND_BAND + 0.5
+    wrap = wraps[tex]
+    if f >= 1.0 and l0 < last:
+        l0 += 1
+        f = 0.0
+    a = _bilinear(texels, levels[tex, l0, 0], levels[tex, l0, 1], levels[tex, l0, 2], u, v, wrap)
+    if f <= 0.0 or l0 == last:
+        return a
+    l1 = l0 + 1
+    b = _bilinear(texels, levels[tex, l1, 0], levels[tex, l1, 1], levels[tex, l1, 2], u, v, wrap)
+    return a + (b - a) * f
+
+
+@numba.njit(cache=True, fastmath=_FAST, inline="always")
+def _light(values, origin, res, x, y):
+    """Bilinear light at floor-plan point (x, y)."""
+    h, w = values.shape
+    fx = (x - origin[0]) / res - 0.5
+    fy = (y - origin[1]) / res - 0.5
+    c0 = min(max(math.floor(fx), 0), w - 2)
+    r0 = min(max(math.floor(fy), 0), h - 2)
+    ax = min(max(fx - c0, 0.0), 1.0)
+    ay = min(max(fy - r0, 0.0), 1.0)
+    top = values[r0, c0] * (1 - ax) + values[r0, c0 + 1] * ax
+    bottom = values[r0 + 1, c0] * (1 - ax) + values[r0 + 1, c0 + 1] * ax
+    return top * (1 - ay) + bottom * ay
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
+               textures, light, sky, sun_w, grey_scale, out_grey, out_depth, out_label):
+    """Grey, distance and label of the surface each world ray meets first.
+
+    Args:
+        rays_w: (M, 3) unit rays, world frame; wedge: (M,) their wedges; angles: (M,)
+            the angular size of the area each one stands for, rad.
+        o, start, ids, quads ... grey_scale: as :func:`trace` takes them.
+        out_grey, out_depth, out_label: (M,) outputs. Labels: a primitive's id, -1 the
+            floor, -2 - j ceiling j, :data:`_LAMP` - i lamp i, :data:`_SKY` the sky.
+    """
+    qa, qd, qlen, qn, qz, qtex, quv, qshade, qemit = quads
+    fc, fax, fhalf, fz, fup, ftex, fuv = flats
+    cc, cr, cz, ctex, cuv = cyls
+    sc, sr, stex, suv = sphs
+    origin, floor_map, floor_tex, floor_uv, ceil_lo, ceil_hi, ceil_z, ceil_tex, ceil_uv = planes
+    lamp_map, lamp_c, lamp_ax, lamp_half, lamp_tex, lamp_emit = lamps
+    texels, levels, level_count, wraps = textures
+    lvalues, lorigin, lres = light
+    nq, nf, nc = qa.shape[0], fc.shape[0], cc.shape[0]
+    ox, oy, oz = o[0], o[1], o[2]
+    fres = 0.01
+    lamp_res = 0.1
+    for p in range(rays_w.shape[0]):
+        rx, ry, rz = rays_w[p, 0], rays_w[p, 1], rays_w[p, 2]
+        k = wedge[p]
+        best = np.inf
+        hit = -1
+        hs = 0.0
+        for e in range(start[k], start[k + 1]):
+            i = ids[e]
+            if i < nq:
+                dx, dy = qd[i, 0], qd[i, 1]
+                den = rx * dy - ry * dx
+                if abs(den) < _EPS:
+                    continue
+                px, py = qa[i, 0] - ox, qa[i, 1] - oy
+                t = (px * dy - py * dx) / den
+                if t <= _MIN_T or t >= best:
+                    continue
+                s = (px * ry - py * rx) / den
+                if s < 0.0 or s > qlen[i]:
+                    continue
+                z = oz + t * rz
+                if z < qz[i, 0] or z > qz[i, 1]:
+                    continue
+                best, hit, hs = t, i, s
+            elif i < nq + nf:
+                f = i - nq
+                if rz * fup[f] >= 0.0 or (oz - fz[f]) * fup[f] <= 0.0:
+                    continue
+                t = (fz[f] - oz) / rz
+                if t <= _MIN_T or t >= best:
+                    continue
+                lx, ly = ox + t * rx - fc[f, 0], oy + t * ry - fc[f, 1]
+                if (abs(lx * fax[f, 0] + ly * fax[f, 1]) > fhalf[f, 0]
+                        or abs(-lx * fax[f, 1] + ly * fax[f, 0]) > fhalf[f, 1]):
+                    continue
+                best, hit = t, i
+            elif i < nq + nf + nc:
+                c = i - nq - nf
+                qx, qy = ox - cc[c, 0], oy - cc[c, 1]
+                a2 = rx * rx + ry * ry
+                if a2 < _EPS:
+                    continue
+                b2 = qx * rx + qy * ry
+                disc = b2 * b2 - a2 * (qx * qx + qy * qy - cr[c] * cr[c])
+                if disc < 0.0:
+                    continue
+                t = (-b2 - math.sqrt(disc)) / a2
+                if t <= _MIN_T or t >= best:
+                    continue
+                z = oz + t * rz
+                if z < cz[c, 0] or z > cz[c, 1]:
+                    continue
+                best, hit = t, i
+            else:
+                s_ = i - nq - nf - nc
+                qx, qy, qz_ = ox - sc[s_, 0], oy - sc[s_, 1], oz - sc[s_, 2]
+                b2 = qx * rx + qy * ry + qz_ * rz
+                disc = b2 * b2 - (qx * qx + qy * qy + qz_ * qz_ - sr[s_] * sr[s_])
+                if disc < 0.0:
+                    continue
+                t = -b2 - math.sqrt(disc)
+                if t <= _MIN_T or t >= best:
+                    continue
+                best, hit = t, i
+        plane = -1
+        if rz < 0.0:
+            t = -oz / rz
+            if t < best:
+                best, hit, plane = t, -1, 0
+        elif rz > 0.0:
+            for j in range(ceil_z.shape[0]):
+                t = (ceil_z[j] - oz) / rz
+                if t <= _MIN_T or t >= best:
+                    continue
+                x, y = ox + t * rx, oy + t * ry
+                if ceil_lo[j, 0] <= x <= ceil_hi[j, 0] and ceil_lo[j, 1] <= y <= ceil_hi[j, 1]:
+                    best, hit, plane = t, -1, 1 + j
+        if hit < 0 and plane < 0:
+            elevation = max(rz, 0.0)
+            out_grey[p] = sky[0] + (sky[1] - sky[0]) * math.sqrt(elevation)
+            out_depth[p] = np.inf
+            out_label[p] = _SKY
+            continue
+        t = best
+        label = hit if hit >= 0 else -1 - plane
+        x, y, z = ox + t * rx, oy + t * ry, oz + t * rz
+        footprint = t * angles[p]
+        emit = 0.0
+        shade = 1.0
+        lx, ly = x, y
+        if plane == 0:
+            r_ = min(max(int((y - origin[1]) / fres), 0), floor_map.shape[0] - 1)
+            c_ = min(max(int((x - origin[0]) / fres), 0), floor_map.shape[1] - 1)
+            m = floor_map[r_, c_]
+            tex = floor_tex[m]
+            su, sv = floor_uv[m, 0], floor_uv[m, 1]
+            u, v = x / su, -y / sv
+            foot_u = footprint / math.sqrt(max(-rz, 0.05)) / su
+        elif plane > 0:
+            j = plane - 1
+            tex = ceil_tex[j]
+            su, sv = ceil_uv[j, 0], ceil_uv[j, 1]
+            u, v = x / su, y / sv
+            foot_u = footprint / math.sqrt(max(rz, 0.05)) / su
+            shade = 0.8
+            r_ = min(max(int((y - origin[1]) / lamp_res), 0), lamp_map.shape[0] - 1)
+            c_ = min(max(int((x - origin[0]) / lamp_res), 0), lamp_map.shape[1] - 1)
+            lamp = lamp_map[r_, c_] - 1
+            if lamp >= 0:
+                dx, dy = x - lamp_c[lamp, 0], y - lamp_c[lamp, 1]
+                a1 = dx * lamp_ax[lamp, 0] + dy * lamp_ax[lamp, 1]
+                a2_ = -dx * lamp_ax[lamp, 1] + dy * lamp_ax[lamp, 0]
+                hu, hv = lamp_half[lamp, 0], lamp_half[lamp, 1]
+                if abs(a1) <= hu and abs(a2_) <= hv:
+                    tex = lamp_tex[lamp]
+                    u, v = (a1 + hu) / (2 * hu), (hv - a2_) / (2 * hv)
+                    su = 2 * hu
+                    foot_u = footprint / math.sqrt(max(rz, 0.05)) / su
+                    emit = lamp_emit[lamp]
+                    label = _LAMP - lamp
+        elif hit < nq:
+            tex = qtex[hit]
+            su, sv, u0, v0 = quv[hit, 0], quv[hit, 1], quv[hit, 2], quv[hit, 3]
+            u, v = (hs - u0) / su, (v0 - z) / sv
+            cos_i = abs(rx * qn[hit, 0] + ry * qn[hit, 1])
+            foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
+            shade, emit = qshade[hit], qemit[hit]
+            lx, ly = x + 0.15 * qn[hit, 0], y + 0.15 * qn[hit, 1]
+        elif hit < nq + nf:
+            f = hit - nq
+            tex = ftex[f]
+            su, sv, u0, v0 = fuv[f, 0], fuv[f, 1], fuv[f, 2], fuv[f, 3]
+            dx, dy = x - fc[f, 0], y - fc[f, 1]
+            a1 = dx * fax[f, 0] + dy * fax[f, 1]
+            a2_ = -dx * fax[f, 1] + dy * fax[f, 0]
+            u, v = (a1 - u0) / su, (v0 - a2_) / sv
+            foot_u = footprint / math.sqrt(max(abs(rz), 0.05)) / su
+            shade = 1.0 if fup[f] > 0 else 0.5
+        elif hit < nq + nf + nc:
+            c = hit - nq - nf
+            tex = ctex[c]
+            su, sv = cuv[c, 0], cuv[c, 1]
+            dx, dy = x - cc[c, 0], y - cc[c, 1]
+            u = (math.atan2(dy, dx) + math.pi) * cr[c] / su
+            v = -z / sv
+            nx, ny = dx / cr[c], dy / cr[c]
+            foot_u = footprint / math.sqrt(max(abs(rx * nx + ry * ny), 0.05)) / su
+            shade = 0.55 + 0.5 * max(0.0, nx * sun_w[0] + ny * sun_w[1])
+            lx, ly = x + 0.15 * nx, y + 0.15 * ny
+        else:
+            s_ = hit - nq - nf - nc
+            tex = stex[s_]
+            su, sv = suv[s_, 0], suv[s_, 1]
+            dx, dy, dz = x - sc[s_, 0], y - sc[s_, 1], z - sc[s_, 2]
+            r_s = sr[s_]
+            u = (math.atan2(dy, dx) + math.pi) * r_s / su
+            v = (r_s - dz) / sv
+            cos_i = abs(rx * dx + ry * dy + rz * dz) / r_s
+            foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
+            shade = 0.45 + 0.35 * dz / r_s + 0.35 * max(0.0, (dx * sun_w[0] + dy * sun_w[1]) / r_s)
+        albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u)
+        if emit > 0.0:
+            out_grey[p] = albedo * emit * grey_scale
+        else:
+            out_grey[p] = albedo * shade * _light(lvalues, lorigin, lres, lx, ly) * grey_scale
+        out_depth[p] = t
+        out_label[p] = label
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def trace(pixels, rays_c, pix_wedge, pix_angle, R, yaw, wedges, o, start, ids, quads, flats,
+          cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, width,
+          out_grey, out_depth):
+    """Shade every pixel (step 2 of the module docstring), edges anti-aliased.
+
+    First one ray through each pixel's centre. Then each pixel whose surface label
+    differs from a neighbour's (an edge between two surfaces) is shaded again as the
+    mean of :data:`_AA` x :data:`_AA` rays on a regular grid inside the pixel (their
+    bearings interpolated from the neighbours', to second order), so edges fall at
+    sub-pixel positions as a real sensor integrates them.
+
+    Args:
+        pixels: (P,) flat indices of the valid pixels in the output images.
+        rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
+        pix_wedge: (P,) wedge of each pixel's azimuth in the robot frame.
+        pix_angle: (P,) angular size of each pixel, rad.
+        R: (3, 3) camera-to-world rotation; yaw: the robot's heading, rad;
+            wedges: the number of wedges; o: (3,) optical centre, world frame, m.
+        start, ids: the wedges' candidates (:func:`bin_primitives`).
+        quads, flats, cyls, sphs, planes, lamps: :class:`sim.surfaces.Scene`'s arrays.
+        textures: (texels, levels, level_count, wraps) of the atlas.
+        light: (values, origin, res) of the light map.
+        sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
+        grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
+        width: image width, px.
+        out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
+            exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
+    """
+    n = rays_c.shape[0]
+    size = out_grey.shape[0]
+    world = rays_c @ R.T
+    grey = np.empty(n, np.float32)
+    depth = np.empty(n, np.float32)
+    lab = np.empty(n, np.int64)
+    shade_rays(world, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+               lamps, textures, light, sky, sun_w, grey_scale, grey, depth, lab)
+    label = np.full(size, _OUTSIDE, np.int64)
+    where = np.full(size, -1, np.int64)
+    for p in range(n):
+        q = pixels[p]
+        out_grey[q], out_depth[q], label[q], where[q] = grey[p], depth[p], lab[p], p
+    # Edge pixels: those whose four neighbours are all valid and not all of their label.
+    edge = np.zeros(n, np.bool_)
+    count = 0
+    for p in range(n):
+        q = pixels[p]
+        if q < width or q >= size - width:
+            continue
+        if where[q - 1] < 0 or where[q + 1] < 0 or where[q - width] < 0 or where[q + width] < 0:
+            continue
+        c = label[q]
+        if label[q - 1] != c or label[q + 1] != c or label[q - width] != c or label[q + width] != c:
+            edge[p] = True
+            count += 1
+    samples = _AA * _AA
+    sub = np.empty((count * samples, 3))
+    sub_wedge = np.empty(count * samples, np.int64)
+    sub_angle = np.empty(count * samples)
+    owner = np.empty(count, np.int64)
+    wedge_width = 2.0 * math.pi / wedges
+    m = 0
+    for p in range(n):
+        if not edge[p]:
+            continue
+        q = pixels[p]
+        owner[m // samples] = q
+        right, down, left, up = where[q + 1], where[q + width], where[q - 1], where[q - width]
+        for i in range(samples):
+            sx = ((i % _AA) + 0.5) / _AA - 0.5
+            sy = ((i // _AA) + 0.5) / _AA - 0.5
+            hx = right if sx > 0 else left
+            hy = down if sy > 0 else up
+            ax, ay = abs(sx), abs(sy)
+            rx = world[p, 0] + ax * (world[hx, 0] - world[p, 0]) + ay * (world[hy, 0] - world[p, 0])
+            ry = world[p, 1] + ax * (world[hx, 1] - world[p, 1]) + ay * (world[hy, 1] - world[p, 1])
+            rz = world[p, 2] + ax * (world[hx, 2] - world[p, 2]) + ay * (world[hy, 2] - world[p, 2])
+            norm = math.sqrt(rx * rx + ry * ry + rz * rz)
+            sub[m, 0], sub[m, 1], sub[m, 2] = rx / norm, ry / norm, rz / norm
+            azimuth = math.atan2(ry, rx) - yaw
+            k = math.floor(((azimuth + math.pi) % (2.0 * math.pi)) / wedge_width)
+            sub_wedge[m] = min(max(k, 0), wedges - 1)
+            sub_angle[m] = pix_angle[p] / _AA
+            m += 1
+    sub_grey = np.empty(m, np.float32)
+    sub_depth = np.empty(m, np.float32)
+    sub_label = np.empty(m, np.int64)
+    shade_rays(sub, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+               lamps, textures, light, sky, sun_w, grey_scale, sub_grey, sub_depth, sub_label)
+    for j in range(count):
+        total = 0.0
+        for i in range(samples):
+            total += min(sub_grey[j * samples + i], 400.0)
+        out_grey[owner[j]] = total / samples
