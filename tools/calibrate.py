@@ -43,7 +43,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     """Register ``vmnav calibrate``."""
     p = subparsers.add_parser(
         "calibrate",
-        help="calibrate the fisheye camera from chessboard images, or import a calibration",
+        help="calibrate from chessboards, or import a calibration",
         description="Find a chessboard in every image of IMAGES_DIR (png, jpg, pgm, ppm, "
         "pbm, bmp, tif, webp), fit the unified sphere camera model with "
         "cv2.omnidir.calibrate and write the calibration JSON; or, with --from-equidistant, "

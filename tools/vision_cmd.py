@@ -18,7 +18,7 @@ SUBCOMMANDS = (vision_pair_cmd, vision_localize_cmd)
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav vision`` and its subcommands."""
     vision = subparsers.add_parser(
-        "vision", help="the vision front end on your own images: matches, relative pose")
+        "vision", help="the front end on your own images: matches, relative pose")
     vision_sub = vision.add_subparsers(dest="vision_command", metavar="SUBCOMMAND",
                                        required=True)
     for module in SUBCOMMANDS:

@@ -144,4 +144,4 @@ def test_help_lists_only_working_commands(capsys: pytest.CaptureFixture[str]) ->
         line.split()[0] for line in out.split("options:")[0].splitlines() if line.startswith("    ")
     ]
     assert listed == ["sim", "calibrate", "bench", "memory", "teach", "demo", "pioneer", "robot",
-                      "log", "replay", "ground"]
+                      "log", "replay", "ground", "vision"]
