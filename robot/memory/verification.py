@@ -34,9 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robot.config import LocalizeConfig
+from robot.config import LocalizeConfig, RelativePoseConfig
 from robot.vision.epipolar import Bearings, EpipolarFit, relative_pose
 from shared.errors import check_shape
+
+_ROTATION_SAMPLES = 64
+"""2-point samples of :func:`rotation_only`: an all-inlier one with probability 0.9996
+at the lowest inlier ratio accepted, 0.35 (1 - (1 - 0.35^2)^64)."""
 
 #: Why a candidate was refused, in the order the tests are applied (``accepted`` when none).
 ACCEPTED = "accepted"
@@ -103,7 +107,58 @@ def verify_bearings(
     if n < config.min_inliers:
         return Verification(n, 0, 0.0, math.nan, math.nan, TOO_FEW_MATCHES)
     fit = relative_pose(bearings_query, bearings_key, rng, config.relative_pose)
-    return verdict_of_fit(fit, n, config)
+    verification = verdict_of_fit(fit, n, config)
+    if verification.verdict in (TOO_FEW_INLIERS, LOW_INLIER_RATIO):
+        rotation = rotation_only(bearings_query, bearings_key, rng, config.relative_pose)
+        if rotation.n_inliers > fit.n_inliers:
+            return verdict_of_fit(rotation, n, config)
+    return verification
+
+
+def rotation_only(bearings_a: Bearings, bearings_b: Bearings, rng: np.random.Generator,
+                  config: RelativePoseConfig) -> EpipolarFit:
+    """A pure rotation ``b = R_b_a a`` fitted to matched bearings (2-point RANSAC, Kabsch).
+
+    A query taken where its key image was (no baseline: the best case of localization)
+    leaves the essential matrix undetermined, and the 5-point fit finds few inliers;
+    the rotation explains such a pair. Inliers are within ``inlier_threshold_rad``
+    of their rotated bearing.
+
+    Args:
+        bearings_a, bearings_b: (N, 3) float64 unit rows, N >= 2.
+        rng: draws the samples.
+        config: the inlier tolerance.
+
+    Returns:
+        The fit (``model`` "rotation", ``t_b_a`` zeros, ``parallax_rad`` 0).
+    """
+    a, b = np.asarray(bearings_a, np.float64), np.asarray(bearings_b, np.float64)
+    best = np.zeros(len(a), bool)
+    best_R = np.eye(3)
+    for _ in range(_ROTATION_SAMPLES):
+        pair = rng.choice(len(a), 2, replace=False)
+        R = _kabsch(a[pair], b[pair])
+        inliers = _angles(R, a, b) < config.inlier_threshold_rad
+        if inliers.sum() > best.sum():
+            best, best_R = inliers, R
+    if best.sum() >= 3:
+        best_R = _kabsch(a[best], b[best])
+    residual = _angles(best_R, a, b)
+    inliers = residual < config.inlier_threshold_rad
+    return EpipolarFit(best_R, np.zeros(3), inliers, residual,
+                       bool(inliers.sum() >= config.min_inliers), "rotation", 0.0)
+
+
+def _kabsch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation R (3, 3) minimising sum |b_i - R a_i|^2 over rows a_i, b_i."""
+    u, _, vt = np.linalg.svd(b.T @ a)
+    d = np.sign(np.linalg.det(u @ vt))
+    return u @ np.diag([1.0, 1.0, d]) @ vt
+
+
+def _angles(R: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N,) angles between ``R a_i`` and ``b_i``, rad."""
+    return np.arccos(np.clip(np.einsum("ij,ij->i", a @ R.T, b), -1.0, 1.0))
 
 
 def verdict_of_fit(fit: EpipolarFit, matches: int, config: LocalizeConfig) -> Verification:

@@ -195,9 +195,13 @@ def _binary_on_fast(extractor: Any) -> Detector:
 def _described(extractor: Any, image: GreyImage, keypoints: Sequence[Any],
                pixels: npt.NDArray[np.float64], response: npt.NDArray[np.float32]) -> Keypoints:
     """Describe ``keypoints`` (class_id = row of ``pixels``); extractors may drop some."""
+    empty = Keypoints(np.zeros((0, 2)), np.zeros((0, extractor.descriptorSize()), np.uint8),
+                      np.zeros(0, np.float32))
     if not keypoints:
-        return Keypoints(np.zeros((0, 2)), np.zeros((0, 32), np.uint8), np.zeros(0, np.float32))
+        return empty
     kept, descriptors = extractor.compute(image, keypoints)
+    if descriptors is None or not kept:
+        return empty
     rows = np.fromiter((k.class_id for k in kept), np.intp, len(kept))
     return Keypoints(pixels[rows], np.ascontiguousarray(descriptors), response[rows])
 

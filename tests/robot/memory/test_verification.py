@@ -79,6 +79,16 @@ class TestVerifyBearings:
         assert result.yaw_deg == pytest.approx(20.0, abs=0.5)
         assert result.tilt_deg < 0.5
 
+    def test_the_same_place_without_baseline_is_accepted(self, rng: np.random.Generator) -> None:
+        # A photo taken where the key image was: the essential matrix is undetermined,
+        # a rotation explains the matches.
+        R, _ = planar_motion(10.0, 0.0)
+        fa, fb = matched_bearings(rng, R, np.zeros(3), n=100, outliers=30)
+        result = verify_bearings(fa, fb, rng, CONFIG)
+        assert result.verdict == ACCEPTED
+        assert 95 <= result.inliers <= 105
+        assert result.yaw_deg == pytest.approx(10.0, abs=0.5)
+
     def test_random_matches_are_refused(self, rng: np.random.Generator) -> None:
         fa, fb = _unit(rng.normal(size=(200, 3))), _unit(rng.normal(size=(200, 3)))
         result = verify_bearings(fa, fb, rng, CONFIG)
