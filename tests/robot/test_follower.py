@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -18,6 +19,7 @@ from robot.follower import (
     targets_from_route,
 )
 from robot.segment_frame import relative_pose
+from robot.vision.features import pixels_per_radian
 from robot.vision.frame_state import FrameState
 from robot.vision.image_errors import ImageErrors
 from robot.vision.path_state import PathState
@@ -88,8 +90,11 @@ BASE = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False, s
 
 def make_follower(memory) -> RouteFollower:
     config = VmnavConfig()
-    follower_config = FollowerConfig(
-        features=config.features, path_state=config.path_state,
+    follower_config = FollowerConfig(  # loop_memory stores the paper's ZNCC patches
+        features=dataclasses.replace(
+            config.features, method="harris-zncc",
+            patch_size_deg=math.degrees(5.0 / pixels_per_radian(memory.camera))),
+        path_state=config.path_state,
         estimator=config.estimator, switching=config.switching, control=config.control,
         mount=config.camera.mount)
     route = memory.paths[0].keyframe_ids[:3]
