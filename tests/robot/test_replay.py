@@ -88,7 +88,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     base, _ = lockstep_pioneer(clock, CONFIG.pioneer, np.random.default_rng(7))
     frames = RememberingFrames(SimFrameSource(sim, camera, clock))
     logs = [FieldLog(LogConfig(output_dir=str(folder / "png"), replay_frames=True,
-                               rotate_period_ns=2_000_000_000), "robot", CONFIG.camera.mount, {}),
+                               rotate_period_ns=1_000_000_000), "robot", CONFIG.camera.mount, {}),
             FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.camera.mount, {})]
     rng = np.random.default_rng(3)
     records: list[CycleRecord] = []
