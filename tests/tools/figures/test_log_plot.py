@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -78,4 +79,6 @@ def test_plot_of_the_demo_log(short_demo, tmp_path: Path) -> None:
     assert all((tmp_path / f"{log.stem}-{name}.png").read_bytes().startswith(PNG)
                for name in PLOT_NAMES)
     series = servo_series(log)
-    assert series.distance_m is not None and 4.0 < series.distance_m[-1] < 4.7
+    report = json.loads((out / "report.json").read_text())
+    assert series.distance_m is not None
+    assert series.distance_m[-1] == pytest.approx(report["distance_m"], rel=0.08)

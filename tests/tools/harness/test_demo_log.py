@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 from collections import defaultdict
 from pathlib import Path
@@ -107,12 +108,15 @@ def test_annotations_share_the_image_timestamps(demo_log: Path,
     assert annotations[-1].data["texts"][0]["text"].startswith("key 12: ")
 
 
-def test_transforms_odometry_and_camera(messages: dict[str, list[LogMessage]]) -> None:
+def test_transforms_odometry_and_camera(messages: dict[str, list[LogMessage]],
+                                        short_demo) -> None:
     tf = [{(t["parent_frame_id"], t["child_frame_id"]): t for t in m.data["transforms"]}
           for m in messages[topics.TF]]
     assert all(set(t) == {("odom", "base_link"), ("base_link", "camera")} for t in tf)
     driven = np.hypot(*np.diff([_planar(t["odom", "base_link"])[:2] for t in tf], axis=0).T)
-    assert 4.0 < driven.sum() < 4.7  # the report's 4.34 m, through odometry noise
+    report = json.loads((short_demo[1] / "report.json").read_text())
+    # The true distance the report measured, through odometry noise.
+    assert driven.sum() == pytest.approx(report["distance_m"], rel=0.08)
 
 
 def test_mission_events_are_log_lines(messages: dict[str, list[LogMessage]]) -> None:
