@@ -13,6 +13,9 @@ through a robustly fitted relative pose):
    own pitch and roll on the robot are taken out).
 2. A relative pose is fitted to them (:func:`robot.vision.epipolar.relative_pose`,
    inlier tolerance an angle on the sphere, so the test means the same on any lens).
+   When it finds too few inliers, a pure rotation is fitted too (:func:`rotation_only`):
+   a query taken where the key image was has no baseline, and the essential matrix is
+   then undetermined; the model with more inliers is tested.
 3. The key image is *accepted* when all of these hold:
 
    * enough inliers (``min_inliers``): a minimal 5-point sample explains a few
