@@ -196,18 +196,24 @@ SEEDS = [png(RNG_IMAGE[:8, :8, 0]), png(RNG_IMAGE[:8, :8]), jpeg(RNG_IMAGE[:16, 
          jpeg(RNG_IMAGE[:16, :16], progressive=True)]
 
 
+def mutated(seed: bytes, flips: list[tuple[int, int]], cut: int) -> bytes:
+    """``seed`` with the bytes at ``flips`` (position modulo the length, value) replaced,
+    then cut short by ``cut`` modulo its length (at least one byte is kept)."""
+    data = bytearray(seed)
+    for at, value in flips:
+        data[at % len(data)] = value
+    return bytes(data[:max(1, len(data) - cut % len(data))])
+
+
 @settings(derandomize=True, max_examples=300, deadline=None)
 @given(st.sampled_from(SEEDS),
        st.lists(st.tuples(st.integers(0, 1 << 16), st.integers(0, 255)), max_size=8),
        st.integers(0, 1 << 16))
 def test_fuzz_mutated_files_give_a_header_or_an_input_error(
         seed: bytes, flips: list[tuple[int, int]], cut: int) -> None:
-    data = bytearray(seed)
-    for at, value in flips:
-        data[at % len(data)] = value
-    data = data[:max(1, len(data) - cut % len(data))]
+    data = mutated(seed, flips, cut)
     try:
-        header = read_image_header(bytes(data), "fuzz")
+        header = read_image_header(data, "fuzz")
     except InputError as e:
         assert "\n" not in str(e)
     else:

@@ -12,6 +12,7 @@ from shared.errors import CalibrationError, InputError
 from shared.image_decode import FILE_FORMATS, decode_grey
 from shared.image_header import ImageFormat, ImageHeader
 from shared.image_header_files import MAGICS, read_file_image_header
+from tests.shared.test_image_header import mutated
 
 GREY = np.random.default_rng(5).integers(0, 256, (48, 64), dtype=np.uint8)
 COLOUR = np.random.default_rng(6).integers(0, 256, (48, 64, 3), dtype=np.uint8)
@@ -125,12 +126,9 @@ SEEDS = [encoded(".pgm", GREY[:8, :8]), encoded(".pgm", GREY[:4, :4], (cv2.IMWRI
        st.integers(0, 1 << 16))
 def test_fuzz_mutated_files_give_a_header_or_an_input_error(
         seed: bytes, flips: list[tuple[int, int]], cut: int) -> None:
-    data = bytearray(seed)
-    for at, value in flips:
-        data[at % len(data)] = value
-    data = data[:max(1, len(data) - cut % len(data))]
+    data = mutated(seed, flips, cut)
     try:
-        header = read_file_image_header(bytes(data), "fuzz")
+        header = read_file_image_header(data, "fuzz")
     except InputError as e:
         assert "\n" not in str(e)
     else:
