@@ -18,19 +18,39 @@ memory already holds). Among conflicting candidates, a junction between two
 path ends wins (the paper's end-to-start connection), then the one with more
 matches: if the new path's first key image matches both the last and the last
 but one key image of an older path, it joins the last.
+
+Two junctions between the same two paths must agree with the paths' odometry: the
+way from one junction to the other measured along one path is the way measured
+along the other (within :data:`ODOMETRY_SLACK_M`, :data:`ODOMETRY_DRIFT` of the
+distance, and the yaw the verification allows between the two views). A geometric
+verification cannot tell a place from another one a whole pattern period away
+(carpet tiles, ceiling tiles and lamps repeat along a corridor: two places 4.8 m
+apart in the lab's corridor look the same to it); two junctions that disagree by
+metres can. This is the pairwise-consistency test of loop closures in SLAM
+(Mangelson et al., ICRA 2018, "Pairwise consistent measurement set maximization");
+the junction tried first (the priority above) stands, the other is refused.
 """
 
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from robot.config import FeatureConfig, LocalizeConfig, TeachConfig
-from robot.memory.localize import Localizer
+from robot.memory.localize import Candidate, Localizer
 from shared.config import CameraMountConfig
 from shared.memory import Junction, VisualMemory, VisualPath
+from shared.pose import Pose2
+
+ODOMETRY_SLACK_M = 0.5
+"""Two junctions between the same paths may disagree with the odometry by this much, m,
+plus :data:`ODOMETRY_DRIFT` of the distance between them (a junction joins two views
+taken up to a few decimetres apart)."""
+ODOMETRY_DRIFT = 0.1
+"""Odometry's drift allowed between two junctions, a fraction of the distance between them."""
 
 
 class JunctionOutcome(enum.Enum):
@@ -40,6 +60,7 @@ class JunctionOutcome(enum.Enum):
     TOO_FEW_MATCHES = "too few matches"  #: below the threshold: not the same place
     NOT_VERIFIED = "not verified"  #: refused by localization's geometric verification
     ALREADY_JOINED = "already joined to that path"  #: one of the two is linked to the other's path
+    INCONSISTENT = "disagrees with the odometry of another junction"  #: see the module docstring
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,6 +151,7 @@ def junction_attempts(
     ]
     found: list[tuple[int, int | None, int]] = []
     verified: list[bool] = []
+    yaws: list[float] = []
     for ends, candidates in (
         (_ends(path.keyframe_ids), others),
         (other_ends, list(path.keyframe_ids)),
@@ -140,8 +162,12 @@ def junction_attempts(
             result = localizer.localize(memory.keyframe(end).image)
             found.append((end, result.keyframe_id, result.matches))
             verified.append(result.ok)
+            yaws.append(_verified_yaw_rad(result.candidates, result.keyframe_id,
+                                          localize_config.max_yaw_deg))
     all_ends = {e for p in memory.paths.values() for e in _ends(p.keyframe_ids)}
     links = {link for j in memory.junctions for link in _links(memory, j.from_id, j.to_id)}
+    max_yaw = math.radians(localize_config.max_yaw_deg)
+    joined = [(j.from_id, j.to_id, max_yaw) for j in memory.junctions]
     outcomes = [JunctionOutcome.TOO_FEW_MATCHES] * len(found)
     for k in sorted(
         range(len(found)), key=lambda k: (found[k][1] not in all_ends, -found[k][2], k)
@@ -153,11 +179,14 @@ def junction_attempts(
             outcomes[k] = JunctionOutcome.NOT_VERIFIED
             continue
         new_links = _links(memory, end, best)
-        if links.isdisjoint(new_links):
-            links |= new_links
-            outcomes[k] = JunctionOutcome.JOINED
-        else:
+        if not links.isdisjoint(new_links):
             outcomes[k] = JunctionOutcome.ALREADY_JOINED
+        elif not all(_consistent(memory, other, (end, best)) for other in joined):
+            outcomes[k] = JunctionOutcome.INCONSISTENT
+        else:
+            links |= new_links
+            joined.append((end, best, yaws[k]))
+            outcomes[k] = JunctionOutcome.JOINED
     return [
         JunctionAttempt(end, best, matches, outcome)
         for (end, best, matches), outcome in zip(found, outcomes, strict=True)
@@ -180,6 +209,47 @@ def junction_lines(
         f"{len(memory.junctions)} junctions"
     )
     return lines
+
+
+def _verified_yaw_rad(candidates: Sequence[Candidate], keyframe_id: int | None,
+                      unknown_deg: float) -> float:
+    """|yaw| between the query and key image ``keyframe_id`` as verified, rad
+    (``unknown_deg`` when it was not fitted)."""
+    for c in candidates:
+        if c.keyframe_id == keyframe_id and c.verification is not None:
+            yaw = abs(c.verification.yaw_deg)
+            return math.radians(yaw if math.isfinite(yaw) else unknown_deg)
+    return math.radians(unknown_deg)
+
+
+def _consistent(memory: VisualMemory, first: tuple[int, int, float],
+                second: tuple[int, int]) -> bool:
+    """Whether junction ``second`` (from, to) agrees with junction ``first`` (from, to,
+    |yaw| between its two views, rad) and the odometry of their paths (module docstring).
+
+    Junctions that do not join the same two paths always agree.
+    """
+    a, b, yaw = first
+    c, d = second
+    path = {k: memory.keyframes[k].path_id for k in (a, b, c, d)}
+    if {path[a], path[b]} != {path[c], path[d]}:
+        return True
+    if path[a] != path[c]:
+        c, d = d, c
+    along_one = _offset(memory.keyframes[a].odom_pose, memory.keyframes[c].odom_pose)
+    along_other = _offset(memory.keyframes[b].odom_pose, memory.keyframes[d].odom_pose)
+    distance = math.hypot(*along_one)
+    allowed = ODOMETRY_SLACK_M + (ODOMETRY_DRIFT + 2.0 * math.sin(yaw / 2.0)) * distance
+    return math.dist(along_one, along_other) <= allowed
+
+
+def _offset(origin: Pose2, pose: Pose2) -> tuple[float, float]:
+    """Where ``pose`` stands in ``origin``'s frame (x ahead, y to the left), m."""
+    x0, y0, yaw0 = origin
+    x, y, _ = pose
+    dx, dy = x - x0, y - y0
+    cos, sin = math.cos(yaw0), math.sin(yaw0)
+    return cos * dx + sin * dy, -sin * dx + cos * dy
 
 
 def _links(memory: VisualMemory, a: int, b: int) -> set[tuple[int, int]]:

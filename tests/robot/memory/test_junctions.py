@@ -74,6 +74,25 @@ class TestJunctionAttempts:
         # ...is not an end: a's end 2 joins b's start 3 instead, and 3 joins a only once.
         assert accepted_pairs(attempts) == [{2, 3}]
 
+    def test_a_second_junction_the_odometry_contradicts_is_refused(
+            self, places: list[Place]) -> None:
+        # Path b starts where a ends (place 3) and ends where a starts (place 0), but
+        # its odometry runs 1.5 m on ahead where a's runs 1.5 m back: two places a
+        # pattern period apart in a corridor look like this. One junction stands.
+        memory = memory_of(
+            {
+                "a": [places[i].key_image for i in range(4)],
+                "b": [places[3].query, places[4].key_image, places[5].key_image,
+                      places[0].query],
+            }
+        )
+        attempts = attempts_of(memory, 1)
+        ends = {(a.end_id, a.best_id) for a in attempts}
+        assert {(4, 3), (7, 0)} <= ends
+        assert len(accepted_pairs(attempts)) == 1
+        assert accepted_pairs(attempts)[0] in ({3, 4}, {0, 7})
+        assert JunctionOutcome.INCONSISTENT in {a.outcome for a in attempts}
+
     def test_junctions_already_made_are_not_made_again(self, places: list[Place]) -> None:
         memory = memory_of(
             {"a": [places[0].key_image, places[1].key_image], "b": [places[1].query]}
