@@ -185,14 +185,32 @@ def _bilinear(texels, off, w, h, u, v, wraps):
     return top + (bottom - top) * fy
 
 
+@numba.njit(cache=True, inline="always")
+def _repeat_flips(iu, iv, surface):
+    """Two pseudo-random bits for the repeat (iu, iv) of a tiling texture on ``surface``:
+    bit 0 mirrors the repeat in u, bit 1 in v (a hash of the three integers)."""
+    h = (iu * 73856093) ^ (iv * 19349663) ^ (surface * 83492791)
+    h ^= h >> 13
+    h *= 1274126177
+    return (h >> 17) & 3
+
+
 @numba.njit(cache=True, fastmath=_FAST, inline="always")
-def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv):
+def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface):
     """Sample of texture ``tex`` at (u, v) for a footprint of ``footprint_uv`` (u units).
 
     "Brilinear" filtering: the mip level is ``log2(footprint in texels)``; within
     :data:`_BLEND_BAND` of the middle between two levels both are sampled and blended
     (no visible seam where the level changes), elsewhere the nearer one alone
     (half the cost of trilinear filtering, as GPUs do).
+
+    A tiling texture is mirrored in u and/or v per repeat, at random but the same for
+    every frame (:func:`_repeat_flips` of the repeat's index and ``surface``, an integer
+    naming the surface). A tiling texture wraps seamlessly, so its mirror image does
+    too; the floor, ceiling and walls then do not repeat exactly every period. They
+    would otherwise: a 1.2 m ceiling tile and a 0.8 m floor tile make two places 4.8 m
+    apart in a corridor the same picture, which no real building is (stains, wear,
+    vents), and the front end rightly matches them.
     """
     lod = math.log2(max(footprint_uv * levels[tex, 0, 1], 1e-6))
     last = level_count[tex] - 1
@@ -200,6 +218,16 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv):
     l0 = int(lod)
     f = (lod - l0 - 0.5) / _BLEND_BAND + 0.5
     wrap = wraps[tex]
+    if wrap:
+        iu = math.floor(u)
+        iv = math.floor(v)
+        flips = _repeat_flips(iu, iv, surface)
+        u -= iu
+        v -= iv
+        if flips & 1:
+            u = 1.0 - u
+        if flips & 2:
+            v = 1.0 - v
     if f >= 1.0 and l0 < last:
         l0 += 1
         f = 0.0
@@ -410,7 +438,7 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
             cos_i = abs(rx * dx + ry * dy + rz * dz) / r_s
             foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
             shade = 0.45 + 0.35 * dz / r_s + 0.35 * max(0.0, (dx * sun_w[0] + dy * sun_w[1]) / r_s)
-        albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u)
+        albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u, label)
         if emit > 0.0:
             out_grey[p] = albedo * emit * grey_scale
         else:
