@@ -478,7 +478,12 @@ def trace(pixels, rays_c, pix_wedge, pix_angle, R, yaw, wedges, o, start, ids, q
     """
     n = rays_c.shape[0]
     size = out_grey.shape[0]
-    world = rays_c @ R.T
+    # world = rays_c @ R.T, without BLAS (whose threads spin while they wait).
+    world = np.empty((n, 3))
+    for p in range(n):
+        x, y, z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
+        for i in range(3):
+            world[p, i] = R[i, 0] * x + R[i, 1] * y + R[i, 2] * z
     grey = np.empty(n, np.float32)
     depth = np.empty(n, np.float32)
     lab = np.empty(n, np.int64)

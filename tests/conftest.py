@@ -6,6 +6,9 @@ import numpy as np
 import pytest
 
 from shared.clock import ManualClock
+from tools.threads import one_blas_thread
+
+one_blas_thread()  # as every vmnav command runs (tools/__init__.py)
 
 
 @pytest.fixture
