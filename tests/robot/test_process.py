@@ -102,11 +102,20 @@ def process(tmp_path: Path, clock: ManualClock, frames: ScriptedCamera, calls: l
         yield robot
 
 
-def notices(robot: RobotProcess) -> list[str]:
-    out = []
-    while (notice := robot.runtime.next_notice()) is not None:
-        out.append(notice[1])
-    return out
+def record_notices(robot: RobotProcess) -> list[str]:
+    """Every notice the runtime gives from now on, whoever takes it (the link's thread
+    sends them as STATUSTEXT whenever it gets a core)."""
+    taken: list[str] = []
+    give = robot.runtime.next_notice
+
+    def next_notice() -> tuple[int, str] | None:
+        notice = give()
+        if notice is not None:
+            taken.append(notice[1])
+        return notice
+
+    robot.runtime.next_notice = next_notice  # type: ignore[method-assign]
+    return taken
 
 
 class TestLoop:
@@ -114,12 +123,15 @@ class TestLoop:
         clock, calls, steps = ManualClock(), [], []
         frames = ScriptedCamera(clock, [100 * MS, None, 800 * MS])
         with process(tmp_path, clock, frames, calls) as robot:
+            said = record_notices(robot)
+
             def on_step(record) -> AfterStep:
                 steps.append((clock.now_ns(), record))
                 return AfterStep.NEXT_FRAME
 
             assert robot.run(on_step=on_step) == CAMERA_ENDED
-            said = notices(robot)
+            while robot.runtime.next_notice() is not None:
+                pass
         assert steps == [(100 * MS, None), (800 * MS, None)]  # HOLD: no mission cycle
         # No frame within TeleopConfig.frame_timeout_ns (0.5 s) of the first: stalled at 0.6 s.
         assert said == ["camera stalled: stopped until frames return", "camera back after 0.2 s"]
