@@ -170,6 +170,7 @@ class RouteFollower:
         self._odom = base.odom_pose
         self._distance_m = base.odom_distance_m
         self._twist = Twist(v_m_s=0.0, omega_rad_s=0.0)  # the last command
+        self._init_gate = InitGate(config.estimator)
 
     @property
     def target_index(self) -> int:
@@ -201,7 +202,7 @@ class RouteFollower:
         index = self.target_index
         corners = self._front_end.describe(image)
         vision = self._vision(index, corners)
-        if vision is not None and vision.state.ok and self._trusted(vision):
+        if vision is not None and vision.state.ok and self._trusted(index, vision):
             self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
                                    vision.state.theta_rad)
         lost = self._estimator.poll(t_ns)
@@ -273,12 +274,14 @@ class RouteFollower:
         else:
             self._estimator.reset(t_ns)
 
-    def _trusted(self, vision: FrameState) -> bool:
+    def _trusted(self, index: int, vision: FrameState) -> bool:
         """Whether a usable estimate may update the filter: always once it runs (the
-        gate judges), but to initialise it only with enough points behind it."""
+        gate judges), else when :class:`InitGate` admits it."""
         if self._estimator.tracking:
+            self._init_gate.clear()
             return True
-        return vision.state.n_points >= self._config.estimator.init_min_points
+        return self._init_gate.admits(index, vision.state.y_m, vision.state.theta_rad,
+                                      vision.state.n_points)
 
     def _command(self, index: int, estimate: Estimate | None) -> Twist:
         cfg = self._config.control
@@ -304,6 +307,51 @@ class RouteFollower:
 
 
 #: Key images of a path tried as a target's partner in its key pair.
+INIT_AGREEMENT_M = 0.05
+"""Two estimates of y agree within this, m (``EstimatorConfig.init_agreeing_points``)."""
+INIT_AGREEMENT_RAD = math.radians(3.0)
+"""Two estimates of theta agree within this, rad."""
+
+
+class InitGate:
+    """Whether a vision estimate may initialise the filter (ungated: at a start, after a
+    junction crossing or LOST): with ``init_min_points`` points behind it, or with at
+    least ``init_agreeing_points`` when it agrees with the estimates of the
+    ``init_agreeing_frames`` - 1 frames before it (:class:`EstimatorConfig`)."""
+
+    def __init__(self, config: EstimatorConfig) -> None:
+        self._config = config
+        self._votes: list[tuple[int, float, float]] = []  # (target index, y, theta) in a row
+
+    def clear(self) -> None:
+        """Forget the estimates seen so far."""
+        self._votes.clear()
+
+    def admits(self, index: int, y_m: float, theta_rad: float, n_points: int) -> bool:
+        """Whether this estimate (target ``index``, y m, theta rad, key-pair points) may
+        initialise the filter; an admitted one starts a new count."""
+        cfg = self._config
+        if n_points >= cfg.init_min_points:
+            self._votes.clear()
+            return True
+        if n_points < cfg.init_agreeing_points:
+            self._votes.clear()
+            return False
+        vote = (index, y_m, theta_rad)
+        kept = self._votes[len(self._votes) + 1 - cfg.init_agreeing_frames:]
+        self._votes = [*kept, vote] if all(_agree(v, vote) for v in kept) else [vote]
+        if len(self._votes) < cfg.init_agreeing_frames:
+            return False
+        self._votes.clear()
+        return True
+
+
+def _agree(a: tuple[int, float, float], b: tuple[int, float, float]) -> bool:
+    """Whether two (target index, y, theta) estimates agree: same target, close y, theta."""
+    return (a[0] == b[0] and abs(a[1] - b[1]) <= INIT_AGREEMENT_M
+            and abs(a[2] - b[2]) <= INIT_AGREEMENT_RAD)
+
+
 _PARTNERS = 3
 
 

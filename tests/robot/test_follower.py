@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from robot.config import VmnavConfig
 from robot.follower import (
     FollowerConfig,
+    InitGate,
     RouteFollower,
     chain_tracks,
     odometry_increment,
@@ -127,3 +128,31 @@ class TestNoEstimate:
         step = follower.step(133_000_000, blank(memory), BASE)
         assert step.y_m == pytest.approx(0.05)
         assert step.twist.v_m_s > 0
+
+
+class TestInitGate:
+    CONFIG = VmnavConfig().estimator  # 10 points, or 5 agreeing over 3 frames
+
+    def test_enough_points_initialise_at_once(self) -> None:
+        assert InitGate(self.CONFIG).admits(0, 0.3, 0.17, n_points=10)
+
+    def test_fewer_points_initialise_when_three_frames_in_a_row_agree(self) -> None:
+        gate = InitGate(self.CONFIG)
+        assert not gate.admits(0, 0.30, 0.170, n_points=6)
+        assert not gate.admits(0, 0.31, 0.175, n_points=5)
+        assert gate.admits(0, 0.29, 0.165, n_points=7)
+
+    @pytest.mark.parametrize("odd", [
+        (0, 0.40, 0.17, 6),  # y 10 cm off
+        (0, 0.30, 0.25, 6),  # theta 4.6 deg off
+        (1, 0.30, 0.17, 6),  # another target
+        (0, 0.30, 0.17, 4),  # too few points: not a vote
+    ])
+    def test_a_frame_that_disagrees_starts_the_count_again(self, odd) -> None:
+        gate = InitGate(self.CONFIG)
+        assert not gate.admits(0, 0.30, 0.17, n_points=6)
+        index, y, theta, points = odd
+        assert not gate.admits(index, y, theta, n_points=points)
+        assert not gate.admits(0, 0.30, 0.17, n_points=6)
+        assert not gate.admits(0, 0.30, 0.17, n_points=6)
+        assert gate.admits(0, 0.30, 0.17, n_points=6)

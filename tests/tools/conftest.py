@@ -6,17 +6,36 @@ import time
 
 import pytest
 
+from shared.camera_model import CameraModel
+from sim.config import SimConfig
+from sim.renderer import FisheyeRenderer
+from sim.simulation import Simulation
+from sim.world import load_world
+from tests.tools.short_routes import write_short_routes_world
 from tools.cli import main
+
+
+def render_one_frame(world_file) -> None:
+    """Render a frame of the world: numba compiles the ray kernel (or loads it from its
+    cache) in this process, once."""
+    sim = Simulation(load_world(world_file), SimConfig(world=str(world_file)))
+    FisheyeRenderer.for_simulation(sim, CameraModel.default()).render(sim)
 
 
 @pytest.fixture(scope="session")
 def short_demo(tmp_path_factory):
-    """The corridor taught (seed 1), then repeated from 0.3 m / 10 degrees off to its key
-    image 12. Returns (exit code, output folder ``.../seed1``, CPU time s: of this process,
-    every thread, teach and repeat; unlike the wall time, it does not grow when other
-    processes take the cores)."""
-    out = tmp_path_factory.mktemp("follow") / "seed1"
+    """The lab's two short routes ``east_a`` and ``east_b`` taught (seed 1) into one memory,
+    then repeated from 0.3 m / 10 degrees off ``east_a``'s start, across their junction, to
+    the middle of ``east_b`` (the demo's default goal). The world file is
+    ``.../lab_short.toml`` beside the output folder. Returns (exit code, output folder
+    ``.../seed1``, CPU time s: of this process, every thread, teach and repeat, once the
+    ray kernel is compiled; unlike the wall time, it does not grow when other processes
+    take the cores)."""
+    folder = tmp_path_factory.mktemp("follow")
+    world = write_short_routes_world(folder)
+    out = folder / "seed1"
+    render_one_frame(world)
     started = time.process_time()
-    code = main(["demo", "--routes", "corridor", "--goal", "12", "--out", str(out),
+    code = main(["demo", "--world", str(world), "--routes", "east_a,east_b", "--out", str(out),
                  "--no-video"])
     return code, out, time.process_time() - started

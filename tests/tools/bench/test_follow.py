@@ -4,6 +4,7 @@ demo's memory as seed 1)."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -11,10 +12,17 @@ from tools.bench.follow import aggregate
 from tools.cli import main
 
 
+def demo_mission(out: Path) -> list[str]:
+    """The short demo's world, routes and goal, as options: its memory is reused."""
+    goal = json.loads((out / "report.json").read_text())["goal_key_image"]
+    return ["--world", str(out.parent / "lab_short.toml"), "--routes", "east_a", "east_b",
+            "--goal", str(goal)]
+
+
 @pytest.mark.slow
 def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
     _, out, _ = short_demo
-    code = main(["bench", "follow", "--seeds", "1", "--routes", "corridor", "--goal", "12",
+    code = main(["bench", "follow", "--seeds", "1", *demo_mission(out),
                  "--laws", "paper+ff", "--out", str(out.parent)])
     result = json.loads(capsys.readouterr().out)
     assert code == 0 and result["benchmark"] == "follow"
@@ -27,7 +35,7 @@ def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
 @pytest.mark.slow
 def test_the_repeat_runs_with_people_and_the_light_changed(short_demo, capsys) -> None:
     _, out, _ = short_demo
-    code = main(["bench", "follow", "--seeds", "1", "--routes", "corridor", "--goal", "12",
+    code = main(["bench", "follow", "--seeds", "1", *demo_mission(out),
                  "--laws", "paper+ff", "--out", str(out.parent), "--people", "2",
                  "--lighting", "scale=0.8,step=0.6@6"])
     (row,) = json.loads(capsys.readouterr().out)["seeds"]

@@ -84,11 +84,12 @@ def test_one_servo_state_per_cycle_with_the_schema_fields(
     for m in states:
         assert set(SERVO_STATE["required"]) <= m.data.keys()
     following = [m.data for m in states if m.data["target_index"] >= 0]
-    assert following[-1]["key_image_id"] == 12 and states[-1].data["mission_state"] == "arrived"
+    report = json.loads((short_demo[1] / "report.json").read_text())
+    assert following[-1]["key_image_id"] == report["goal_key_image"]
+    assert states[-1].data["mission_state"] == "arrived"
     assert all(d["err_image_max_px"] >= d["err_points_px"] for d in following
                if d["err_image_max_px"] is not None)
     # One switch per key image of the route, from the one it localized at on.
-    report = json.loads((short_demo[1] / "report.json").read_text())
     assert sum(d["switch_reason"] is not None for d in following) == report["key_images_route"]
     commands = messages[topics.CMD_VEL]
     assert len(commands) == len(following)
@@ -97,7 +98,8 @@ def test_one_servo_state_per_cycle_with_the_schema_fields(
 
 
 def test_annotations_share_the_image_timestamps(demo_log: Path,
-                                                messages: dict[str, list[LogMessage]]) -> None:
+                                                messages: dict[str, list[LogMessage]],
+                                                short_demo) -> None:
     annotations = messages[topics.CAMERA_ANNOTATIONS]
     images = list(read_messages(demo_log, [topics.CAMERA_IMAGE]))
     image_stamps = [m.log_time_ns for m in images]
@@ -107,7 +109,8 @@ def test_annotations_share_the_image_timestamps(demo_log: Path,
     stamp = points["timestamp"]
     assert stamp["sec"] * 10**9 + stamp["nsec"] == image_stamps[-1]
     assert len(points["points"]) > 20
-    assert annotations[-1].data["texts"][0]["text"].startswith("key 12: ")
+    goal = json.loads((short_demo[1] / "report.json").read_text())["goal_key_image"]
+    assert annotations[-1].data["texts"][0]["text"].startswith(f"key {goal}: ")
 
 
 def test_transforms_odometry_and_camera(messages: dict[str, list[LogMessage]],
