@@ -163,9 +163,10 @@ def _tracking_match_config() -> MatchConfig:
 class TeachConfig:
     """Key image selection (Courbon et al. 2008, sec. II-C) and joining new paths to a memory.
 
-    The default M was chosen in the ``lab`` world at the teach driver's default speed:
-    it gives about two key images per metre on straight corridors (the measured
-    spacing is printed by ``vmnav teach``).
+    The default M was chosen in the ``lab`` world at the teach driver's default speed,
+    when it showed fiducial patches: about two key images per metre on straight
+    corridors. In the textured lab it gives 3.5 per metre, 3.7 in the campus (``vmnav
+    bench vision``'s ``key_images_per_m``; ``vmnav teach`` prints the spacing).
     """
 
     min_tracked_points: int = 50
