@@ -47,10 +47,11 @@ from shared.pose import Pose2
 
 ODOMETRY_SLACK_M = 0.5
 """Two junctions between the same paths may disagree with the odometry by this much, m,
-plus :data:`ODOMETRY_DRIFT` of the distance between them (a junction joins two views
-taken up to a few decimetres apart)."""
+plus :data:`ODOMETRY_DRIFT` of the distance driven between them (a junction joins two
+views taken up to a few decimetres apart)."""
 ODOMETRY_DRIFT = 0.1
-"""Odometry's drift allowed between two junctions, a fraction of the distance between them."""
+"""Odometry's drift allowed between two junctions, a fraction of the distance driven from
+one to the other along the longer of the two paths (a loop drifts over its whole length)."""
 
 
 class JunctionOutcome(enum.Enum):
@@ -236,10 +237,13 @@ def _consistent(memory: VisualMemory, first: tuple[int, int, float],
         return True
     if path[a] != path[c]:
         c, d = d, c
-    along_one = _offset(memory.keyframes[a].odom_pose, memory.keyframes[c].odom_pose)
-    along_other = _offset(memory.keyframes[b].odom_pose, memory.keyframes[d].odom_pose)
-    distance = math.hypot(*along_one)
-    allowed = ODOMETRY_SLACK_M + (ODOMETRY_DRIFT + 2.0 * math.sin(yaw / 2.0)) * distance
+    keys = memory.keyframes
+    along_one = _offset(keys[a].odom_pose, keys[c].odom_pose)
+    along_other = _offset(keys[b].odom_pose, keys[d].odom_pose)
+    driven = max(abs(keys[c].distance_m - keys[a].distance_m),
+                 abs(keys[d].distance_m - keys[b].distance_m))
+    allowed = (ODOMETRY_SLACK_M + ODOMETRY_DRIFT * driven
+               + 2.0 * math.sin(yaw / 2.0) * math.hypot(*along_one))
     return math.dist(along_one, along_other) <= allowed
 
 
