@@ -155,12 +155,9 @@ def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, qu
 def _bilinear(texels, off, w, h, u, v, wraps):
     """Bilinear sample at texture coordinates (u, v) in [0, 1) of a ``w`` x ``h`` level.
 
-    A tiling level wraps around (``u``, ``v`` any real); another clamps at its border.
-    No integer division: the wrap is done on the float coordinate.
+    A tiling level wraps its neighbour texels around (``u``, ``v`` in [0, 1]: :func:`_sample`
+    brings them there); another clamps at its border.
     """
-    if wraps:
-        u -= math.floor(u)
-        v -= math.floor(v)
     x = u * w - 0.5
     y = v * h - 0.5
     x0 = math.floor(x)
