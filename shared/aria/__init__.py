@@ -13,6 +13,8 @@ Modules:
 * ``commands``: the :class:`Command` opcodes, argument encoding, SI helpers.
 * ``handshake``: SYNC0-2 and the robot's identity reply.
 * ``sip``: the standard SIP and the ENCODERpac; ``config_packet``: the CONFIGpac.
+* ``p3at``: the Pioneer 3-AT as ARIA knows it (subclass, conversion factors, sonar
+  geometry), for the emulator and the robot's driver.
 * ``events``: the remaining events; ``state``: the transitions table;
   ``session``: :class:`AriaSession`.
 """

@@ -1,8 +1,10 @@
 """The emulated Pioneer 3-AT: an ARIA server on the simulated body (issue 5).
 
+The robot as ARIA knows it (subclass, conversion factors, sonar geometry) is
+:mod:`shared.aria.p3at`: the robot's driver reads the same geometry.
+
 Modules:
 
-* ``p3at``: the robot as ARIA knows it (subclass, conversion factors, sonar geometry).
 * ``motion``: the firmware's motion controller (targets, limits, velocity profile).
 * ``sonar``: the two sonar arrays (firing schedule, pymunk rays).
 * ``emulator``: :class:`EmulatedPioneer`, the sans-I/O ARIA server.

@@ -78,13 +78,7 @@ from shared.aria import (
     vel2_wheels,
     wrap_position,
 )
-from shared.aria.state import OPEN_STATES
-from shared.errors import ConfigError, LocalProtocolError
-from shared.handler_faults import HandlerFaults
-from shared.pose import Pose2
-from sim.config import EmulatorConfig
-from sim.pioneer.motion import MotionController
-from sim.pioneer.p3at import (
+from shared.aria.p3at import (
     ANGLE_CONV_RAD,
     DIFF_CONV_RAD_PER_M,
     DIST_CONV_M,
@@ -95,6 +89,12 @@ from sim.pioneer.p3at import (
     THPOS_UNITS_PER_TURN,
     VEL2_DIVISOR_M_S,
 )
+from shared.aria.state import OPEN_STATES
+from shared.errors import ConfigError, LocalProtocolError
+from shared.handler_faults import HandlerFaults
+from shared.pose import Pose2
+from sim.config import EmulatorConfig
+from sim.pioneer.motion import MotionController
 from sim.pioneer.sonar import SonarRing
 from sim.simulation import Simulation
 

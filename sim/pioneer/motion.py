@@ -33,9 +33,9 @@ import math
 from dataclasses import replace
 
 from shared.aria import ConfigPacket
+from shared.aria.p3at import DIFF_CONV_RAD_PER_M
 from shared.pose import Pose2
 from sim.body import ramp
-from sim.pioneer.p3at import DIFF_CONV_RAD_PER_M
 
 MOVE_TOLERANCE_M = 0.005
 """A MOVE is done within this distance of its goal, m."""

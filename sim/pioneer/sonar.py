@@ -22,9 +22,9 @@ import math
 import numpy as np
 import pymunk
 
+from shared.aria.p3at import SONAR_POSES, SONARS_PER_ARRAY
 from shared.pose import Pose2
 from sim.config import EmulatorConfig
-from sim.pioneer.p3at import SONAR_POSES, SONARS_PER_ARRAY
 from sim.simulation import OCCLUDER_FILTER
 
 

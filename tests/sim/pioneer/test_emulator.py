@@ -20,10 +20,10 @@ from shared.aria import (
     position_delta,
     vel2,
 )
+from shared.aria.p3at import ANGLE_CONV_RAD, DIST_CONV_M
 from shared.config import AriaLinkConfig
 from shared.errors import ConfigError
 from sim.config import EmulatorConfig
-from sim.pioneer.p3at import ANGLE_CONV_RAD, DIST_CONV_M
 from tests.sim.pioneer.rig import OPEN_STATES, Rig
 
 SIP_PERIOD_NS = 100_000_000

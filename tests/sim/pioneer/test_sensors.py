@@ -7,10 +7,10 @@ import math
 import pytest
 
 from shared.aria import Command, SipFlags
+from shared.aria.p3at import FRONT_BUMPER_SEGMENTS, SONAR_POSES
 from shared.pose import Pose2
 from sim.config import EmulatorConfig
 from sim.free_space import WALL_HALF_THICKNESS_M
-from sim.pioneer.p3at import FRONT_BUMPER_SEGMENTS, SONAR_POSES
 from tests.sim.pioneer.rig import Rig
 
 ROOM = (12.0, 6.0)
