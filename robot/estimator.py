@@ -22,8 +22,11 @@ Rules of use, once per servo cycle:
    without one simply skip it, and the filter coasts on odometry. An estimate far
    from the prediction (Mahalanobis gate) is rejected and counted.
 3. :meth:`Estimator.poll` with the time: after ``lost_timeout_ns`` without an
-   accepted estimate it returns one :class:`EstimatorLost` event (once per episode).
-   The first estimate after LOST re-initialises the filter, ungated.
+   accepted estimate, or after ``lost_distance_m`` driven on odometry alone, it
+   returns one :class:`EstimatorLost` event (once per episode): a robot without
+   verified localization does not drive on blind. The first estimate after LOST
+   re-initialises the filter, ungated. Time the robot stood still for the safety
+   layer (:meth:`Estimator.stood_still`) does not count.
 
 Before its first estimate (and after :meth:`Estimator.reset`) the filter holds no
 state and :attr:`Estimator.estimate` is None. At a key image switch,
@@ -100,6 +103,8 @@ class EstimatorLost:
         since_update_ns: time since the last accepted estimate (or the reset), ns.
         limit_ns: the configured timeout, ns.
         rejected: estimates rejected by the gate in that time.
+        driven_m: distance driven on odometry alone in that time, m.
+        limit_m: the configured distance, m.
     """
 
     t_ns: int
@@ -107,12 +112,16 @@ class EstimatorLost:
     since_update_ns: int
     limit_ns: int
     rejected: int
+    driven_m: float = 0.0
+    limit_m: float = math.inf
 
     @property
     def message(self) -> str:
         """One line for logs and telemetry."""
         what = (f"{self.rejected} estimates rejected by the gate" if self.reason == "rejected"
                 else "no usable vision estimate")
+        if self.driven_m >= self.limit_m:
+            return f"{what} for {self.driven_m:.2f} m driven (limit {self.limit_m:.2f} m)"
         return (f"{what} for {self.since_update_ns / 1e9:.2f} s "
                 f"(limit {self.limit_ns / 1e9:.2f} s)")
 
@@ -136,6 +145,7 @@ class Estimator:
         self._t_last_ns = now_ns
         self._t_update_ns = now_ns
         self._rejected = 0
+        self._driven_m = 0.0  # on odometry alone since the last accepted estimate
 
     @property
     def estimate(self) -> Estimate | None:
@@ -163,6 +173,12 @@ class Estimator:
         self._lost = False
         self._t_update_ns = now_ns
         self._rejected = 0
+        self._driven_m = 0.0
+
+    def stood_still(self, duration_ns: int) -> None:
+        """The robot stood still for ``duration_ns`` (a safety wait, ns): that time does
+        not count towards ``lost_timeout_ns`` (odometry saw no motion to drift)."""
+        self._t_update_ns += max(duration_ns, 0)
 
     def predict(self, ds_m: float, dpsi_rad: float) -> None:
         """Move the state by the base's odometry since the last call.
@@ -177,6 +193,7 @@ class Estimator:
         for name, value in (("ds_m", ds_m), ("dpsi_rad", dpsi_rad)):
             if not math.isfinite(value):
                 raise ValueError(f"Estimator.predict: {name} must be finite, got {value}")
+        self._driven_m += abs(ds_m)
         if not self._initialized:
             return
         s, y, theta = self._kf.x[:, 0]
@@ -253,13 +270,13 @@ class Estimator:
         """
         self._check_time(now_ns)
         since_ns = now_ns - self._t_update_ns
-        limit_ns = self._config.lost_timeout_ns
-        if self._lost or since_ns < limit_ns:
+        limit_ns, limit_m = self._config.lost_timeout_ns, self._config.lost_distance_m
+        if self._lost or (since_ns < limit_ns and self._driven_m < limit_m):
             return None
         self._lost = True
         return EstimatorLost(t_ns=now_ns, reason="rejected" if self._rejected else "no_estimate",
                              since_update_ns=since_ns, limit_ns=limit_ns,
-                             rejected=self._rejected)
+                             rejected=self._rejected, driven_m=self._driven_m, limit_m=limit_m)
 
     def switch_segment(self, next_in_current: Pose2) -> None:
         """Re-express the state relative to the following key image (at a key image switch).
@@ -284,6 +301,7 @@ class Estimator:
         self._lost = False
         self._t_update_ns = now_ns
         self._rejected = 0
+        self._driven_m = 0.0
 
     def _check_time(self, now_ns: int) -> None:
         if now_ns < self._t_last_ns:

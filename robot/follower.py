@@ -165,6 +165,7 @@ class RouteFollower:
         self.targets = targets_from_route(memory, route)
         self._front_end = make_front_end(config.features, memory.camera)
         self._estimator = Estimator(config.estimator, now_ns)
+        self._paused_ns: int | None = None
         self._switching = SwitchState(route_length=len(self.targets))
         self._segments: dict[int, KeySegment | None] = {}
         self._odom = base.odom_pose
@@ -181,6 +182,17 @@ class RouteFollower:
     def finished(self) -> bool:
         """The goal key image was reached."""
         return self._switching.finished
+
+    def pause(self, t_ns: int) -> None:
+        """The robot stops for the safety layer at ``t_ns``; :meth:`resume` goes on."""
+        self._paused_ns = t_ns
+
+    def resume(self, t_ns: int) -> None:
+        """Go on after :meth:`pause`: the route, the key image and the estimate stay; the
+        time stood still does not count against the estimator's LOST timeout."""
+        if self._paused_ns is not None:
+            self._estimator.stood_still(t_ns - self._paused_ns)
+        self._paused_ns = None
 
     def step(self, t_ns: int, image: npt.NDArray[np.uint8], base: BaseState) -> FollowStep:
         """One servo cycle on a frame.

@@ -117,18 +117,19 @@ class GoalRuns:
         self._forward_events(run)
         return record, self.finish() if run.finished else None
 
-    def end(self, t_ns: int, why: str) -> None:
-        """Abort the run as the operator's abort (``why``) and keep how it ended."""
+    def end(self, t_ns: int, cause: str, why: str) -> None:
+        """Abort the run for ``cause`` (:data:`robot.mission.ABORT_CAUSES`; ``why``: the
+        detail line) and keep how it ended."""
         run = self._run
         assert run is not None
-        run.abort(t_ns, why)
+        run.abort(t_ns, cause, why)
         self._forward_events(run)
         self.finish()
 
     def abort(self, t_ns: int, why: str) -> None:
         """Abort the run, if any, and keep nothing (the robot process is closing)."""
         if self._run is not None:
-            self._run.abort(t_ns, why)
+            self._run.abort(t_ns, "shutdown", why)
 
     def finish(self) -> bool:
         """Keep how the finished run ended; True when it arrived with goals left."""
@@ -167,8 +168,13 @@ class GoalRuns:
 
 
 def _detail(result: MissionResult) -> str:
-    """The detail line of a run's last transition."""
-    return f"{result.reason}: {result.detail}" if result.detail else result.reason
+    """The detail line of a run's last transition, led by its reason code unless the line
+    already starts with it ("blocked for 60.0 s: holding")."""
+    if not result.detail:
+        return result.reason
+    if result.detail.startswith(result.reason):
+        return result.detail
+    return f"{result.reason}: {result.detail}"
 
 
 def _servo_telemetry(run: MissionRun, record: CycleRecord) -> ServoTelemetry:

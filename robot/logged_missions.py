@@ -30,7 +30,7 @@ from typing import Any
 from robot.config import config_from_log
 from robot.replay import LoggedCycle, MissionStart, generator_from_state, logged_fields
 from shared.errors import InputError
-from shared.interfaces import BaseState
+from shared.interfaces import BaseState, Blocked, RangeReading
 from shared.logs import topics
 from shared.logs.messages import image_from_compressed
 from shared.logs.reader import LogMessage, log_info, read_messages
@@ -133,10 +133,21 @@ def base_state(where: str, data: Mapping[str, Any]) -> BaseState:
     """
     try:
         battery = data["battery_v"]
+        cause, distance = data.get("blocked_cause"), data.get("blocked_distance_m")
+        blocked = None if cause is None else Blocked(
+            str(cause), math.nan if distance is None else float(distance),
+            int(data["blocked_since_ns"]))
+        ranges = tuple(
+            RangeReading(int(r["sensor"]), Pose2(float(r["sensor_x_m"]), float(r["sensor_y_m"]),
+                                                 float(r["sensor_heading_rad"])),
+                         float(r["range_m"]), int(r["stamp_ns"]),
+                         Pose2(float(r["odom_x_m"]), float(r["odom_y_m"]),
+                               float(r["odom_yaw_rad"])))
+            for r in data.get("ranges", ()))
         return BaseState(Pose2(float(data["x_m"]), float(data["y_m"]), float(data["yaw_rad"])),
                          float(data["odom_distance_m"]), bool(data["bumped"]),
                          bool(data["stalled"]), math.nan if battery is None else float(battery),
-                         bool(data["motors_enabled"]))
+                         bool(data["motors_enabled"]), ranges=ranges, blocked=blocked)
     except KeyError as e:
         raise InputError(where, f"base state without {e}") from None
     except (TypeError, ValueError) as e:

@@ -1,21 +1,29 @@
-"""The mission state machine: localize, follow the route, arrive; or get lost, or stop.
+"""The mission state machine: localize, follow the route, arrive; or get lost, wait, or stop.
 
 Theory of operation
 -------------------
 
 A mission starts IDLE. ``Start(goal)`` asks the application to localize the
 robot in the visual memory (LOCALIZING); ``Localized(key image)`` lets it plan
-the route and follow it (FOLLOWING) until ``Arrived`` (ARRIVED). While following,
-the estimator may report ``Lost`` (no usable vision for too long): the robot
-stops and relocalizes (LOST); ``Localized`` there continues the mission from the
-key image found (back to FOLLOWING, reason "relocalized"). Localization that
-keeps failing gives up: after ``*_attempts`` ``LocalizationFailed`` inputs in a
-row, or after ``*_timeout_ns`` in the state (checked on ``Tick``), the mission
-FAILED. The bumper, a stall or the operator end any active mission (ABORTED).
+the route and follow it (FOLLOWING) until ``Arrived`` (ARRIVED). No route from
+there to the goal (``NoRoute``) fails the mission. While following, the estimator
+may report ``Lost`` (no usable vision for too long, or too far): the robot stops
+and relocalizes (LOST); ``Localized`` there continues the mission from the key image
+found (back to FOLLOWING, reason "relocalized"). Localization that keeps failing
+gives up: after ``*_attempts`` ``LocalizationFailed`` inputs in a row, or after
+``*_timeout_ns`` in the state (checked on ``Tick``), the mission FAILED; so does a
+robot lost ``lost_limit`` times without reaching a key image in between (each
+relocalization led nowhere). The safety layer's hold (``Obstacle``: something in
+the way) makes a following robot stop and wait (WAITING) with its route and its
+estimate kept; ``WayClear`` resumes the route where it stopped; waiting
+``SafetyConfig.wait_ns`` gives up (ABORTED, "blocked"). The bumper, a stall or an
+``Abort`` (the operator, a failsafe, the loop's limits, each with its own cause)
+end any active mission (ABORTED).
 
 ARRIVED, ABORTED and FAILED are final: a new mission is a new :class:`Mission`.
 FAILED is kept apart from ABORTED: ABORTED means something outside stopped the
-robot (a person, an obstacle); FAILED means the method could not go on.
+robot (a person, an obstacle, the operator); FAILED means the method could not go on.
+Every end carries its true cause as its reason (``REASONS``).
 
 Rules:
 
@@ -24,8 +32,8 @@ Rules:
    reason code (``REASONS``), a one-line detail and the commands for the
    application, and is meant for telemetry and logs.
 3. Commands belong to the state entered: entering LOCALIZING or LOST gives
-   (STOP, LOCALIZE), FOLLOWING gives (FOLLOW,), a final state gives (STOP,). The
-   application keeps doing what the state says until the next transition.
+   (STOP, LOCALIZE), FOLLOWING gives (FOLLOW,), WAITING and a final state give
+   (STOP,). The application keeps doing what the state says until the next transition.
 4. ``_TRANSITIONS`` below is the whole behaviour. An input listed as ``_IGNORED``
    in a state changes nothing (a safety input when nothing moves, a late ``Lost``
    from the estimator once the robot stopped following, a ``Tick`` without a
@@ -36,7 +44,10 @@ Rules:
    final state.
 5. Guarded edges: ``_Guard.ATTEMPTS`` fires on the n-th failure in a row in the
    state (the count restarts on entering it); ``_Guard.TIMEOUT`` fires on the
-   first ``Tick`` at or after the state's time limit from its entry.
+   first ``Tick`` at or after the state's time limit from its entry;
+   ``_Guard.LOST_LIMIT`` turns the ``lost_limit``-th ``Lost`` since the last
+   ``KeyImageReached`` (accepted in every state, never a transition) into a failure
+   (``lost_repeatedly``). An ``Abort`` edge takes its reason from the input's cause.
 """
 
 from __future__ import annotations
@@ -44,7 +55,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from robot.config import MissionConfig
+from robot.config import MissionConfig, SafetyConfig
 from shared.errors import IllegalEventError
 
 
@@ -55,9 +66,10 @@ class MissionState(enum.Enum):
     LOCALIZING = "localizing"  #: stopped; finding the start key image in the memory
     FOLLOWING = "following"  #: servoing along the route
     LOST = "lost"  #: stopped; relocalizing after the estimator lost the state
+    WAITING = "waiting"  #: stopped for an obstacle; the route resumes when the way clears
     ARRIVED = "arrived"  #: final: the goal key image was reached
-    ABORTED = "aborted"  #: final: stopped by the bumper, a stall or the operator
-    FAILED = "failed"  #: final: localization or relocalization gave up
+    ABORTED = "aborted"  #: final: stopped by the bumper, a stall, an obstacle or an abort
+    FAILED = "failed"  #: final: localization, relocalization or route planning gave up
 
 
 #: States no input leaves.
@@ -132,12 +144,57 @@ class Stall:
     t_ns: int
 
 
+#: Causes of :class:`Abort`: the operator (a mode change), disarming, the emergency
+#: stop, a new goal replacing the mission, the ground's heartbeat lost (failsafe), the
+#: base not reporting ("hold"), the loop's time limit, the camera ending, the robot
+#: process closing.
+ABORT_CAUSES = ("operator_abort", "disarmed", "e_stop", "new_goal", "gcs_lost", "base_lost",
+                "time_limit", "camera_ended", "shutdown")
+
+
 @dataclass(frozen=True, slots=True)
-class OperatorAbort:
-    """The operator stops the mission."""
+class Abort:
+    """Something outside the mission ends it; ``cause`` is one of :data:`ABORT_CAUSES`."""
 
     t_ns: int
-    reason: str = "operator abort"
+    cause: str = "operator_abort"
+    detail: str = "operator abort"
+
+    def __post_init__(self) -> None:
+        if self.cause not in ABORT_CAUSES:
+            raise ValueError(f"Abort: cause must be one of {', '.join(ABORT_CAUSES)}, "
+                             f"got {self.cause!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class NoRoute:
+    """The memory graph has no route from the key image found to the goal."""
+
+    t_ns: int
+    detail: str
+
+
+@dataclass(frozen=True, slots=True)
+class KeyImageReached:
+    """The follower reached a key image of the route (progress: the lost count restarts)."""
+
+    t_ns: int
+    keyframe_id: int
+
+
+@dataclass(frozen=True, slots=True)
+class Obstacle:
+    """The safety layer holds the robot (``shared.interfaces.Blocked``, described)."""
+
+    t_ns: int
+    detail: str
+
+
+@dataclass(frozen=True, slots=True)
+class WayClear:
+    """The safety layer's hold ended."""
+
+    t_ns: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,7 +205,7 @@ class Tick:
 
 
 MissionInput = (Start | Localized | LocalizationFailed | Lost | Arrived | Bumper | Stall
-                | OperatorAbort | Tick)
+                | Abort | NoRoute | KeyImageReached | Obstacle | WayClear | Tick)
 
 
 # ---------------------------------------------------------------------------
@@ -158,7 +215,8 @@ MissionInput = (Start | Localized | LocalizationFailed | Lost | Arrived | Bumper
 #: Reason codes of transitions.
 REASONS = ("start", "localized", "relocalized", "lost", "arrived", "localization_failed",
            "localization_timeout", "relocalization_failed", "relocalization_timeout",
-           "bumper", "stall", "operator_abort")
+           "lost_repeatedly", "no_route", "obstacle", "resumed", "blocked", "bumper", "stall",
+           *ABORT_CAUSES)
 
 
 @dataclass(frozen=True, slots=True)
@@ -193,24 +251,28 @@ class _Guard(enum.Enum):
     NONE = enum.auto()
     ATTEMPTS = enum.auto()
     TIMEOUT = enum.auto()
+    LOST_LIMIT = enum.auto()
 
 
 @dataclass(frozen=True, slots=True)
 class _Edge:
     target: MissionState
-    reason: str
+    reason: str  #: the reason code; ``_CAUSE``: the input's own cause (``Abort``)
     guard: _Guard = _Guard.NONE
 
 
 _IGNORED = None
+_CAUSE = "<the input's cause>"
 
 _SAFETY: dict[type, _Edge | None] = {
     Bumper: _Edge(MissionState.ABORTED, "bumper"),
     Stall: _Edge(MissionState.ABORTED, "stall"),
-    OperatorAbort: _Edge(MissionState.ABORTED, "operator_abort"),
+    Abort: _Edge(MissionState.ABORTED, _CAUSE),
+    Obstacle: _IGNORED, WayClear: _IGNORED, KeyImageReached: _IGNORED,
 }
 _QUIET: dict[type, _Edge | None] = {
-    Bumper: _IGNORED, Stall: _IGNORED, OperatorAbort: _IGNORED, Lost: _IGNORED, Tick: _IGNORED,
+    Bumper: _IGNORED, Stall: _IGNORED, Abort: _IGNORED, Lost: _IGNORED, Tick: _IGNORED,
+    Obstacle: _IGNORED, WayClear: _IGNORED, KeyImageReached: _IGNORED,
 }
 
 _TRANSITIONS: dict[MissionState, dict[type, _Edge | None]] = {
@@ -220,19 +282,28 @@ _TRANSITIONS: dict[MissionState, dict[type, _Edge | None]] = {
     },
     MissionState.LOCALIZING: {
         Localized: _Edge(MissionState.FOLLOWING, "localized"),
+        NoRoute: _Edge(MissionState.FAILED, "no_route"),
         LocalizationFailed: _Edge(MissionState.FAILED, "localization_failed", _Guard.ATTEMPTS),
         Tick: _Edge(MissionState.FAILED, "localization_timeout", _Guard.TIMEOUT),
         Lost: _IGNORED,
         **_SAFETY,
     },
     MissionState.FOLLOWING: {
-        Lost: _Edge(MissionState.LOST, "lost"),
+        Lost: _Edge(MissionState.LOST, "lost", _Guard.LOST_LIMIT),
         Arrived: _Edge(MissionState.ARRIVED, "arrived"),
         Tick: _IGNORED,
         **_SAFETY,
+        Obstacle: _Edge(MissionState.WAITING, "obstacle"),
+    },
+    MissionState.WAITING: {
+        **_SAFETY,
+        WayClear: _Edge(MissionState.FOLLOWING, "resumed"),
+        Tick: _Edge(MissionState.ABORTED, "blocked", _Guard.TIMEOUT),
+        Lost: _IGNORED,
     },
     MissionState.LOST: {
         Localized: _Edge(MissionState.FOLLOWING, "relocalized"),
+        NoRoute: _Edge(MissionState.FAILED, "no_route"),
         LocalizationFailed: _Edge(MissionState.FAILED, "relocalization_failed", _Guard.ATTEMPTS),
         Tick: _Edge(MissionState.FAILED, "relocalization_timeout", _Guard.TIMEOUT),
         Lost: _IGNORED,
@@ -247,6 +318,7 @@ _ENTRY_COMMANDS: dict[MissionState, tuple[Command, ...]] = {
     MissionState.LOCALIZING: (Command.STOP, Command.LOCALIZE),
     MissionState.FOLLOWING: (Command.FOLLOW,),
     MissionState.LOST: (Command.STOP, Command.LOCALIZE),
+    MissionState.WAITING: (Command.STOP,),
     MissionState.ARRIVED: (Command.STOP,),
     MissionState.ABORTED: (Command.STOP,),
     MissionState.FAILED: (Command.STOP,),
@@ -258,10 +330,13 @@ class Mission:
 
     Args:
         config: give-up limits.
+        safety: the safety layer's settings (how long WAITING lasts).
     """
 
-    def __init__(self, config: MissionConfig) -> None:
+    def __init__(self, config: MissionConfig, safety: SafetyConfig | None = None) -> None:
         self._config = config
+        self._wait_ns = (safety if safety is not None else SafetyConfig()).wait_ns
+        self._lost_since_progress = 0
         self._state = MissionState.IDLE
         self._goal_id: int | None = None
         self._entered_ns = 0
@@ -298,6 +373,9 @@ class Mission:
         row = _TRANSITIONS[self._state]
         if type(event) not in row:
             raise IllegalEventError("mission", self._state.name, type(event).__name__)
+        if isinstance(event, KeyImageReached):  # progress: counted, never a transition
+            self._lost_since_progress = 0
+            return None
         edge = row[type(event)]
         if edge is _IGNORED:
             return None
@@ -306,10 +384,16 @@ class Mission:
             return None
         if isinstance(event, Start):
             self._goal_id = event.goal_id
-        transition = Transition(t_ns=event.t_ns, source=self._state, target=edge.target,
-                                reason=edge.reason, detail=detail, cause=event,
-                                commands=_ENTRY_COMMANDS[edge.target])
-        self._state = edge.target
+        target, reason = edge.target, edge.reason
+        if isinstance(event, Abort):
+            reason = event.cause
+        elif edge.guard is _Guard.LOST_LIMIT and self._lost_since_progress >= (
+                self._config.lost_limit):
+            target, reason = MissionState.FAILED, "lost_repeatedly"
+        transition = Transition(t_ns=event.t_ns, source=self._state, target=target,
+                                reason=reason, detail=detail, cause=event,
+                                commands=_ENTRY_COMMANDS[target])
+        self._state = target
         self._entered_ns = event.t_ns
         self._failures = 0
         return transition
@@ -319,6 +403,8 @@ class Mission:
         cfg = self._config
         if self._state is MissionState.LOCALIZING:
             return cfg.localize_attempts, cfg.localize_timeout_ns
+        if self._state is MissionState.WAITING:
+            return 0, self._wait_ns
         return cfg.relocalize_attempts, cfg.relocalize_timeout_ns
 
     def _guard_detail(self, edge: _Edge, event: MissionInput) -> str | None:
@@ -335,8 +421,18 @@ class Mission:
             waited_ns = event.t_ns - self._entered_ns
             if waited_ns < timeout_ns:
                 return None
+            if self._state is MissionState.WAITING:
+                return f"blocked for {waited_ns / 1e9:.1f} s: holding"
             return (f"{self._state.value} for {waited_ns / 1e9:.1f} s "
                     f"(limit {timeout_ns / 1e9:.1f} s)")
+        if edge.guard is _Guard.LOST_LIMIT:
+            assert isinstance(event, Lost)
+            self._lost_since_progress += 1
+            if self._lost_since_progress >= self._config.lost_limit:
+                return (f"lost {self._lost_since_progress} times without reaching a key image "
+                        f"(limit {self._config.lost_limit}): {event.reason}")
+        if isinstance(event, WayClear):
+            return f"way clear after {(event.t_ns - self._entered_ns) / 1e9:.1f} s: resuming"
         return _describe(event)
 
 
@@ -346,8 +442,12 @@ def _describe(event: MissionInput) -> str:
             return f"to goal key image {goal}"
         case Localized(keyframe_id=kf, matches=n):
             return f"at key image {kf} ({n} matches)"
-        case Lost(reason=reason) | OperatorAbort(reason=reason):
+        case Lost(reason=reason):
             return reason
+        case Abort(detail=detail) | NoRoute(detail=detail):
+            return detail
+        case Obstacle(detail=detail):
+            return f"{detail}: waiting"
         case Arrived(keyframe_id=kf):
             return f"at goal key image {kf}"
         case Bumper():

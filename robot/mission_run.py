@@ -11,21 +11,23 @@ and, while following, the :class:`robot.follower.RouteFollower`; it commands a
 Rules of a cycle (:meth:`MissionRun.cycle`):
 
 1. Read the base's state. A pressed bumper or a stall goes to the
-   mission first (ABORTED).
+   mission first (ABORTED); then the safety layer's hold (``BaseState.blocked``):
+   following, a hold makes the mission wait (WAITING: the follower pauses, its
+   estimate kept); waiting, its end resumes the route (the follower resumes where
+   it stood, the time spent waiting not counted against its LOST timer).
 2. LOCALIZING or LOST: localize the frame in the memory
    (:class:`robot.memory.localize.Localizer`); a localization plans the route to
    the goal and starts (or restarts) the follower. A goal the memory does not
-   reach from there ends the mission as ABORTED with reason ``operator_abort``
-   and the detail "no route ..." (the mission table has no planning edge).
-3. FOLLOWING: one servo cycle, its command to the base; the estimator's LOST and
-   the final key image switch go to the mission.
+   reach from there fails the mission (``no_route``).
+3. FOLLOWING: one servo cycle, its command to the base; the estimator's LOST, each
+   key image reached and the final key image switch go to the mission.
 4. A ``Tick`` drives the give-up timers. A transition whose commands include STOP
    stops the base at once.
 
 :meth:`MissionRun.run` cycles once per ``period_ns`` scheduled by deadline on the
 clock (STYLE.md sec. 3) and ends in a final state, when the frame source ends
-(operator abort), or after ``max_duration_ns`` (operator abort, "time limit"); the
-base is stopped on the way out.
+(``camera_ended``), or after ``max_duration_ns`` (``time_limit``); the base is
+stopped on the way out.
 
 Every transition, key image switch and localization attempt is an :class:`AppEvent`.
 """
@@ -44,18 +46,22 @@ from robot.follower import FollowerConfig, FollowStep, RouteFollower
 from robot.memory.localize import Localization, Localizer
 from robot.mission import (
     FINAL_STATES,
+    Abort,
     Bumper,
     Command,
+    KeyImageReached,
     LocalizationFailed,
     Localized,
     Mission,
     MissionInput,
     MissionState,
-    OperatorAbort,
+    NoRoute,
+    Obstacle,
     Stall,
     Start,
     Tick,
     Transition,
+    WayClear,
 )
 from robot.mission import Arrived as ArrivedInput
 from robot.mission import Lost as LostInput
@@ -161,7 +167,7 @@ class MissionRun:
             features=config.features, path_state=config.path_state,
             estimator=config.estimator, switching=config.switching, control=config.control,
             mount=config.camera.mount)
-        self._mission = Mission(config.mission)
+        self._mission = Mission(config.mission, config.safety)
         self._events: list[AppEvent] = []
         self._follower: RouteFollower | None = None
         self._route: tuple[int, ...] = ()
@@ -202,10 +208,11 @@ class MissionRun:
         self._memory.keyframe(goal_id)
         self._feed(Start(t_ns, goal_id))
 
-    def abort(self, t_ns: int, detail: str) -> None:
-        """End an active mission as the operator's abort (the base stops)."""
+    def abort(self, t_ns: int, cause: str, detail: str) -> None:
+        """End an active mission for ``cause`` (one of :data:`robot.mission.ABORT_CAUSES`;
+        the base stops)."""
         if not self.finished:
-            self._feed(OperatorAbort(t_ns, detail))
+            self._feed(Abort(t_ns, cause, detail))
 
     def result(self) -> MissionResult:
         """How the mission ended (or stands)."""
@@ -228,7 +235,7 @@ class MissionRun:
             frames: the camera.
             clock: time and waiting.
             period_ns: the servo period, ns (the camera's frame period).
-            max_duration_ns: give up (operator abort) after this long, ns.
+            max_duration_ns: give up (``time_limit``) after this long, ns.
             observer: called after every cycle.
 
         Raises:
@@ -239,11 +246,12 @@ class MissionRun:
         deadline_ns = start_ns
         while not self.finished:
             if clock.now_ns() - start_ns >= max_duration_ns:
-                self.abort(clock.now_ns(), f"time limit {max_duration_ns / 1e9:.0f} s reached")
+                self.abort(clock.now_ns(), "time_limit",
+                           f"time limit {max_duration_ns / 1e9:.0f} s reached")
                 break
             frame = frames.read()
             if frame is None:
-                self.abort(clock.now_ns(), "the camera ended")
+                self.abort(clock.now_ns(), "camera_ended", "the camera ended")
                 break
             record = self.cycle(*frame)
             if observer is not None:
@@ -262,6 +270,7 @@ class MissionRun:
             self._feed(Bumper(t_ns))
         elif base.stalled:
             self._feed(Stall(t_ns))
+        self._safety_hold(t_ns, base)
         follow: FollowStep | None = None
         localization: Localization | None = None
         state = self._mission.state
@@ -274,6 +283,18 @@ class MissionRun:
         return CycleRecord(t_ns=t_ns, state=self._mission.state, base=base,
                            follow=follow, localization=localization, route=self._route,
                            compute_ns=self._stopwatch() - started)
+
+    def _safety_hold(self, t_ns: int, base: BaseState) -> None:
+        """Rule 1's wait and resume."""
+        state, follower = self._mission.state, self._follower
+        if base.blocked is not None and state is MissionState.FOLLOWING:
+            self._feed(Obstacle(t_ns, base.blocked.describe()))
+            if self._mission.state is MissionState.WAITING and follower is not None:
+                follower.pause(t_ns)
+        elif base.blocked is None and state is MissionState.WAITING:
+            self._feed(WayClear(t_ns))
+            if follower is not None:
+                follower.resume(t_ns)
 
     def _localize(self, t_ns: int, image: npt.NDArray[np.uint8],
                   base: BaseState) -> Localization:
@@ -288,8 +309,8 @@ class MissionRun:
         assert goal_id is not None  # set by Start
         route = self._memory.plan_route(found.keyframe_id, goal_id)
         if not route:
-            self._feed(OperatorAbort(t_ns, f"no route from key image {found.keyframe_id} to "
-                                           f"goal key image {goal_id} in the memory graph"))
+            self._feed(NoRoute(t_ns, f"no route from key image {found.keyframe_id} to "
+                                     f"goal key image {goal_id} in the memory graph"))
             return found
         self._route = tuple(route)
         self._follower = RouteFollower(self._memory, route, self._follower_config, self._rng,
@@ -309,8 +330,7 @@ class MissionRun:
             self._events.append(AppEvent(
                 t_ns, "key_image", switch.reason,
                 f"reached key image {key} ({switch.reached_index + 1}/{len(follower.targets)})"))
-            if switch.final:
-                self._feed(ArrivedInput(t_ns, key))
+            self._feed(ArrivedInput(t_ns, key) if switch.final else KeyImageReached(t_ns, key))
         if step.lost is not None:
             self._events.append(AppEvent(t_ns, "lost", step.lost.reason, step.lost.message))
             self._feed(LostInput(t_ns, step.lost.message))

@@ -22,9 +22,11 @@ class SetMode:
 
 @dataclass(frozen=True, slots=True)
 class Arm:
-    """The operator arms (True) or disarms the motors."""
+    """The operator arms (True) or disarms the motors; ``emergency``: a forced disarm,
+    the emergency stop (the base was stopped on receipt, ``robot.safe_base``)."""
 
     armed: bool
+    emergency: bool = False
 
 
 @dataclass(frozen=True, slots=True)

@@ -149,6 +149,7 @@ class Decision:
         actions: what the runtime does, in order.
         say: the line of :attr:`Action.SAY` (a refusal's too), WARNING.
         why: the reason a run ends (:attr:`Action.END_RUN`), for its detail line.
+        cause: its cause code (one of :data:`robot.mission.ABORT_CAUSES`).
         refused: the event was refused (rule 9): only ``say`` comes of it.
     """
 
@@ -156,6 +157,7 @@ class Decision:
     actions: tuple[Action, ...] = ()
     say: str = ""
     why: str = ""
+    cause: str = ""
     refused: bool = False
 
 
@@ -312,8 +314,8 @@ def decide(state: TopState, event: Event) -> Decision:
         base_lost=(True if isinstance(event, BaseLost)
                    else False if isinstance(event, BaseBack) else state.base_lost),
         photos_pending=photos)
-    return Decision(next_state, actions, edge.say,
-                    _why(event, mode) if A.END_RUN in actions else "", edge.refusal)
+    cause, why = _why(event, mode) if A.END_RUN in actions else ("", "")
+    return Decision(next_state, actions, edge.say, why, cause, edge.refusal)
 
 
 def drive_of(state: TopState) -> Drive:
@@ -346,17 +348,21 @@ def _holds(guard: _Guard, state: TopState, event: Event) -> bool:
     raise AssertionError(f"unknown guard {guard}")
 
 
-def _why(event: Event, mode: Mode) -> str:
-    """Why a run ends, for its detail line."""
+def _why(event: Event, mode: Mode) -> tuple[str, str]:
+    """Why a run ends: its cause code (:data:`robot.mission.ABORT_CAUSES`) and detail line."""
     match event:
-        case SetMode() | GcsLost():
-            return f"mode {mode.name}"
+        case SetMode():
+            return "operator_abort", f"mode {mode.name}"
+        case GcsLost():
+            return "gcs_lost", f"ground heartbeat lost: mode {mode.name}"
+        case Arm(emergency=True):
+            return "e_stop", "emergency stop"
         case Arm():
-            return "disarmed"
+            return "disarmed", "disarmed"
         case StartGoals():
-            return "a new mission started"
+            return "new_goal", "a new mission started"
         case PhotoFound():
-            return "a new goal"
+            return "new_goal", "a new goal"
         case BaseLost():
-            return "the base stopped reporting"
+            return "base_lost", "the base stopped reporting"
     raise AssertionError(f"no reason for ending a run on {event!r}")

@@ -53,6 +53,13 @@ failsafes, photo goals) in one table; what they rest on here:
    skips those frames (the odometry is frozen), and a mission run follows
    ``MissionConfig.base_lost_action``: "hold" ends it (HOLD, as an abort), "continue"
    pauses it until the base reports again.
+9. The safety layer: the runtime drives the base only through a
+   :class:`~robot.safe_base.SafeBase` it builds itself, so missions and the stick alike
+   are bounded by the sonars and bumpers (``robot.safety``). A forced disarm is the
+   emergency stop (QGroundControl's and ArduRover's: COMPONENT_ARM_DISARM with param2
+   21196): the link thread stops the base on receipt (the Pioneer's E_STOP) and the
+   hold lasts until the operator arms again or changes mode, which also ends a
+   bumper's hold.
 """
 
 from __future__ import annotations
@@ -91,6 +98,7 @@ from robot.mode_events import (
 )
 from robot.modes import Action, Activity, Decision, Drive, TopState, decide, drive_of
 from robot.runtime_log import RuntimeLog
+from robot.safe_base import SafeBase
 from robot.teach import KeyImageSelector, SelectedKeyImage
 from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
 from robot.worker import Worker, find_photo, store_path
@@ -141,7 +149,7 @@ class RobotRuntime:
         self._memory = memory
         self._memory_dir = memory_dir
         self._config = config
-        self._base = base
+        self._base = SafeBase(base, clock, config.safety)
         self._clock = clock
         self._log = log
         self._localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
@@ -151,13 +159,17 @@ class RobotRuntime:
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)
         self._manual: tuple[float, float, int] | None = None  # (x, r, arrival ns)
         self._top = TopState()
-        self._goals = GoalRuns(base, rng, log, stopwatch)
+        self._goals = GoalRuns(self._base, rng, log, stopwatch)
         self._teaching: _Teaching | None = None
         self._twist = (0.0, 0.0)
         self._home: Pose2 | None = None
         self._stalled_since_ns: int | None = None
         self._base_lost_since_ns: int | None = None
         self._snapshot = VehicleTelemetry(mode=self._top.mode, armed=self._top.armed)
+        if not config.safety.enabled:
+            self._say(clock.now_ns(), logging.WARNING,
+                      "safety layer off ([safety] enabled = false): sonars and bumpers do "
+                      "not bound the speed")
 
     @property
     def last_result(self) -> MissionResult | None:
@@ -255,7 +267,10 @@ class RobotRuntime:
     def arm(self, armed: bool, force: bool) -> bool:
         if not armed and not force and self._snapshot.mission_state in ACTIVE_STATES:
             return False
-        self._requests.append(Arm(armed))
+        emergency = not armed and force
+        if emergency:
+            self._base.emergency_stop()  # rule 9: now, not on the loop's next frame
+        self._requests.append(Arm(armed, emergency))
         return True
 
     def start_mission(self, goals: tuple[Goal, ...], first_seq: int) -> bool:
@@ -272,6 +287,7 @@ class RobotRuntime:
 
     def params_changed(self, config: VmnavConfig) -> None:
         self._config = config
+        self._base.configure(config.safety)
 
     def manual_control(self, x: float, y: float, z: float, r: float, buttons: int,
                        now_ns: int) -> None:
@@ -321,6 +337,8 @@ class RobotRuntime:
         """Feed ``event`` to the table and carry out its decision."""
         decision = decide(self._top, event)
         self._top = decision.state
+        if (isinstance(event, Arm) and event.armed) or isinstance(event, SetMode):
+            self._base.release()  # rule 9
         for action in decision.actions:
             self._act(action, t_ns, event, decision)
 
@@ -337,7 +355,7 @@ class RobotRuntime:
                 self._say(t_ns, logging.INFO, f"base reporting again after "
                           f"{(t_ns - self._base_lost_since_ns) / 1e9:.1f} s{resumes}")
             case Action.END_RUN:
-                self._goals.end(t_ns, decision.why)
+                self._goals.end(t_ns, decision.cause, decision.why)
                 self._stop()
             case Action.SAY_MODE:
                 self._say(t_ns, logging.INFO, f"mode {self._top.mode.name}")

@@ -22,7 +22,7 @@ import numpy.typing as npt
 from shared.clock import Clock
 from shared.pose import Pose2
 
-__all__ = ["BaseState", "Clock", "FrameSource", "MobileBase"]
+__all__ = ["BaseState", "Blocked", "Clock", "FrameSource", "MobileBase", "RangeReading"]
 
 
 @runtime_checkable
@@ -41,6 +41,63 @@ class FrameSource(Protocol):
 
 
 @dataclass(frozen=True, slots=True)
+class RangeReading:
+    """The latest echo of one range sensor of the base (a sonar transducer).
+
+    Attributes:
+        sensor: the sensor's number on the base (P3-AT: 0-7 front array, 8-15 rear).
+        sensor_pose: the sensor in the robot frame: x_m, y_m and the heading of its axis,
+            rad, counter-clockwise from the robot's x axis.
+        range_m: distance along the axis to the nearest echo, m; the sensor's maximum
+            range when nothing echoed.
+        t_ns: when the reading arrived, ns, on the application's clock.
+        odom_pose: the robot frame's pose in the odometry frame when it arrived (the
+            echo stays where it was in the odometry frame while the robot moves on).
+    """
+
+    sensor: int
+    sensor_pose: Pose2
+    range_m: float
+    t_ns: int
+    odom_pose: Pose2
+
+
+#: Why the safety layer holds the robot (:attr:`Blocked.cause`).
+BLOCK_CAUSES = ("obstacle", "sonar_silent", "bumper", "e_stop")
+
+
+@dataclass(frozen=True, slots=True)
+class Blocked:
+    """The safety layer (``robot.safety``) holds the robot's forward motion.
+
+    Attributes:
+        cause: one of :data:`BLOCK_CAUSES`: an echo in the robot's way ("obstacle"),
+            front sonars whose readings went stale ("sonar_silent"), a bumper hit
+            (held until the operator re-arms or changes mode), the operator's
+            emergency stop (held likewise).
+        distance_m: for "obstacle", the echo's distance ahead of the robot's front, m;
+            NaN otherwise.
+        since_ns: when the hold began, ns.
+    """
+
+    cause: str
+    distance_m: float
+    since_ns: int
+
+    def __post_init__(self) -> None:
+        if self.cause not in BLOCK_CAUSES:
+            raise ValueError(f"Blocked: cause must be one of {', '.join(BLOCK_CAUSES)}, "
+                             f"got {self.cause!r}")
+
+    def describe(self) -> str:
+        """One line for the operator, e.g. ``obstacle 0.45 m ahead``."""
+        if self.cause == "obstacle":
+            return f"obstacle {self.distance_m:.2f} m ahead"
+        return {"sonar_silent": "front sonars silent", "bumper": "bumper pressed",
+                "e_stop": "emergency stop"}[self.cause]
+
+
+@dataclass(frozen=True, slots=True)
 class BaseState:
     """What the mobile base reports.
 
@@ -55,6 +112,11 @@ class BaseState:
         reporting: the base's reports are current (for a Pioneer: connected, and its
             last SIP is recent); False means the fields above are stale and commands
             may not arrive.
+        ranges: the latest reading of each range sensor, by sensor number (empty for a
+            base without any).
+        blocked: set by the safety layer's base (``robot.safe_base.SafeBase``) while it
+            holds the robot's forward motion; None when the way is clear (and always
+            from a bare base).
     """
 
     odom_pose: Pose2
@@ -64,6 +126,8 @@ class BaseState:
     battery_v: float
     motors_enabled: bool
     reporting: bool = True
+    ranges: tuple[RangeReading, ...] = ()
+    blocked: Blocked | None = None
 
     def __post_init__(self) -> None:
         if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):

@@ -37,6 +37,7 @@ from robot.config.driving import (
     ControlConfig,
     EstimatorConfig,
     MissionConfig,
+    SafetyConfig,
     SwitchingConfig,
     TeleopConfig,
 )
@@ -78,6 +79,7 @@ __all__ = [
     "PathStateConfig",
     "PioneerDriverConfig",
     "RelativePoseConfig",
+    "SafetyConfig",
     "SwitchingConfig",
     "TeachConfig",
     "TeleopConfig",
@@ -106,6 +108,7 @@ class VmnavConfig:
     ftp: FtpConfig = field(default_factory=FtpConfig)
     log: LogConfig = field(default_factory=LogConfig)
     teleop: TeleopConfig = field(default_factory=TeleopConfig)
+    safety: SafetyConfig = field(default_factory=SafetyConfig)
 
 
 #: Tables of the layout before the simulator's tables left the robot's config: the old

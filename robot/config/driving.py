@@ -1,8 +1,8 @@
 """The robot's driving configs: the control law, the estimator, key image switching, the
-mission's give-up policy and driving by hand.
+mission's give-up policy, the safety layer and driving by hand.
 
-Tables ``[control]``, ``[estimator]``, ``[switching]``, ``[mission]`` and ``[teleop]``
-of a vmnav config file (:mod:`robot.config`).
+Tables ``[control]``, ``[estimator]``, ``[switching]``, ``[mission]``, ``[safety]`` and
+``[teleop]`` of a vmnav config file (:mod:`robot.config`).
 """
 
 from __future__ import annotations
@@ -105,9 +105,13 @@ class EstimatorConfig:
     lost_timeout_ns: int = 2_000_000_000
     """No accepted vision estimate for this long means LOST, ns (30 frames at 15 Hz, 0.4 m
     of odometry alone at 0.2 m/s)."""
+    lost_distance_m: float = 1.0
+    """...nor while driving this far on odometry alone, m: the robot stops (issue 17,
+    "lost means stop"), whatever its speed."""
 
     def __post_init__(self) -> None:
-        for name in ("sigma_y_m", "sigma_theta_rad", "sigma_s_m", "lost_timeout_ns"):
+        for name in ("sigma_y_m", "sigma_theta_rad", "sigma_s_m", "lost_timeout_ns",
+                     "lost_distance_m"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         for name in ("process_var_position_m2_per_m", "process_var_theta_rad2_per_m",
                      "rotation_scale_sigma"):
@@ -172,16 +176,77 @@ class MissionConfig:
     """LOST for this long without relocalizing fails the mission, ns."""
     relocalize_attempts: int = 10
     """This many failed relocalizations in one LOST episode fail the mission."""
+    lost_limit: int = 3
+    """Lost this many times without reaching a key image in between fails the mission
+    (each relocalization led nowhere; a campus robot once went LOST 579 times and drove
+    57 m)."""
     base_lost_action: str = "continue"
     """One of ``BASE_LOST_ACTIONS``: what a mission run does when the base stops reporting."""
 
     def __post_init__(self) -> None:
         for name in ("localize_timeout_ns", "localize_attempts", "relocalize_timeout_ns",
-                     "relocalize_attempts"):
+                     "relocalize_attempts", "lost_limit"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.base_lost_action in BASE_LOST_ACTIONS,
                 f"base_lost_action must be one of {', '.join(BASE_LOST_ACTIONS)}, "
                 f"got {self.base_lost_action!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class SafetyConfig:
+    """The safety layer under every mission and the stick (``robot.safety``).
+
+    The footprint defaults are the Pioneer 3-AT's with its bumpers (ARIA
+    ``params/p3at-sh.p``: RobotLength 626 mm, RobotWidth 505 mm, the centre of rotation
+    in the middle).
+    """
+
+    enabled: bool = True
+    """The layer bounds every command. A developer's switch (to measure the servo alone in
+    the simulator), in the config file only: no parameter turns it off, and the robot
+    warns at start-up when a file did."""
+    stop_distance_m: float = 0.4
+    """Forward motion stops when an echo in the robot's swept corridor is this close to
+    its front, m."""
+    slow_distance_m: float = 1.2
+    """Echoes beyond this far ahead of the front leave the speed alone; nearer, the speed
+    falls linearly towards ``min_speed_ratio`` of the command at ``stop_distance_m``, m."""
+    min_speed_ratio: float = 0.25
+    """The slowest fraction of the commanded speed short of stopping (so the robot reaches
+    its stop line instead of creeping towards it)."""
+    clear_margin_m: float = 0.1
+    """Stopped, the way counts as clear again only beyond ``stop_distance_m`` + this, m."""
+    clear_dwell_ns: int = 1_000_000_000
+    """...and only after it stayed clear this long, ns."""
+    side_margin_m: float = 0.1
+    """The swept corridor is the robot's width plus this on each side, m."""
+    turn_margin_m: float = 0.05
+    """Turning in place is refused while an echo lies within the circle the robot's
+    corners sweep plus this, m."""
+    front_m: float = 0.313
+    """From the centre of rotation to the front bumper, m."""
+    rear_m: float = 0.313
+    """From the centre of rotation to the rear bumper, m."""
+    half_width_m: float = 0.2525
+    """Half the robot's width, m."""
+    sonar_stale_ns: int = 1_000_000_000
+    """A sonar whose latest reading is older than this counts as not clear, ns (a P3's
+    ring fires every transducer every 320 ms)."""
+    wait_ns: int = 60_000_000_000
+    """A mission stopped by an obstacle waits this long for the way to clear, then holds,
+    ns."""
+
+    def __post_init__(self) -> None:
+        for name in ("stop_distance_m", "slow_distance_m", "front_m", "rear_m",
+                     "half_width_m", "sonar_stale_ns", "wait_ns"):
+            require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
+        for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "turn_margin_m"):
+            require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
+        require(self.slow_distance_m > self.stop_distance_m,
+                f"slow_distance_m must be > stop_distance_m ({self.stop_distance_m}), "
+                f"got {self.slow_distance_m}")
+        require(0 < self.min_speed_ratio <= 1,
+                f"min_speed_ratio must be in (0, 1], got {self.min_speed_ratio}")
 
 
 @dataclass(frozen=True, slots=True)

@@ -68,6 +68,7 @@ from shared.aria.session import AriaSession
 from shared.aria.sip import Sip, SipFlags, SipType
 from shared.aria.state import OPEN_STATES, ConnState, Role
 from shared.errors import LocalProtocolError
+from shared.interfaces import RangeReading
 
 RESET_NOTICE_IDS = (0xFF, 0xFE)
 """Robot packets that announce a controller reset (reference §3, ``ArRobot.cpp:4546``)."""
@@ -107,6 +108,7 @@ class PioneerClient:
         self._command_given_ns = 0  # when the caller gave self._command
         self._last_sip: Sip | None = None
         self._last_sip_ns: int | None = None
+        self._ranges: dict[int, RangeReading] = {}  # this session's, by sonar number
         self._flags: SipFlags | None = None  # this session's last FLAGS
         self._stale_close_ns: int | None = None
         self._ended_session_noise = (0, 0, 0)  # bad checksums, skipped bytes, abandoned
@@ -161,6 +163,7 @@ class PioneerClient:
             estop_pressed=sip is not None and bool(sip.flags & SipFlags.ESTOP_PRESSED),
             motors_enabled=self.accepts_commands,
             last_sip_ns=self._last_sip_ns,
+            ranges=tuple(self._ranges[k] for k in sorted(self._ranges)),
         )
 
     @property
@@ -203,6 +206,7 @@ class PioneerClient:
         self._outbox.clear()  # nothing meant for the previous transport
         self._robot_config = None
         self._flags = None
+        self._ranges.clear()
         self._stale_close_ns = None
         self._odometry.restart()
         self._send(SyncRequest(0), now_ns)
@@ -408,6 +412,12 @@ class PioneerClient:
         self._sips += 1
         self._odometry.update(sip, self._params)
         self._last_sip, self._last_sip_ns = sip, now_ns
+        poses = self._params.sonar_poses
+        for reading in sip.sonar:
+            if reading.number < len(poses):  # a sonar the robot's params do not place
+                self._ranges[reading.number] = RangeReading(
+                    reading.number, poses[reading.number], reading.range_m, now_ns,
+                    self._odometry.pose)
         if self._on_sip_callback is not None:
             self._on_sip_callback(now_ns, sip)
         before, self._flags = self._flags, sip.flags

@@ -129,8 +129,9 @@ class PioneerDriver:
             self._client.stop(self._clock.now_ns())
 
     def state(self) -> BaseState:
-        """Odometry, bumpers (front or rear), stall (either wheel), battery, motors; not
-        ``reporting`` unless connected with a SIP within ``config.report_timeout_ns``."""
+        """Odometry, bumpers (front or rear), stall (either wheel), battery, motors, the
+        sonars' latest readings; not ``reporting`` unless connected with a SIP within
+        ``config.report_timeout_ns``."""
         s = self.status()
         now_ns = self._clock.now_ns()
         return BaseState(
@@ -142,6 +143,7 @@ class PioneerDriver:
             motors_enabled=s.motors_enabled,
             reporting=(s.link is LinkState.CONNECTED and s.last_sip_ns is not None
                        and now_ns - s.last_sip_ns <= self.config.report_timeout_ns),
+            ranges=s.ranges,
         )
 
     # -- more than a MobileBase ---------------------------------------------------------

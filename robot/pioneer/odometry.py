@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from shared.aria.p3at import SONAR_POSES as P3AT_SONAR_POSES
 from shared.aria.sip import Sip, position_delta
 from shared.pose import Pose2
 
@@ -30,22 +31,36 @@ class RobotParams:
         angle_rad_per_count: AngleConvFactor, rad per THPOS count.
         diff_conv_rad_per_mm: DiffConvFactor, rad/s of turn rate per mm/s of wheel-speed
             difference (used when the SIP carries no ROTVEL).
+        sonar_poses: the ``SonarUnit`` lines: sonar k's (x_m, y_m, heading_rad) in the
+            robot frame.
     """
 
     dist_mm_per_count: float
     angle_rad_per_count: float = 0.001534
     diff_conv_rad_per_mm: float = 0.0034
+    sonar_poses: tuple[Pose2, ...] = P3AT_SONAR_POSES
 
+
+_P3DX_SONAR_POSES: tuple[Pose2, ...] = tuple(
+    Pose2(x_mm / 1000, y_mm / 1000, math.radians(th_deg))
+    for x_mm, y_mm, th_deg in (
+        (69, 136, 90), (114, 119, 50), (148, 78, 30), (166, 27, 10),
+        (166, -27, -10), (148, -78, -30), (114, -119, -50), (69, -136, -90),
+        (-157, -136, -90), (-203, -119, -130), (-237, -78, -150), (-255, -27, -170),
+        (-255, 27, 170), (-237, 78, 150), (-203, 119, 130), (-157, 136, 90),
+    )
+)
 
 PARAMS_BY_SUBTYPE: dict[str, RobotParams] = {
     "p3at": RobotParams(0.465),
     "p3at-sh": RobotParams(1.0),
-    "p3dx": RobotParams(0.485, diff_conv_rad_per_mm=0.0056),
-    "p3dx-sh": RobotParams(1.0, diff_conv_rad_per_mm=0.0056),
+    "p3dx": RobotParams(0.485, diff_conv_rad_per_mm=0.0056, sonar_poses=_P3DX_SONAR_POSES),
+    "p3dx-sh": RobotParams(1.0, diff_conv_rad_per_mm=0.0056, sonar_poses=_P3DX_SONAR_POSES),
 }
-"""Subclass (lower case) -> factors. P3-AT: reference §8 (``ArRobotTypes.cpp:1268, 1544``);
-P3-DX: AriaCoda ``ArRobotTypes.cpp`` (``ArRobotP3DX``, ``ArRobotP3DXSH``); AngleConvFactor
-is ARIA's default 0.001534 for all four."""
+"""Subclass (lower case) -> factors. P3-AT: reference §8 (``ArRobotTypes.cpp:1268, 1544``)
+and ``params/p3at-sh.p``'s SonarUnit lines (:mod:`shared.aria.p3at`); P3-DX: AriaCoda
+``ArRobotTypes.cpp`` (``ArRobotP3DX``, ``ArRobotP3DXSH``) and ``params/p3dx-sh.p``;
+AngleConvFactor is ARIA's default 0.001534 for all four."""
 
 DEFAULT_SUBTYPE = "p3at-sh"
 """Assumed for an unknown subclass: the reference's recommended pairing (§8), 1 mm per count."""

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from shared.aria.handshake import RobotIdentity
+from shared.interfaces import RangeReading
 from shared.pose import Pose2
 
 
@@ -38,6 +39,8 @@ class PioneerStatus:
         motors_enabled: connected and the robot reports its motors enabled: velocity
             commands are accepted.
         last_sip_ns: when the last SIP arrived, ns; None before the first.
+        ranges: each sonar's latest reading this session, by sonar number (a SIP
+            carries only the transducers fired since the previous one).
     """
 
     link: LinkState
@@ -54,6 +57,7 @@ class PioneerStatus:
     estop_pressed: bool
     motors_enabled: bool
     last_sip_ns: int | None
+    ranges: tuple[RangeReading, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -32,7 +32,8 @@ from shared.pose import Pose2
 GcsLostAction = Literal["stop", "hold", "continue"]
 
 #: Mission states in which the robot is working on a goal.
-ACTIVE_STATES = frozenset({MissionState.LOCALIZING, MissionState.FOLLOWING, MissionState.LOST})
+ACTIVE_STATES = frozenset({MissionState.LOCALIZING, MissionState.FOLLOWING, MissionState.LOST,
+                           MissionState.WAITING})
 #: The odometry frame's origin: the pose before the base reported any.
 _ODOM_ORIGIN = Pose2(0.0, 0.0, 0.0)
 

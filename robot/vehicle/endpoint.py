@@ -86,7 +86,7 @@ from robot.vehicle.ftp_memory import MemoryFileSystem
 from robot.vehicle.options import SigningSetup, VehicleFiles
 from robot.vehicle.param_file import load_param_file, save_param_file
 from robot.vehicle.progress import MissionProgress
-from robot.vehicle.robot_params import config_with_params, robot_param_table
+from robot.vehicle.robot_params import config_with_params, param_problem, robot_param_table
 from robot.vehicle.telemetry import (
     TELEMETRY_BUILDERS,
     Builder,
@@ -218,7 +218,9 @@ class VehicleEndpoint:
         load_param_file(files.param_file, self._table)
         self.config = config_with_params(config, self._table)
         """The config in force: ``config`` with the parameters applied."""
-        self._params = ParamServer(self._table, self.address, link)
+        self._params = ParamServer(
+            self._table, self.address, link,
+            check=lambda name, value: param_problem(self._base_config, self._table, name, value))
         self._mission = MissionServer(self.address, link, validate=self._validate,
                                       admit=self._admit_upload)
         ftp = ftp if ftp is not None else config.ftp

@@ -104,6 +104,24 @@ ROBOT_PARAMS: tuple[ParamBinding, ...] = (
     ParamBinding("FS_BASE_ACTION", "mission", "base_lost_action", 0, len(BASE_LOST_ACTIONS) - 1,
                  "What a mission does when the base stops reporting", Kind.CHOICE,
                  BASE_LOST_ACTIONS),
+    ParamBinding("EST_LOST_DIST", "estimator", "lost_distance_m", 0.1, 10.0,
+                 "Driving this far without a vision estimate means LOST, m"),
+    ParamBinding("MIS_LOST_LIMIT", "mission", "lost_limit", 1, 100,
+                 "LOST this many times without reaching a key image fails the mission",
+                 Kind.INT),
+    ParamBinding("SAFE_STOP_DIST", "safety", "stop_distance_m", 0.1, 3.0,
+                 "Forward motion stops when an echo in the way is this close to the front, m"),
+    ParamBinding("SAFE_SLOW_DIST", "safety", "slow_distance_m", 0.2, 5.0,
+                 "Nearer echoes in the way slow the robot down, m (> SAFE_STOP_DIST)"),
+    ParamBinding("SAFE_CLR_MARGIN", "safety", "clear_margin_m", 0.0, 1.0,
+                 "Stopped, the way is clear beyond SAFE_STOP_DIST plus this, m"),
+    ParamBinding("SAFE_CLR_DWELL", "safety", "clear_dwell_ns", 0.0, 30.0,
+                 "...for this long before the robot resumes, s", Kind.SECONDS),
+    ParamBinding("SAFE_SIDE_MARGIN", "safety", "side_margin_m", 0.0, 0.5,
+                 "The swept corridor's margin on each side of the robot, m"),
+    ParamBinding("SAFE_WAIT", "safety", "wait_ns", 1.0, 3600.0,
+                 "A mission stopped by an obstacle waits this long, then holds, s",
+                 Kind.SECONDS),
 )
 
 
@@ -114,6 +132,22 @@ def robot_param_table(config: VmnavConfig) -> ParamTable:
         ConfigError: a config value lies outside its parameter's range (names it).
     """
     return ParamTable([binding.spec(config) for binding in ROBOT_PARAMS])
+
+
+def param_problem(config: VmnavConfig, table: ParamTable, name: str,
+                  value: float) -> str | None:
+    """What setting ``name`` to the in-range ``value`` would break in the config with the
+    other parameters as they are (e.g. ``safety: slow_distance_m must be > ...``); None
+    when it fits."""
+    trial = ParamTable([*table])
+    for other, current in table.values().items():
+        trial.set(other, current)
+    trial.set(name, value)
+    try:
+        config_with_params(config, trial)
+    except ConfigError as e:
+        return e.problem
+    return None
 
 
 def config_with_params(config: VmnavConfig, table: ParamTable) -> VmnavConfig:

@@ -38,6 +38,7 @@ _VTR_STATES = {
     MissionState.LOCALIZING: mavlink.VTR_STATE_LOCALIZING,
     MissionState.FOLLOWING: mavlink.VTR_STATE_FOLLOWING,
     MissionState.LOST: mavlink.VTR_STATE_LOST,
+    MissionState.WAITING: mavlink.VTR_STATE_WAITING,
     MissionState.ARRIVED: mavlink.VTR_STATE_ARRIVED,
     MissionState.ABORTED: mavlink.VTR_STATE_ABORTED,
     MissionState.FAILED: mavlink.VTR_STATE_FAILED,

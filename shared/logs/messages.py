@@ -173,12 +173,22 @@ def sip_fields(t_ns: int, sip: Sip) -> dict[str, Any]:
 
 
 def base_state_fields(t_ns: int, state: BaseState) -> dict[str, Any]:
-    """A ``vmnav.BaseState``: every field of ``state``, the odometry pose split in three."""
+    """A ``vmnav.BaseState``: every field of ``state``, poses split in three."""
     x_m, y_m, yaw_rad = state.odom_pose
+    blocked = state.blocked
+    distance = None if blocked is None or math.isnan(blocked.distance_m) else blocked.distance_m
     return {"stamp_ns": t_ns, "x_m": x_m, "y_m": y_m, "yaw_rad": yaw_rad,
             "odom_distance_m": state.odom_distance_m, "bumped": state.bumped,
             "stalled": state.stalled, "battery_v": state.battery_v,
-            "motors_enabled": state.motors_enabled}
+            "motors_enabled": state.motors_enabled,
+            "blocked_cause": None if blocked is None else blocked.cause,
+            "blocked_distance_m": distance,
+            "blocked_since_ns": None if blocked is None else blocked.since_ns,
+            "ranges": [{"sensor": r.sensor, "sensor_x_m": r.sensor_pose[0],
+                        "sensor_y_m": r.sensor_pose[1], "sensor_heading_rad": r.sensor_pose[2],
+                        "range_m": r.range_m, "stamp_ns": r.t_ns, "odom_x_m": r.odom_pose[0],
+                        "odom_y_m": r.odom_pose[1], "odom_yaw_rad": r.odom_pose[2]}
+                       for r in state.ranges]}
 
 
 def mavlink_fields(msg: Any) -> dict[str, Any]:

@@ -228,17 +228,38 @@ MISSION_EVENT = _flat("vmnav.MissionEvent", "A mission event: goal set, started,
     "detail": ("string", "free text for the operator"),
 })
 
-BASE_STATE = _flat("vmnav.BaseState", "What the mobile base reported "
-                   "(shared.interfaces.BaseState), flattened", {
-    "stamp_ns": _STAMP,
-    "x_m": ("number", "odometry: x of base_link in odom, m"),
-    "y_m": ("number", "odometry: y of base_link in odom, m"),
-    "yaw_rad": ("number", "odometry: heading of base_link in odom, rad, counter-clockwise"),
-    "odom_distance_m": ("number", "distance driven since the odometry started, m"),
-    "bumped": ("boolean", "a bumper is pressed"),
-    "stalled": ("boolean", "a motor is stalled"),
-    "battery_v": (["number", "null"], "battery, V (null when not a number)"),
-    "motors_enabled": ("boolean", "the motors accept velocity commands"),
+RANGE_READING = _flat("vmnav.RangeReading", "One range sensor's latest echo "
+                      "(shared.interfaces.RangeReading), flattened", {
+    "sensor": ("integer", "the sensor's number on the base (P3-AT: 0-7 front, 8-15 rear)"),
+    "sensor_x_m": ("number", "the sensor in base_link: x, m"),
+    "sensor_y_m": ("number", "the sensor in base_link: y, m"),
+    "sensor_heading_rad": ("number", "the sensor's axis in base_link, rad, counter-clockwise"),
+    "range_m": ("number", "distance along the axis to the echo, m (the maximum: no echo)"),
+    "stamp_ns": ("integer", "when the reading arrived, ns (the loop's clock)"),
+    "odom_x_m": ("number", "base_link in odom when it arrived: x, m"),
+    "odom_y_m": ("number", "base_link in odom when it arrived: y, m"),
+    "odom_yaw_rad": ("number", "base_link in odom when it arrived: heading, rad"),
+})
+
+BASE_STATE = _object("vmnav.BaseState", "What the mobile base reported "
+                     "(shared.interfaces.BaseState), flattened but for its range readings", {
+    **_flat("", "", {
+        "stamp_ns": _STAMP,
+        "x_m": ("number", "odometry: x of base_link in odom, m"),
+        "y_m": ("number", "odometry: y of base_link in odom, m"),
+        "yaw_rad": ("number", "odometry: heading of base_link in odom, rad, counter-clockwise"),
+        "odom_distance_m": ("number", "distance driven since the odometry started, m"),
+        "bumped": ("boolean", "a bumper is pressed"),
+        "stalled": ("boolean", "a motor is stalled"),
+        "battery_v": (["number", "null"], "battery, V (null when not a number)"),
+        "motors_enabled": ("boolean", "the motors accept velocity commands"),
+        "blocked_cause": (["string", "null"], "why the safety layer holds the robot "
+                          "(obstacle, sonar_silent, bumper, e_stop); null: the way is clear"),
+        "blocked_distance_m": (["number", "null"], "the obstacle ahead of the front, m"),
+        "blocked_since_ns": (["integer", "null"], "when the hold began, ns"),
+    })["properties"],
+    "ranges": {"type": "array", "items": RANGE_READING,
+               "description": "each range sensor's latest reading"},
 })
 
 MISSION_START = _object("vmnav.MissionStart", "A mission run starts: what replay needs to "

@@ -372,13 +372,15 @@ enums["VTR_STATE"][3] = EnumEntry("VTR_STATE_LOST", """Stopped; relocalizing aft
 VTR_STATE_ARRIVED = 4
 enums["VTR_STATE"][4] = EnumEntry("VTR_STATE_ARRIVED", """Final: the goal key image was reached.""")
 VTR_STATE_ABORTED = 5
-enums["VTR_STATE"][5] = EnumEntry("VTR_STATE_ABORTED", """Final: stopped by the bumper, a stall or the operator.""")
+enums["VTR_STATE"][5] = EnumEntry("VTR_STATE_ABORTED", """Final: stopped by the bumper, a stall, an obstacle that did not clear, or an abort (the operator, a failsafe).""")
 VTR_STATE_FAILED = 6
-enums["VTR_STATE"][6] = EnumEntry("VTR_STATE_FAILED", """Final: localization or relocalization gave up.""")
+enums["VTR_STATE"][6] = EnumEntry("VTR_STATE_FAILED", """Final: localization, relocalization or route planning gave up.""")
 VTR_STATE_TEACHING = 7
 enums["VTR_STATE"][7] = EnumEntry("VTR_STATE_TEACHING", """An operator drives the robot; key images are being recorded.""")
-VTR_STATE_ENUM_END = 8
-enums["VTR_STATE"][8] = EnumEntry("VTR_STATE_ENUM_END", """""")
+VTR_STATE_WAITING = 8
+enums["VTR_STATE"][8] = EnumEntry("VTR_STATE_WAITING", """Stopped for an obstacle in the way; the route resumes where it stopped when the way clears.""")
+VTR_STATE_ENUM_END = 9
+enums["VTR_STATE"][9] = EnumEntry("VTR_STATE_ENUM_END", """""")
 
 # HL_FAILURE_FLAG
 enums["HL_FAILURE_FLAG"] = Enum()

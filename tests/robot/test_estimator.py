@@ -139,11 +139,45 @@ class TestPoll:
         event = estimator.poll(manual_clock.now_ns())
         assert event == EstimatorLost(t_ns=CONFIG.lost_timeout_ns, reason="no_estimate",
                                       since_update_ns=CONFIG.lost_timeout_ns,
-                                      limit_ns=CONFIG.lost_timeout_ns, rejected=0)
+                                      limit_ns=CONFIG.lost_timeout_ns, rejected=0,
+                                      driven_m=pytest.approx(29 * 0.2 / 15),
+                                      limit_m=CONFIG.lost_distance_m)
         assert event.message == "no usable vision estimate for 2.00 s (limit 2.00 s)"
         assert estimator.lost
         manual_clock.advance(1.0)
         assert estimator.poll(manual_clock.now_ns()) is None  # declared once
+
+    def test_lost_after_the_distance_on_odometry_alone_at_any_speed(
+            self, manual_clock: ManualClock) -> None:
+        estimator = started(manual_clock)
+        for _ in range(7):  # 0.125 m a frame: 1.9 m/s, far inside the timeout
+            manual_clock.advance_ns(FRAME_NS)
+            estimator.predict(0.125, 0.0)
+            assert estimator.poll(manual_clock.now_ns()) is None
+        manual_clock.advance_ns(FRAME_NS)
+        estimator.predict(0.125, 0.0)
+        event = estimator.poll(manual_clock.now_ns())
+        assert event is not None and event.driven_m == pytest.approx(1.0)
+        assert event.message == "no usable vision estimate for 1.00 m driven (limit 1.00 m)"
+
+    def test_an_accepted_estimate_restarts_the_distance(self, manual_clock: ManualClock) -> None:
+        estimator = started(manual_clock)
+        estimator.predict(0.9, 0.0)
+        moved = estimator.estimate
+        assert estimator.update(manual_clock.now_ns(), moved.s_m, moved.y_m,
+                                moved.theta_rad).outcome == "accepted"
+        estimator.predict(0.9, 0.0)
+        assert estimator.poll(manual_clock.now_ns()) is None
+
+    def test_time_stood_still_for_the_safety_layer_does_not_count(
+            self, manual_clock: ManualClock) -> None:
+        estimator = started(manual_clock)
+        manual_clock.advance(1.5)
+        estimator.stood_still(ns_from_s(30.0))  # waited for a person to pass
+        manual_clock.advance(30.4)
+        assert estimator.poll(manual_clock.now_ns()) is None
+        manual_clock.advance(0.1)
+        assert estimator.poll(manual_clock.now_ns()) is not None
 
     def test_counts_from_construction_without_any_estimate(self) -> None:
         estimator = Estimator(CONFIG, ns_from_s(100.0))

@@ -9,23 +9,27 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from robot import mission as m
-from robot.config import MissionConfig
+from robot.config import MissionConfig, SafetyConfig
 from robot.mission import (
     FINAL_STATES,
     REASONS,
+    Abort,
     Arrived,
     Bumper,
     Command,
+    KeyImageReached,
     LocalizationFailed,
     Localized,
     Lost,
     Mission,
     MissionState,
-    OperatorAbort,
+    NoRoute,
+    Obstacle,
     Stall,
     Start,
     Tick,
     Transition,
+    WayClear,
 )
 from shared.clock import ns_from_s
 from shared.errors import IllegalEventError, VmnavError
@@ -111,9 +115,11 @@ class TestHandle:
     @pytest.mark.parametrize(("event", "reason", "detail"), [
         (Bumper(ns_from_s(5)), "bumper", "bumper pressed"),
         (Stall(ns_from_s(5)), "stall", "motors stalled"),
-        (OperatorAbort(ns_from_s(5)), "operator_abort", "operator abort"),
-        (OperatorAbort(ns_from_s(5), "ground station: STOP"), "operator_abort",
-         "ground station: STOP"),
+        (Abort(ns_from_s(5)), "operator_abort", "operator abort"),
+        (Abort(ns_from_s(5), "gcs_lost", "ground heartbeat lost: mode HOLD"), "gcs_lost",
+         "ground heartbeat lost: mode HOLD"),
+        (Abort(ns_from_s(5), "time_limit", "time limit 60 s reached"), "time_limit",
+         "time limit 60 s reached"),
     ])
     @pytest.mark.parametrize("make", [following, lost])
     def test_safety_aborts(self, make: Callable[[], Mission], event: m.MissionInput, reason: str,
@@ -128,7 +134,7 @@ class TestHandle:
         mission.handle(Start(0, 42))
         assert mission.handle(Bumper(1)).target is MissionState.ABORTED
 
-    @pytest.mark.parametrize("event", [Bumper(1), Stall(1), OperatorAbort(1), Tick(1),
+    @pytest.mark.parametrize("event", [Bumper(1), Stall(1), Abort(1), Tick(1),
                                        Lost(1, "late")])
     def test_ignored_when_idle_or_final(self, event: m.MissionInput) -> None:
         idle = Mission(CONFIG)
@@ -161,13 +167,78 @@ class TestHandle:
             mission.handle(Tick(ns_from_s(0.5)))
 
 
+class TestSafetyWait:
+    def test_an_obstacle_waits_and_the_way_clearing_resumes(self) -> None:
+        mission = following()
+        waiting = mission.handle(Obstacle(ns_from_s(3.0), "obstacle 0.45 m ahead"))
+        assert (waiting.target, waiting.reason, waiting.detail, waiting.commands) == (
+            MissionState.WAITING, "obstacle", "obstacle 0.45 m ahead: waiting", (Command.STOP,))
+        assert mission.handle(Lost(ns_from_s(5.0), "late")) is None  # stood still
+        resumed = mission.handle(WayClear(ns_from_s(9.2)))
+        assert (resumed.target, resumed.reason, resumed.detail) == (
+            MissionState.FOLLOWING, "resumed", "way clear after 6.2 s: resuming")
+
+    def test_blocked_for_the_wait_holds(self) -> None:
+        mission = Mission(CONFIG, SafetyConfig(wait_ns=ns_from_s(60)))
+        mission.handle(Start(0, goal_id=42))
+        mission.handle(Localized(ns_from_s(1.0), keyframe_id=7, matches=120))
+        mission.handle(Obstacle(ns_from_s(2.0), "obstacle 0.45 m ahead"))
+        assert mission.handle(Tick(ns_from_s(61.9))) is None
+        held = mission.handle(Tick(ns_from_s(62.0)))
+        assert (held.target, held.reason, held.detail) == (
+            MissionState.ABORTED, "blocked", "blocked for 60.0 s: holding")
+
+    def test_the_bumper_while_waiting_aborts(self) -> None:
+        mission = following()
+        mission.handle(Obstacle(ns_from_s(3.0), "obstacle 0.45 m ahead"))
+        assert mission.handle(Bumper(ns_from_s(4.0))).reason == "bumper"
+
+    def test_an_obstacle_while_localizing_changes_nothing(self) -> None:
+        mission = lost()
+        assert mission.handle(Obstacle(ns_from_s(3.0), "obstacle 0.2 m ahead")) is None
+
+
+class TestTrueCauses:
+    def test_no_route_fails_the_mission(self) -> None:
+        mission = Mission(CONFIG)
+        mission.handle(Start(0, goal_id=42))
+        failed = mission.handle(NoRoute(1, "no route from key image 157 to goal key image 109"))
+        assert (failed.target, failed.reason) == (MissionState.FAILED, "no_route")
+
+    def test_lost_again_and_again_without_progress_fails(self) -> None:
+        config = MissionConfig(lost_limit=3)
+        mission = Mission(config)
+        mission.handle(Start(0, goal_id=42))
+        t = 1
+        for episode in range(1, 4):
+            mission.handle(Localized(t, keyframe_id=7, matches=120))
+            outcome = mission.handle(Lost(t + 1, "no usable vision estimate"))
+            t += 2
+            if episode < 3:
+                assert outcome.target is MissionState.LOST
+        assert (outcome.target, outcome.reason) == (MissionState.FAILED, "lost_repeatedly")
+        assert outcome.detail.startswith("lost 3 times without reaching a key image")
+
+    def test_progress_restarts_the_count(self) -> None:
+        mission = Mission(MissionConfig(lost_limit=2))
+        mission.handle(Start(0, goal_id=42))
+        for t in (1, 10, 20):
+            mission.handle(Localized(t, keyframe_id=7, matches=120))
+            mission.handle(KeyImageReached(t + 1, 8))
+            assert mission.handle(Lost(t + 2, "no estimate")).target is MissionState.LOST
+
+    def test_an_unknown_abort_cause_is_refused(self) -> None:
+        with pytest.raises(ValueError, match="cause must be one of"):
+            Abort(0, "because")
+
+
 class TestTransitionTable:
     def test_every_state_has_a_row_and_every_edge_is_well_formed(self) -> None:
         assert set(m._TRANSITIONS) == set(MissionState)
         for row in m._TRANSITIONS.values():
             for edge in row.values():
                 if edge is not None:
-                    assert edge.reason in REASONS
+                    assert edge.reason in REASONS or edge.reason is m._CAUSE
                     assert edge.target in m._ENTRY_COMMANDS
 
     def test_final_states_are_absorbing(self) -> None:
@@ -176,7 +247,8 @@ class TestTransitionTable:
 
     def test_every_reason_is_reachable(self) -> None:
         used = {edge.reason for row in m._TRANSITIONS.values() for edge in row.values() if edge}
-        assert used == set(REASONS)
+        # an Abort's reason is its cause; the lost limit redirects "lost"
+        assert used - {m._CAUSE} | {*m.ABORT_CAUSES, "lost_repeatedly"} == set(REASONS)
 
 
 inputs = st.one_of(
@@ -186,7 +258,7 @@ inputs = st.one_of(
     st.builds(Lost, st.just(0), st.just("no estimate")),
     st.builds(Arrived, st.just(0), st.integers(0, 9)),
     st.builds(Bumper, st.just(0)), st.builds(Stall, st.just(0)),
-    st.builds(OperatorAbort, st.just(0)), st.builds(Tick, st.just(0)),
+    st.builds(Abort, st.just(0)), st.builds(Tick, st.just(0)),
 )
 
 

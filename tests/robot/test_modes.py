@@ -85,7 +85,13 @@ class TestRule2LeavingAMissionMode:
     def test_the_gcs_failsafe_hold_aborts_the_run(self) -> None:
         d = decide(RUNNING, GcsLost("hold"))
         assert (d.state.mode, d.state.activity) == (Mode.HOLD, Activity.IDLE)
-        assert Action.END_RUN in d.actions and d.why == "mode HOLD"
+        assert Action.END_RUN in d.actions
+        assert (d.cause, d.why) == ("gcs_lost", "ground heartbeat lost: mode HOLD")
+
+    def test_a_forced_disarm_ends_the_run_as_the_emergency_stop(self) -> None:
+        d = decide(RUNNING, Arm(False, emergency=True))
+        assert (d.state.armed, d.cause, d.why) == (False, "e_stop", "emergency stop")
+        assert decide(RUNNING, Arm(False)).cause == "disarmed"
 
     def test_auto_again_restarts(self) -> None:
         d = decide(RUNNING, StartGoals((Goal(3),), 1))

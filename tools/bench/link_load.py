@@ -29,11 +29,11 @@ from pathlib import Path
 
 from robot.config import MissionConfig, VmnavConfig
 from robot.mission import (
+    Abort,
     Arrived,
     Localized,
     Mission,
     MissionState,
-    OperatorAbort,
     Start,
     Transition,
 )
@@ -215,7 +215,7 @@ class LinkLoadApp:
 
     def _stop_mission(self, reason: str) -> None:
         if self._mission is not None and self._state in ACTIVE_STATES:
-            self._apply(self._mission.handle(OperatorAbort(self._clock.now_ns(), reason)))
+            self._apply(self._mission.handle(Abort(self._clock.now_ns(), "operator_abort", reason)))
 
     def _next_arc_m(self, ring_index: int, from_arc_m: float) -> float:
         """The first arc length >= ``from_arc_m`` at which key image ``ring_index`` lies."""

@@ -21,6 +21,7 @@ The exchanges are drawn in :mod:`shared.mavlink.params`. Rules:
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,11 +59,16 @@ class ParamServer:
         table: the parameters; the server sets values in it.
         address: this vehicle, for filtering requests.
         config: the list pacing.
+        check: the vehicle's own test of a value that is in range: the problem it makes
+            with the other parameters (e.g. a slow-down distance below the stop
+            distance), None when it fits; refused like an out-of-range value.
     """
 
     def __init__(self, table: ParamTable, address: Address,
-                 config: MavlinkConfig | None = None) -> None:
+                 config: MavlinkConfig | None = None,
+                 check: Callable[[str, float], str | None] | None = None) -> None:
         self.table = table
+        self._check = check
         self.address = address
         self.config = config if config is not None else MavlinkConfig()
         self._stream: deque[int] = deque()
@@ -105,6 +111,8 @@ class ParamServer:
             return self._error(msg, mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST,
                                f"param {name}: no such parameter")
         problem = self.table.problem(name, value)
+        if problem is None and self._check is not None:
+            problem = self._check(name, value)
         if problem is not None:
             self._events.append(ParamRefused(name, value, problem, source))
             return [*self._error(msg, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE,

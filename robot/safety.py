@@ -1,0 +1,237 @@
+"""The safety layer's core: how fast the robot may go, given its sonars and bumpers (pure).
+
+Theory of operation
+-------------------
+
+Every velocity command of the robot, a mission's or the operator's stick, passes
+:meth:`SafetyGovernor.assess` before it reaches the base (``robot.safe_base``). The
+governor keeps no map: it sees the latest echo of each sonar, where the robot stood
+when it came, and what the robot is asked to do, and it only ever lowers the speed.
+This is the reactive layer of ARIA's ``ArActionAvoidFront`` / ``ArActionLimiterForwards``
+with an explicit swept corridor, a stop line and hysteresis, as in the stop-and-wait
+behaviour of VT&R systems (Furgale & Barfoot 2010 waited for people in the path).
+
+Rules (``SafetyConfig`` holds every distance and time):
+
+1. Echoes. A reading is one point on its sensor's axis at its range (ARIA's
+   ``ArSensorReading`` convention), fixed in the odometry frame where the robot stood
+   when it arrived and seen from where the robot stands now, so a 300 ms old echo
+   does not move with the robot.
+2. The swept corridor. Driving forward at (v, omega) the robot's centre follows the
+   arc of curvature omega / v; its body sweeps the band of half-width ``half_width_m``
+   + ``side_margin_m`` around that arc. An echo in the band at arc length s lies
+   ``d = s - front_m`` ahead of the front. Reversing is the mirror image (rear sensors,
+   ``rear_m``). Standing still, the corridor is the straight one ahead.
+3. The bound. The nearest echo ahead at d: at or inside ``stop_distance_m`` forward
+   motion stops; inside ``slow_distance_m`` the speed falls linearly with d, never
+   below ``min_speed_ratio`` of the command short of the stop line, and the turn
+   rate with it (the arc stays the one checked); beyond it the command passes.
+4. Hysteresis. Once stopped, forward motion stays stopped until the nearest echo
+   ahead has stayed beyond ``stop_distance_m`` + ``clear_margin_m`` for
+   ``clear_dwell_ns``: a noisy echo near the line does not make the robot jerk.
+5. Silence is not clear. Forward motion needs a reading younger than
+   ``sonar_stale_ns`` from every sensor whose axis points forward of abeam (reverse:
+   aft of abeam); a base with no range sensor cannot drive forward at all.
+6. Turning in place is refused (omega = 0) while an echo lies within the circle the
+   robot's corners sweep, plus ``turn_margin_m``; otherwise it stays allowed, so a
+   stopped robot can still face its route.
+7. Bumper and emergency stop hold: a bumper being pressed (its rising edge) or
+   :meth:`SafetyGovernor.emergency_stop` stops everything until
+   :meth:`SafetyGovernor.release` (the operator re-arms or changes mode).
+
+:class:`~shared.interfaces.Blocked` reports the hold that stops forward motion (rules
+3-5, 7), for the mission (wait, resume, give up) and telemetry.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from robot.config import SafetyConfig
+from shared.interfaces import BaseState, Blocked, RangeReading
+
+
+@dataclass(frozen=True, slots=True)
+class Assessment:
+    """The bounded command and why it was bounded.
+
+    Attributes:
+        v_m_s: the forward speed the base may get, m/s.
+        omega_rad_s: the turn rate the base may get, rad/s.
+        blocked: the hold that stops forward motion now, or None.
+        ahead_m: the nearest echo in the forward corridor, ahead of the front, m
+            (inf when none).
+    """
+
+    v_m_s: float
+    omega_rad_s: float
+    blocked: Blocked | None
+    ahead_m: float
+
+
+class SafetyGovernor:
+    """Rules 1-7 for one robot; not thread-safe (``robot.safe_base`` locks it).
+
+    Args:
+        config: distances, times and the robot's footprint.
+    """
+
+    def __init__(self, config: SafetyConfig) -> None:
+        self._config = config
+        self._latched: Blocked | None = None  # rule 7
+        self._was_bumped = False
+        self._stopped_since_ns: int | None = None  # rule 4: forward motion stopped
+        self._clear_since_ns: int | None = None
+
+    @property
+    def config(self) -> SafetyConfig:
+        """The layer's settings."""
+        return self._config
+
+    @property
+    def latched(self) -> Blocked | None:
+        """The bumper's or emergency stop's hold in force (rule 7), or None."""
+        return self._latched
+
+    def configure(self, config: SafetyConfig) -> None:
+        """New settings; the holds and the hysteresis in force stay."""
+        self._config = config
+
+    def emergency_stop(self, now_ns: int) -> None:
+        """Hold everything until :meth:`release` (rule 7)."""
+        if self._latched is None or self._latched.cause != "e_stop":
+            self._latched = Blocked("e_stop", math.nan, now_ns)
+
+    def release(self) -> None:
+        """The operator re-armed or changed mode: the bumper's or e-stop's hold ends."""
+        self._latched = None
+
+    def assess(self, now_ns: int, state: BaseState, v_m_s: float,
+               omega_rad_s: float) -> Assessment:
+        """Bound the command (v_m_s, omega_rad_s) at ``now_ns`` for the base in ``state``."""
+        cfg = self._config
+        if state.bumped and not self._was_bumped and self._latched is None:
+            self._latched = Blocked("bumper", math.nan, now_ns)
+        self._was_bumped = state.bumped
+        points = _echo_points(state, now_ns, cfg.sonar_stale_ns)
+        ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, cfg, reverse=False)
+        blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False))
+        if self._latched is not None:
+            return Assessment(0.0, 0.0, self._latched, ahead_m)
+        v, omega = v_m_s, omega_rad_s
+        if v > 0:
+            ratio = 0.0 if blocked is not None else _speed_ratio(ahead_m, cfg)
+        elif v < 0:
+            behind_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.rear_m, cfg, reverse=True)
+            silent = _silent(state, now_ns, cfg, reverse=True)
+            ratio = 0.0 if silent or behind_m <= cfg.stop_distance_m else _speed_ratio(
+                behind_m, cfg)
+        else:
+            ratio = 1.0
+        v *= ratio
+        if ratio > 0.0:
+            omega *= ratio  # slowing down keeps the arc the corridor was checked along
+        if omega != 0.0 and _too_close_to_turn(points, cfg):
+            omega = 0.0
+        return Assessment(v, omega, blocked, ahead_m)
+
+    def _forward_hold(self, now_ns: int, ahead_m: float, silent: bool) -> Blocked | None:
+        """Rules 3-5: stop at the line, clear only after the margin and the dwell."""
+        cfg = self._config
+        if silent:
+            self._stopped_since_ns = self._stopped_since_ns or now_ns
+            self._clear_since_ns = None
+            return Blocked("sonar_silent", math.nan, self._stopped_since_ns)
+        if ahead_m <= cfg.stop_distance_m:
+            if self._stopped_since_ns is None:
+                self._stopped_since_ns = now_ns
+            self._clear_since_ns = None
+        elif self._stopped_since_ns is not None:
+            if ahead_m <= cfg.stop_distance_m + cfg.clear_margin_m:
+                self._clear_since_ns = None
+            elif self._clear_since_ns is None:
+                self._clear_since_ns = now_ns
+            if (self._clear_since_ns is not None
+                    and now_ns - self._clear_since_ns >= cfg.clear_dwell_ns):
+                self._stopped_since_ns = self._clear_since_ns = None
+        if self._stopped_since_ns is None:
+            return None
+        return Blocked("obstacle", ahead_m, self._stopped_since_ns)
+
+
+def _echo_points(state: BaseState, now_ns: int, stale_ns: int) -> list[tuple[float, float]]:
+    """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now."""
+    x0, y0, yaw0 = state.odom_pose
+    c0, s0 = math.cos(yaw0), math.sin(yaw0)
+    points = []
+    for r in state.ranges:
+        if now_ns - r.t_ns > stale_ns:
+            continue
+        ox, oy, oyaw = r.odom_pose
+        sx, sy, sh = r.sensor_pose
+        c, s = math.cos(oyaw), math.sin(oyaw)
+        # the echo in the odometry frame: the robot's pose then, the sensor, the range
+        ex = sx + r.range_m * math.cos(sh)
+        ey = sy + r.range_m * math.sin(sh)
+        wx, wy = ox + c * ex - s * ey, oy + s * ex + c * ey
+        dx, dy = wx - x0, wy - y0
+        points.append((c0 * dx + s0 * dy, -s0 * dx + c0 * dy))
+    return points
+
+
+def _faces(reading: RangeReading, reverse: bool) -> bool:
+    """The sensor's axis points forward of abeam (aft of abeam when ``reverse``)."""
+    ahead = math.cos(reading.sensor_pose[2])
+    return ahead < 1e-6 if reverse else ahead > -1e-6
+
+
+def _silent(state: BaseState, now_ns: int, config: SafetyConfig, reverse: bool) -> bool:
+    """Rule 5: some sensor facing the way of travel has no fresh reading (or none exist)."""
+    facing = [r for r in state.ranges if _faces(r, reverse)]
+    return not facing or any(now_ns - r.t_ns > config.sonar_stale_ns for r in facing)
+
+
+def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s: float,
+                   body_m: float, config: SafetyConfig, reverse: bool) -> float:
+    """Rule 2: the distance from the body's end to the nearest echo in the swept corridor,
+    m (inf when the corridor is empty)."""
+    sign = -1.0 if reverse else 1.0
+    curvature = omega_rad_s / v_m_s if v_m_s * sign > 1e-6 else 0.0
+    half = config.half_width_m + config.side_margin_m
+    nearest = math.inf
+    for px, py in points:
+        x = px * sign  # mirrored when reversing: the curvature keeps its sign
+        s, lateral = _arc_coordinates(x, py, curvature)
+        if s > 0 and abs(lateral) <= half:
+            nearest = min(nearest, s - body_m)
+    return nearest
+
+
+def _arc_coordinates(x: float, y: float, curvature: float) -> tuple[float, float]:
+    """A point's arc length along the path of curvature ``curvature`` (1/m) from the
+    robot (forward positive) and its distance from that path, m."""
+    if abs(curvature) < 1e-3:
+        return x, y
+    radius = 1.0 / curvature  # the centre of the turn at (0, radius)
+    dx, dy = x, y - radius
+    rho = math.hypot(dx, dy)
+    # angle swept from the robot (at angle -pi/2 seen from a left turn's centre)
+    angle = math.atan2(dx, -dy) if radius > 0 else math.atan2(dx, dy)
+    return abs(radius) * angle, abs(radius) - rho
+
+
+def _too_close_to_turn(points: list[tuple[float, float]], config: SafetyConfig) -> bool:
+    """Rule 6: an echo inside the circle the robot's corners sweep turning in place."""
+    reach = math.hypot(max(config.front_m, config.rear_m), config.half_width_m)
+    limit = reach + config.turn_margin_m
+    return any(math.hypot(px, py) < limit for px, py in points)
+
+
+def _speed_ratio(distance_m: float, config: SafetyConfig) -> float:
+    """Rule 3 short of the stop line: the fraction of the command allowed."""
+    if distance_m >= config.slow_distance_m:
+        return 1.0
+    ramp = (distance_m - config.stop_distance_m) / (
+        config.slow_distance_m - config.stop_distance_m)
+    return max(config.min_speed_ratio, min(1.0, ramp))
