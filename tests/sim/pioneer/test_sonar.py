@@ -7,14 +7,12 @@ import time
 from dataclasses import replace
 
 import numpy as np
-import pymunk
 import pytest
 
 from shared.aria import Command
 from shared.aria.p3at import SONAR_POSES
 from shared.pose import Pose2
-from sim._shapes import Category, tag
-from sim.config import EmulatorConfig, SimConfig
+from sim.config import EmulatorConfig, PeopleConfig, SimConfig
 from sim.decor import PlacedObject
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.pioneer.sonar import SonarRing
@@ -99,21 +97,19 @@ class TestSpecularMisses:
         assert ping(sim, 7, ONE_RAY) == pytest.approx((y - WALL_HALF_THICKNESS_M)
                                                       / -math.sin(axis), abs=0.005)
 
-    def test_a_person_echoes_at_grazing_geometry_where_a_box_would_not(self) -> None:
-        sim = room(Pose2(4.0, 3.0, 0.0))
+    def test_a_person_echoes_at_grazing_geometry_where_a_board_would_not(self) -> None:
+        config = SimConfig(people=PeopleConfig(count=1))
+        sim = Simulation(box_room((12.0, 6.0)), config)
+        sim.place_robot(Pose2(4.0, 3.0, 0.0))
         x, y, axis = transducer_w(sim, 3)
-        radius = 0.25
+        radius = config.people.radius_m
         # The axis passes 0.9 radius from the centre: it meets the body 64 deg off normal.
         centre = (x + 2.0 * math.cos(axis) - 0.9 * radius * math.sin(axis),
                   y + 2.0 * math.sin(axis) + 0.9 * radius * math.cos(axis))
-        body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        body.position = centre
-        person = pymunk.Circle(body, radius)
-        tag(person, Category.PERSON, 1.75)  # as sim.people tags them
-        sim.space.add(body, person)
+        sim.people.place(0, centre, centre)
         expected = 2.0 - radius * math.cos(math.asin(0.9))
         assert ping(sim, 3, ONE_RAY) == pytest.approx(expected, abs=0.005)
-        sim.space.remove(body, person)
+        sim.people.place(0, (1.0, 1.0), (1.0, 1.0))  # out of the way
         # A board's face met by the axis at 64 deg from its normal gives no echo.
         board = sim.add_object(PlacedObject(
             "board", (x + 2.0 * math.cos(axis), y + 2.0 * math.sin(axis)), (0.6, 0.02), 1.0,
