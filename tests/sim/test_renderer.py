@@ -18,6 +18,7 @@ from sim.decor import PlacedObject
 from sim.pioneer.sonar import SonarRing
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
+from sim.topdown import _FURNITURE, MapCanvas, draw_topdown
 from sim.world import LandmarkDensity, World, load_world
 from tests.sim.rooms import box_room
 from tools.bench.corners import picture_corner_errors_px
@@ -228,6 +229,8 @@ class TestObjectsPlacedWhileRunning:
         sim.step()
         with_box = renderer.render(sim)
         heard = ring.range_m(3, sim.body.pose_w)
+        (u, v), = MapCanvas(sim).px([(8.0, 3.0)])
+        assert tuple(draw_topdown(sim, with_box, 180.0)[v, u]) == _FURNITURE  # on the map too
         sim.remove_object(box)
         sim.step()
         after = renderer.render(sim)
