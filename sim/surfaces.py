@@ -267,8 +267,9 @@ def build_scene(world: World, atlas: Atlas) -> Scene:
 
 
 def with_objects(scene: Scene, world: World, objects: Iterable[PlacedObject]) -> Scene:
-    """``scene`` (compiled from ``world`` by :func:`build_scene`, not changed) with
-    ``objects`` added as boxes, their textures added to its atlas.
+    """A copy of ``scene`` (compiled from ``world`` by :func:`build_scene`) with
+    ``objects`` added as boxes; ``scene``'s arrays stay as they were, its atlas (shared
+    by both) gains the objects' textures.
 
     Raises:
         ConfigError: a texture an object names is missing from the world's set.

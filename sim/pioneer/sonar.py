@@ -73,8 +73,8 @@ class SonarRing:
         self._pending: dict[int, float] = {}
         half = math.radians(config.sonar_beam_width_deg) / 2
         rays = config.sonar_rays
-        self._ray_offsets_rad = tuple(-half + 2 * half * k / (rays - 1) for k in range(rays)) \
-            if rays > 1 else (0.0,)
+        self._ray_offsets_rad = (  # off the axis, rad: the cone's edges included
+            tuple(-half + 2 * half * k / (rays - 1) for k in range(rays)) if rays > 1 else (0.0,))
         self._cos_critical = math.cos(math.radians(config.sonar_critical_angle_deg))
 
     @property
