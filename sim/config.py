@@ -246,6 +246,23 @@ class EmulatorConfig:
     """Std of Gaussian noise on each sonar range, m."""
     sonar_cycle_ns: int = 40_000_000
     """Each sonar array fires its next transducer this often, ns (both arrays together)."""
+    sonar_beam_width_deg: float = 30.0
+    """Full width of each transducer's cone, degrees: the Polaroid 600-series
+    transducers of the Pioneer rings have a main lobe about 30 degrees wide (Polaroid
+    6500 ranging module data sheet; Leonard & Durrant-Whyte 1992, ch. 2)."""
+    sonar_rays: int = 7
+    """Rays spread evenly across the cone, edges included; the nearest echo among them
+    is the reading (1: the axis only)."""
+    sonar_min_range_m: float = 0.15
+    """Nearer than this a surface gives no echo: it returns while the transducer still
+    rings from its pulse and the receiver is blanked, m (Polaroid 6500 data sheet:
+    ranging from 6 in, 0.15 m)."""
+    sonar_critical_angle_deg: float = 50.0
+    """A ray meeting a flat surface (wall, furniture, object) further than this from
+    its normal gives no echo: the sound glances away, degrees (specular reflection,
+    Kuc & Siegel 1987; Leonard & Durrant-Whyte 1992). A chosen middle of the 40-60
+    degrees used for painted walls; 90: no specular misses. Round shapes (people,
+    trunks) always echo."""
     link: AriaLinkConfig = field(default_factory=AriaLinkConfig)
     """The robot end's timing: SIP cycle, watchdog, frame timeout."""
 
@@ -270,6 +287,15 @@ class EmulatorConfig:
             f"sonar_max_range_m must be in (0, 65] (u16 mm), got {self.sonar_max_range_m}",
         )
         require(self.sonar_cycle_ns > 0, f"sonar_cycle_ns must be > 0, got {self.sonar_cycle_ns}")
+        require(0.0 <= self.sonar_beam_width_deg <= 90.0,
+                f"sonar_beam_width_deg must be in [0, 90], got {self.sonar_beam_width_deg}")
+        require(1 <= self.sonar_rays <= 31, f"sonar_rays must be in [1, 31], got {self.sonar_rays}")
+        require(0.0 <= self.sonar_min_range_m < self.sonar_max_range_m,
+                f"sonar_min_range_m must be in [0, sonar_max_range_m), got "
+                f"{self.sonar_min_range_m} (sonar_max_range_m {self.sonar_max_range_m})")
+        require(0.0 < self.sonar_critical_angle_deg <= 90.0,
+                f"sonar_critical_angle_deg must be in (0, 90], got "
+                f"{self.sonar_critical_angle_deg}")
 
 
 

@@ -209,6 +209,10 @@ class PlacedObject:
     """Doors only: how far the leaf is turned about its hinge, degrees (0 = closed)."""
     hinge: str = "start"
     """Doors only: the hinge end of the length axis, "start" (-length/2) or "end"."""
+    sonar: bool = True
+    """Whether the sonar ring hears it. False stands for the obstacles a sonar ring
+    misses though the bumper hits them: glass at an angle, thin legs, a table top
+    above the sonar plane. Still solid, still drawn (opaque, with its textures)."""
 
     def __post_init__(self) -> None:
         require(self.kind in OBJECT_KINDS,

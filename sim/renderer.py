@@ -9,6 +9,9 @@ Per frame:
    placed object, picture, tree, floor, ceiling, lamp or the sky, textured with
    trilinear mip-mapping from the pixel's footprint (no aliasing shimmer) and lit
    by the light map (:mod:`sim.lightmap`: lamps, daylight through windows, open sky).
+   Objects placed in the simulation while it runs are in the surfaces from the first
+   frame after they were placed until they are removed (:func:`sim.surfaces.with_objects`,
+   recompiled when :attr:`Simulation.objects_revision` changes).
    The image is a float radiance, grey levels (lamps and sky may exceed 255).
 3. People are drawn as textured figures (:mod:`sim.person_figure`, hidden per pixel
    by the depth image), then the legacy landmark patches of a world that asks for them.
@@ -44,7 +47,7 @@ from sim.config import RenderConfig, SensorConfig
 from sim.landmarks import LandmarkField
 from sim.person_figure import PersonFigures
 from sim.simulation import Simulation
-from sim.surfaces import Scene, build_scene
+from sim.surfaces import Scene, build_scene, with_objects
 from sim.texture_library import TextureLibrary
 from sim.world import World
 
@@ -124,6 +127,7 @@ class FisheyeRenderer:
         self.config = config
         self.landmarks = landmarks
         self.scene: Scene = build_scene(world, Atlas(world.textures()))
+        self._world, self._world_scene, self._objects_revision = world, self.scene, 0
         self._patches = PatchPainter(camera, landmarks, world.lighting) if len(landmarks) else None
         self._rng = rng
         self._brightness = world.lighting.brightness
@@ -177,6 +181,9 @@ class FisheyeRenderer:
         Returns:
             the frame and its ground truth.
         """
+        if sim.objects_revision != self._objects_revision:
+            self.scene = with_objects(self._world_scene, self._world, sim.added_objects.values())
+            self._objects_revision = sim.objects_revision
         pose_w = sim.body.pose_w
         T_world_cam = camera_pose_world(pose_w, self.mount)
         R_cam_world = T_world_cam[:3, :3].T

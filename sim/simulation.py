@@ -18,13 +18,21 @@ Rules:
    :data:`~sim.free_space.WALL_HALF_THICKNESS_M`), furniture static boxes, people
    kinematic circles, the robot a dynamic box. Each carries its height
    (:meth:`Simulation.occluder_height`); :data:`OCCLUDER_FILTER` makes ray queries see
-   walls, furniture and people but not the robot.
+   walls, furniture and people but not the robot. A placed object whose ``sonar`` is
+   false is silent to the sonar's queries (:mod:`sim._shapes`), solid to the rest.
+5. **Objects placed while it runs** (:meth:`Simulation.add_object`, such as a box put
+   on a route after it was taught) are static boxes like the world's objects, with an
+   id; :meth:`Simulation.remove_object` takes one away. Each change bumps
+   :attr:`Simulation.objects_revision`, so a renderer knows to redraw its scene. The
+   people do not know of them (their free-space map is the world's): they walk
+   through them, as they walk through nothing else.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 import numpy as np
 import numpy.typing as npt
@@ -32,9 +40,11 @@ import pymunk
 
 from shared.errors import ConfigError
 from shared.pose import Pose2
+from sim._geometry import box_corners
 from sim._shapes import Category, category_of, height_of, tag
 from sim.body import PioneerBody
 from sim.config import SimConfig
+from sim.decor import PlacedObject
 from sim.free_space import WALL_HALF_THICKNESS_M, FreeSpaceMap
 from sim.landmarks import LandmarkField, generate_landmarks
 from sim.people import People
@@ -95,6 +105,9 @@ class Simulation:
         self._dt_s = config.physics_dt_ns / 1e9
         self._step_hooks: list[Callable[[int, int], None]] = []
         self.light_gain_at: Callable[[int], float] = _steady_light
+        self._added: dict[int, tuple[PlacedObject, pymunk.Shape]] = {}
+        self._next_object_id = 1
+        self._objects_revision = 0
 
     def _add_walls_and_furniture(self) -> None:
         static = self.space.static_body
@@ -109,15 +122,66 @@ class Simulation:
             tag(poly, Category.FURNITURE, box.height_m)
             self.space.add(poly)
         for obj, corners in zip(self.world.objects, self.world.object_corners(), strict=True):
-            poly = pymunk.Poly(static, [tuple(c) for c in corners])
-            poly.friction = _WALL_FRICTION
-            tag(poly, Category.FURNITURE, obj.elevation_m + obj.height_m)
-            self.space.add(poly)
+            self.space.add(self._object_shape(obj, corners))
         for tree in self.world.trees:
             trunk = pymunk.Circle(static, tree.trunk_radius_m, tree.at)
             trunk.friction = _WALL_FRICTION
             tag(trunk, Category.FURNITURE, tree.trunk_height_m + tree.crown_radius_m)
             self.space.add(trunk)
+
+    def _object_shape(self, obj: PlacedObject, corners: npt.NDArray[np.float64]) -> pymunk.Poly:
+        """The static polygon of a placed object with footprint ``corners`` (4, 2), m."""
+        poly = pymunk.Poly(self.space.static_body, [tuple(c) for c in corners])
+        poly.friction = _WALL_FRICTION
+        tag(poly, Category.FURNITURE, obj.elevation_m + obj.height_m, sonar_echo=obj.sonar)
+        return poly
+
+    # -- objects placed while running (rule 5) -----------------------------------------
+
+    @property
+    def added_objects(self) -> Mapping[int, PlacedObject]:
+        """The objects placed while running, by id, oldest first (read-only)."""
+        return MappingProxyType({i: obj for i, (obj, _) in self._added.items()})
+
+    @property
+    def objects_revision(self) -> int:
+        """A count of the objects placed and removed while running (rule 5)."""
+        return self._objects_revision
+
+    def add_object(self, obj: PlacedObject) -> int:
+        """Put ``obj`` in the world now (solid, heard by the sonar unless ``obj.sonar`` is
+        false, drawn by a renderer from its next frame); returns its id (1, 2, ...).
+
+        Raises:
+            ConfigError: its footprint overlaps the robot.
+        """
+        poly = self._object_shape(obj, box_corners(*obj.footprint()))
+        hits = self.space.shape_query(poly)
+        if any(h.shape is self.body.shape for h in hits):
+            (x, y), (length, width), _ = obj.footprint()
+            raise ConfigError("object", f"a {length:g} x {width:g} m {obj.kind} at "
+                                        f"({x:g}, {y:g}) overlaps the robot")
+        self.space.add(poly)
+        object_id = self._next_object_id
+        self._next_object_id += 1
+        self._added[object_id] = (obj, poly)
+        self._objects_revision += 1
+        return object_id
+
+    def remove_object(self, object_id: int) -> PlacedObject:
+        """Take away the object placed with id ``object_id``; returns it.
+
+        Raises:
+            ConfigError: no object placed while running has that id.
+        """
+        if object_id not in self._added:
+            placed = ", ".join(map(str, self._added)) or "none"
+            raise ConfigError(f"object {object_id}",
+                              f"no object placed while running has this id (placed: {placed})")
+        obj, poly = self._added.pop(object_id)
+        self.space.remove(poly)
+        self._objects_revision += 1
+        return obj
 
     # -- time -------------------------------------------------------------------------
 

@@ -26,11 +26,17 @@ Light: each primitive has a ``*_shade`` factor (its orientation to the light) an
 ``*_emit`` factor (> 0: self-lit, such as windows by day and lit lamps; its grey is
 the texture times ``emit``); the rest take the light map's value where they are
 (:mod:`sim.lightmap`).
+
+Objects placed while a simulation runs (:meth:`sim.simulation.Simulation.add_object`)
+join a compiled scene as more quads (:func:`with_objects`); the light map is the
+world's, so they cast no shadow.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import cv2
@@ -40,7 +46,7 @@ import numpy.typing as npt
 from sim._atlas import Atlas
 from sim._geometry import box_corners
 from sim._world_checks import place_picture
-from sim.decor import named
+from sim.decor import PlacedObject, named
 from sim.free_space import WALL_HALF_THICKNESS_M
 from sim.lightmap import LightMap, build_light_map
 from sim.world import World
@@ -175,6 +181,38 @@ class _Builder:
                 u0, v0 = -half[0], half[1]
             self.flats.append((centre, ax, half, zz, up, self.atlas.id_of(top), (su, sv, u0, v0)))
 
+    def objects(self, objects: Iterable[PlacedObject]) -> None:
+        """Placed objects as boxes, each as it stands (a door turned open)."""
+        for obj in objects:
+            textures = tuple(named(obj.kind, name, k)
+                             for k, name in enumerate((obj.top, obj.texture, obj.sides)))
+            z = (obj.elevation_m, obj.elevation_m + obj.height_m)
+            self.box(box_corners(*obj.footprint()), z, textures,  # type: ignore[arg-type]
+                     obj.scale_m)
+
+    def arrays(self) -> dict[str, npt.NDArray]:
+        """The quads and flats collected, as the :class:`Scene`'s ``quad_*`` and ``flat_*``."""
+        q = list(zip(*self.quads, strict=True)) if self.quads else [()] * 9
+        f = list(zip(*self.flats, strict=True)) if self.flats else [()] * 7
+        return {
+            "quad_a": np.array(q[0], float).reshape(-1, 2),
+            "quad_d": np.array(q[1], float).reshape(-1, 2),
+            "quad_len": np.array(q[2], float),
+            "quad_n": np.array(q[3], float).reshape(-1, 2),
+            "quad_z": np.array(q[4], float).reshape(-1, 2),
+            "quad_tex": np.array(q[5], np.int64),
+            "quad_uv": np.array(q[6], float).reshape(-1, 4),
+            "quad_shade": np.array(q[7], float),
+            "quad_emit": np.array(q[8], float),
+            "flat_c": np.array(f[0], float).reshape(-1, 2),
+            "flat_ax": np.array(f[1], float).reshape(-1, 2),
+            "flat_half": np.array(f[2], float).reshape(-1, 2),
+            "flat_z": np.array(f[3], float),
+            "flat_up": np.array(f[4], float),
+            "flat_tex": np.array(f[5], np.int64),
+            "flat_uv": np.array(f[6], float).reshape(-1, 4),
+        }
+
 
 def build_scene(world: World, atlas: Atlas) -> Scene:
     """Compile ``world``'s surfaces (see the module docstring).
@@ -201,11 +239,7 @@ def build_scene(world: World, atlas: Atlas) -> Scene:
         textures = tuple(named(box.kind, name, k)
                          for k, name in enumerate((box.top, box.front, box.sides)))
         b.box(corners, (0.0, box.height_m), textures, box.scale_m)  # type: ignore[arg-type]
-    for obj, corners in zip(world.objects, world.object_corners(), strict=True):
-        textures = tuple(named(obj.kind, name, k)
-                         for k, name in enumerate((obj.top, obj.texture, obj.sides)))
-        z = (obj.elevation_m, obj.elevation_m + obj.height_m)
-        b.box(corners, z, textures, obj.scale_m)  # type: ignore[arg-type]
+    b.objects(world.objects)
     corners_w, normals_w = _pictures(world, b)
     trees = _trees(world, atlas, sun_w)
     floor_map, floor_tex, floor_uv, origin = _floor(world, atlas)
@@ -213,26 +247,9 @@ def build_scene(world: World, atlas: Atlas) -> Scene:
     lamps = _lamps(world, atlas, origin, floor_map.shape)
     heights = [w.height_m for w in world.walls] + [t.trunk_height_m + t.crown_radius_m
                                                    for t in world.trees]
-    q = list(zip(*b.quads, strict=True)) if b.quads else [()] * 9
-    f = list(zip(*b.flats, strict=True)) if b.flats else [()] * 7
     return Scene(
         atlas=atlas.freeze(),
-        quad_a=np.array(q[0], float).reshape(-1, 2),
-        quad_d=np.array(q[1], float).reshape(-1, 2),
-        quad_len=np.array(q[2], float),
-        quad_n=np.array(q[3], float).reshape(-1, 2),
-        quad_z=np.array(q[4], float).reshape(-1, 2),
-        quad_tex=np.array(q[5], np.int64),
-        quad_uv=np.array(q[6], float).reshape(-1, 4),
-        quad_shade=np.array(q[7], float),
-        quad_emit=np.array(q[8], float),
-        flat_c=np.array(f[0], float).reshape(-1, 2),
-        flat_ax=np.array(f[1], float).reshape(-1, 2),
-        flat_half=np.array(f[2], float).reshape(-1, 2),
-        flat_z=np.array(f[3], float),
-        flat_up=np.array(f[4], float),
-        flat_tex=np.array(f[5], np.int64),
-        flat_uv=np.array(f[6], float).reshape(-1, 4),
+        **b.arrays(),
         **trees,
         grid_origin=origin,
         floor_map=floor_map,
@@ -247,6 +264,24 @@ def build_scene(world: World, atlas: Atlas) -> Scene:
         picture_corners_w=corners_w,
         picture_normals_w=normals_w,
     )
+
+
+def with_objects(scene: Scene, world: World, objects: Iterable[PlacedObject]) -> Scene:
+    """A copy of ``scene`` (compiled from ``world`` by :func:`build_scene`) with
+    ``objects`` added as boxes; ``scene``'s arrays stay as they were, its atlas (shared
+    by both) gains the objects' textures.
+
+    Raises:
+        ConfigError: a texture an object names is missing from the world's set.
+    """
+    b = _Builder(world, scene.atlas, scene.sun_w)
+    objects = list(objects)
+    b.objects(objects)
+    scene.atlas.freeze()
+    added = {name: np.concatenate([getattr(scene, name), values])
+             for name, values in b.arrays().items()}
+    tops = [o.elevation_m + o.height_m for o in objects]
+    return dataclasses.replace(scene, **added, max_height_m=max([scene.max_height_m, *tops]))
 
 
 def _pictures(world: World, b: _Builder) -> tuple[FloatArray, FloatArray]:

@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from sim._geometry import box_corners
 from sim._world_checks import place_picture
 from sim.landmarks import Surface
 from sim.renderer import RenderedFrame
@@ -83,7 +84,10 @@ def draw_topdown(
         corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
         cv2.fillPoly(img, [canvas.px(corners)], _CEILING)
     cv2.fillPoly(img, [canvas.px(_fov_polygon(sim, frame, fov_deg))], _FOV, lineType=cv2.LINE_AA)
-    for corners in np.concatenate([sim.world.furniture_corners(), sim.world.object_corners()]):
+    added = np.array([box_corners(*o.footprint()) for o in sim.added_objects.values()],
+                     dtype=float).reshape(-1, 4, 2)
+    for corners in np.concatenate([sim.world.furniture_corners(), sim.world.object_corners(),
+                                   added]):
         cv2.fillPoly(img, [canvas.px(corners)], _FURNITURE, lineType=cv2.LINE_AA)
     for tree in sim.world.trees:
         (u, v), = canvas.px([tree.at])

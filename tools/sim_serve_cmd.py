@@ -107,8 +107,9 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
     serve.add_argument(
         "--control",
         metavar="SPEC",
-        help="also serve the simulator's truth and robot placement over HTTP (GET /truth, "
-        "POST /place; for vmnav demo --hil): http, http:PORT, http:HOST:PORT (port "
+        help="also serve the simulator's truth, robot placement and boxes over HTTP (GET "
+        "/truth, POST /place, GET/POST /obstacles, DELETE /obstacles/<id>; for vmnav demo "
+        "--hil and safety scenarios): http, http:PORT, http:HOST:PORT (port "
         f"{DEFAULT_CONTROL_PORT} unless given) [default: none]",
     )
     serve.add_argument(
@@ -170,7 +171,8 @@ def run_serve(args: argparse.Namespace) -> int:
             print(f"  camera on {video_server.stream_url} "
                   f"(one frame: {video_server.snapshot_url})")
         if control_server is not None:
-            print(f"  control on {control_server.url} (GET /truth, POST /place)")
+            print(f"  control on {control_server.url} (GET /truth, POST /place, "
+                  "GET/POST /obstacles, DELETE /obstacles/<id>)")
         print("  Ctrl-C stops", flush=True)
         duration_ns = None if args.duration is None else round(args.duration * 1e9)
         with _stopped_by_signals(server.stop):

@@ -6,7 +6,7 @@ The robot as ARIA knows it (subclass, conversion factors, sonar geometry) is
 Modules:
 
 * ``motion``: the firmware's motion controller (targets, limits, velocity profile).
-* ``sonar``: the two sonar arrays (firing schedule, pymunk rays).
+* ``sonar``: the two sonar arrays (firing schedule, a cone of pymunk rays per ping).
 * ``emulator``: :class:`EmulatedPioneer`, the sans-I/O ARIA server.
 * ``links``: pty and TCP byte links; ``server``: :class:`PioneerServer`, one client at
   a time, tick by tick or in real time (``vmnav sim serve``); ``world_server``: a world

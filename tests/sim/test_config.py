@@ -127,6 +127,12 @@ def test_emulator_table_loads_with_its_link() -> None:
         ({"sonar_noise_m": -0.1}, "sonar_noise_m must be >= 0"),
         ({"sonar_max_range_m": 70.0}, "sonar_max_range_m must be in (0, 65]"),
         ({"sonar_cycle_ns": 0}, "sonar_cycle_ns must be > 0"),
+        ({"sonar_beam_width_deg": 120.0}, "sonar_beam_width_deg must be in [0, 90]"),
+        ({"sonar_beam_width_deg": float("nan")}, "sonar_beam_width_deg: expected a finite"),
+        ({"sonar_rays": 0}, "sonar_rays must be in [1, 31]"),
+        ({"sonar_min_range_m": 5.0}, "sonar_min_range_m must be in [0, sonar_max_range_m)"),
+        ({"sonar_min_range_m": -0.1}, "sonar_min_range_m must be in [0, sonar_max_range_m)"),
+        ({"sonar_critical_angle_deg": 0.0}, "sonar_critical_angle_deg must be in (0, 90]"),
     ],
 )
 def test_emulator_bad_values_name_the_key(table: dict, fragment: str) -> None:

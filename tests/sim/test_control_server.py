@@ -13,7 +13,7 @@ import urllib.request
 import pytest
 
 from sim.config import SimConfig
-from sim.control_server import ControlHook, ControlServer
+from sim.control_server import MAX_OBSTACLES, ControlHook, ControlServer
 from sim.simulation import Simulation
 from sim.world import load_world
 
@@ -41,11 +41,11 @@ def served():
 
 
 def call(url: str, data: bytes | None = None,
-         headers: dict[str, str] | None = None) -> tuple[int, dict]:
-    """GET (no data) or POST ``data`` as JSON, unless ``headers`` say otherwise."""
+         headers: dict[str, str] | None = None, method: str | None = None) -> tuple[int, dict]:
+    """GET (no data) or POST ``data`` as JSON, unless ``headers`` or ``method`` say otherwise."""
     headers = {"Content-Type": "application/json", **(headers or {})}
-    request = urllib.request.Request(url, data=data, method="GET" if data is None else "POST",
-                                     headers=headers)
+    method = method or ("GET" if data is None else "POST")
+    request = urllib.request.Request(url, data=data, method=method, headers=headers)
     try:
         with urllib.request.urlopen(request, timeout=5) as reply:
             return reply.status, json.loads(reply.read())
@@ -154,3 +154,91 @@ def test_idle_connections_hold_no_thread_and_a_client_is_still_served(served) ->
     finally:
         for conn in idle:
             conn.close()
+
+
+BOX = {"pose_w": [6.0, 4.0, 0.3], "size_m": [0.5, 0.4, 0.8]}
+
+
+def test_a_box_is_placed_listed_and_removed(served) -> None:
+    url = served
+    status, placed = call(url + "/obstacles", json.dumps(BOX).encode())
+    assert status == 200 and isinstance(placed["id"], int) and placed["t_ns"] >= 0
+    assert placed["pose_w"] == pytest.approx(BOX["pose_w"]) and placed["sonar"] is True
+    assert placed["size_m"] == pytest.approx(BOX["size_m"])
+    box_id = placed["id"]
+    status, listed = call(url + "/obstacles")
+    assert status == 200 and box_id in [b["id"] for b in listed["obstacles"]]
+    status, removed = call(url + f"/obstacles/{box_id}", method="DELETE")
+    assert status == 200 and removed["id"] == box_id
+    assert box_id not in [b["id"] for b in call(url + "/obstacles")[1]["obstacles"]]
+    status, reply = call(url + f"/obstacles/{box_id}", method="DELETE")
+    assert status == 404 and f"object {box_id}: no object placed" in reply["error"]
+
+
+def test_a_silent_box_is_placed_as_asked(served) -> None:
+    url = served
+    status, placed = call(url + "/obstacles", json.dumps({**BOX, "sonar": False}).encode())
+    assert status == 200 and placed["sonar"] is False
+    assert call(url + f"/obstacles/{placed['id']}", method="DELETE")[0] == 200
+
+
+@pytest.mark.parametrize("body, message", [
+    (b"not json", "the body is not JSON"),
+    (b"[]", 'want {"pose_w": [x_m, y_m, yaw_rad], "size_m"'),
+    (json.dumps({"pose_w": [6, 4, 0]}).encode(), "got {'pose_w'"),
+    (json.dumps({**BOX, "size_m": [0.5, 0.4]}).encode(), "size_m expected 3 numbers, got 2"),
+    (json.dumps({**BOX, "size_m": [0.5, -0.4, 0.8]}).encode(),
+     "size_m width_m -0.4 is outside [0.05, 5] m"),
+    (json.dumps({**BOX, "size_m": [1e9, 0.4, 0.8]}).encode(), "length_m 1e+09 is outside"),
+    (json.dumps({**BOX, "size_m": [0.5, 0.4, True]}).encode(), "height_m True is not a number"),
+    (b'{"pose_w": [6, 4, 0], "size_m": [0.5, 0.4, NaN]}', "height_m nan is not finite"),
+    (b'{"pose_w": [6, 4, 1e400], "size_m": [0.5, 0.4, 0.8]}', "yaw_rad inf is not finite"),
+    (json.dumps({**BOX, "pose_w": [-50.0, 4.0, 0.0]}).encode(), "outside the world's walls"),
+    (json.dumps({**BOX, "sonar": "no"}).encode(), "sonar 'no' is not true or false"),
+    (json.dumps({**BOX, "colour": "red"}).encode(), "unknown field 'colour'"),
+])
+def test_bad_boxes_are_refused_with_a_reason(served, body, message) -> None:
+    url = served
+    before = call(url + "/obstacles")[1]
+    status, reply = call(url + "/obstacles", body)
+    assert status == 400 and message in reply["error"] and "\n" not in reply["error"]
+    assert call(url + "/obstacles")[1] == before
+
+
+def test_a_box_on_the_robot_is_refused(served) -> None:
+    url = served
+    x, y, _ = call(url + "/truth")[1]["pose_w"]
+    status, reply = call(url + "/obstacles", json.dumps({**BOX, "pose_w": [x, y, 0.0]}).encode())
+    assert status == 400 and "overlaps the robot" in reply["error"]
+
+
+def test_no_more_than_the_most_boxes(served) -> None:
+    url = served
+    ids = []
+    for k in range(MAX_OBSTACLES):
+        status, placed = call(url + "/obstacles", json.dumps(
+            {**BOX, "pose_w": [20.0 + 0.2 * (k % 8), 3.0 + 0.2 * (k // 8), 0.0],
+             "size_m": [0.1, 0.1, 0.5]}).encode())
+        assert status == 200, placed
+        ids.append(placed["id"])
+    status, reply = call(url + "/obstacles", json.dumps(BOX).encode())
+    assert status == 400 and f"already {MAX_OBSTACLES} boxes placed" in reply["error"]
+    for box_id in ids:
+        assert call(url + f"/obstacles/{box_id}", method="DELETE")[0] == 200
+
+
+@pytest.mark.parametrize("path", ["/obstacles/abc", "/obstacles/-1", "/obstacles/1/x",
+                                  "/obstacles/" + "9" * 40, "/truth"])
+def test_deleting_what_is_not_a_box_is_404(served, path) -> None:
+    status, reply = call(served + path, method="DELETE")
+    assert status == 404 and reply["error"]
+
+
+def test_a_cross_origin_delete_is_refused(served) -> None:
+    url = served
+    status, placed = call(url + "/obstacles", json.dumps(BOX).encode())
+    assert status == 200
+    status, reply = call(url + f"/obstacles/{placed['id']}", method="DELETE",
+                         headers={"Origin": "http://evil.example"})
+    assert status == 403 and "cross-origin" in reply["error"]
+    assert call(url + f"/obstacles/{placed['id']}", method="DELETE")[0] == 200

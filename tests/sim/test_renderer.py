@@ -8,13 +8,17 @@ import cv2
 import numpy as np
 import pytest
 
+from shared.aria.p3at import SONAR_POSES
 from shared.camera_model import CameraModel
 from shared.config import CameraMountConfig
 from shared.pose import Pose2
 from sim._geometry import segments_cross
-from sim.config import PeopleConfig, RenderConfig, SensorConfig, SimConfig
+from sim.config import EmulatorConfig, PeopleConfig, RenderConfig, SensorConfig, SimConfig
+from sim.decor import PlacedObject
+from sim.pioneer.sonar import SonarRing
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
 from sim.simulation import Simulation
+from sim.topdown import _FURNITURE, MapCanvas, draw_topdown
 from sim.world import LandmarkDensity, World, load_world
 from tests.sim.rooms import box_room
 from tools.bench.corners import picture_corner_errors_px
@@ -210,3 +214,42 @@ class TestNoise:
         gains = [renderer.illumination_gain(t * 10**9) for t in range(0, 40)]
         assert max(gains) <= 1.2 + 1e-12 and min(gains) >= 0.8 - 1e-12
         assert max(gains) - min(gains) > 0.3
+
+
+class TestObjectsPlacedWhileRunning:
+    def test_a_box_placed_mid_run_is_drawn_heard_and_gone_once_removed(self) -> None:
+        config = dataclasses.replace(SimConfig(), sensor=SensorConfig.ideal())
+        sim = Simulation(box_room((12.0, 6.0)), config)  # the robot at (6, 3) facing +x
+        camera = CameraModel.default()
+        renderer = FisheyeRenderer.for_simulation(sim, camera)
+        ring = SonarRing(sim.space, EmulatorConfig(sonar_noise_m=0.0), np.random.default_rng(0))
+        sim.step()
+        before = renderer.render(sim)
+        box = sim.add_object(PlacedObject("box", (8.0, 3.0), (0.5, 0.5), 0.8))
+        sim.step()
+        with_box = renderer.render(sim)
+        heard = ring.range_m(3, sim.body.pose_w)
+        (u, v), = MapCanvas(sim).px([(8.0, 3.0)])
+        assert tuple(draw_topdown(sim, with_box, 180.0)[v, u]) == _FURNITURE  # on the map too
+        sim.remove_object(box)
+        sim.step()
+        after = renderer.render(sim)
+
+        # The middle of the box's front face, x = 7.75 m, 0.4 m up.
+        T = with_box.T_world_cam
+        face_w = np.array([7.75, 3.0, 0.4])
+        pix, ok = camera.project(((face_w - T[:3, 3]) @ T[:3, :3])[None])
+        assert ok[0]
+        col, row = np.round(pix[0]).astype(int)
+        patch = (slice(row - 5, row + 6), slice(col - 5, col + 6))
+        distance = float(np.linalg.norm(face_w - T[:3, 3]))
+        assert with_box.depth_m[row, col] == pytest.approx(distance, rel=0.03)
+        assert before.depth_m[row, col] > distance + 1.0  # the far wall, 4 m on
+        changed = np.abs(with_box.image[patch].astype(float) - before.image[patch])
+        assert changed.mean() > 5.0
+        assert after.depth_m[row, col] == pytest.approx(before.depth_m[row, col])
+        assert np.abs(after.image[patch].astype(float) - before.image[patch]).mean() < 2.0
+
+        sonar_x = sim.body.pose_w[0] + SONAR_POSES[3][0]
+        assert heard == pytest.approx(7.75 - sonar_x, abs=0.01)
+        assert ring.range_m(3, sim.body.pose_w) > 5.0 - 0.01  # the far wall, 5.6 m: none

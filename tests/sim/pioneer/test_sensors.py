@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from shared.aria import Command, SipFlags
@@ -17,19 +18,30 @@ ROOM = (12.0, 6.0)
 MAX_RANGE_M = 5.0
 
 
-def expected_range(number: int, pose: Pose2) -> float:
-    """Range of sonar ``number`` from ``pose`` to the inner faces of the bare room, m."""
+def expected_range(number: int, pose: Pose2, config: EmulatorConfig | None = None) -> float:
+    """Noise-free reading of sonar ``number`` from ``pose`` in the bare room, m: the
+    nearest echo among the cone's rays off the walls' inner faces, where a ray echoes
+    if it meets its face within the critical angle of the normal and beyond the
+    minimum range (sim.pioneer.sonar rules 2-4, computed here without pymunk)."""
+    config = config or EmulatorConfig()
     yaw = pose.yaw_rad
     sx, sy, heading = SONAR_POSES[number]
     x = pose.x_m + math.cos(yaw) * sx - math.sin(yaw) * sy
     y = pose.y_m + math.sin(yaw) * sx + math.cos(yaw) * sy
-    dx, dy = math.cos(yaw + heading), math.sin(yaw + heading)
+    half = math.radians(config.sonar_beam_width_deg) / 2
+    cos_critical = math.cos(math.radians(config.sonar_critical_angle_deg))
     lo = WALL_HALF_THICKNESS_M
-    ts = []
-    for p, d, size in ((x, dx, ROOM[0]), (y, dy, ROOM[1])):
-        if abs(d) > 1e-9:
-            ts.append(((size - lo if d > 0 else lo) - p) / d)
-    return min(min(ts), MAX_RANGE_M)
+    nearest = MAX_RANGE_M
+    for offset in np.linspace(-half, half, config.sonar_rays):
+        dx, dy = math.cos(yaw + heading + offset), math.sin(yaw + heading + offset)
+        faces = []  # (distance, cosine of the incidence) of the x and y faces ahead
+        for p, d, size in ((x, dx, ROOM[0]), (y, dy, ROOM[1])):
+            if abs(d) > 1e-9:
+                faces.append((((size - lo if d > 0 else lo) - p) / d, abs(d)))
+        distance, cos_incidence = min(faces)
+        if config.sonar_min_range_m <= distance < nearest and cos_incidence >= cos_critical:
+            nearest = distance
+    return nearest
 
 
 def collect_readings(rig: Rig, seconds: float) -> tuple[dict[int, list[float]], list[int]]:
@@ -46,7 +58,10 @@ def collect_readings(rig: Rig, seconds: float) -> tuple[dict[int, list[float]], 
 
 
 class TestSonar:
-    @pytest.mark.parametrize("pose", [Pose2(10.0, 3.0, 0.0), Pose2(4.0, 2.0, math.radians(35.0))])
+    # Headings are multiples of 10 degrees and the rays 5 degrees apart: yaws of 2 and 37
+    # degrees keep every incidence off the 50 degree critical angle by 2 degrees or more.
+    @pytest.mark.parametrize("pose", [Pose2(10.0, 3.0, math.radians(2.0)),
+                                      Pose2(4.0, 2.0, math.radians(37.0))])
     def test_ranges_match_the_walls(self, pose: Pose2) -> None:
         rig = Rig(world=None, start=pose)
         rig.connect()
@@ -59,7 +74,7 @@ class TestSonar:
         assert any(r == MAX_RANGE_M for ranges in readings.values() for r in ranges)
 
     def test_noise_free_ranges_are_exact_to_the_mm(self) -> None:
-        pose = Pose2(10.0, 3.0, 0.0)
+        pose = Pose2(10.0, 3.0, math.radians(2.0))
         rig = Rig(config=EmulatorConfig(sonar_noise_m=0.0), start=pose)
         rig.connect()
         readings, _ = collect_readings(rig, 0.5)
@@ -97,7 +112,8 @@ class TestBumpersAndStall:
         assert sip.left_stalled and sip.right_stalled
         nose_x = rig.sim.body.pose_w[0] + rig.sim.config.body.length_m / 2
         assert nose_x == pytest.approx(ROOM[0] - WALL_HALF_THICKNESS_M, abs=0.02)
-        assert max(readings[3] + readings[4]) < 0.1  # the front sonars see the wall up close
+        # The front sonars are 7 cm from the wall, inside their minimum range: blind.
+        assert readings[3] + readings[4] == [MAX_RANGE_M] * len(readings[3] + readings[4])
         rig.command(Command.VEL, -200)
         rig.run_for(1.5)
         sip = rig.host.sips[-1][1]
