@@ -62,6 +62,7 @@ from shared.errors import IllegalEventError, InputError, VmnavError
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.commands.gcs import CommandClient, CommandDone, result_name
 from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
+from shared.mavlink.commands.vehicle import FORCE_ARM_MAGIC
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp.gcs import Downloaded, FtpClient, FtpFailed, Listed, Uploaded
 from shared.mavlink.ftp.payload import DirEntry
@@ -389,6 +390,23 @@ class GroundStation:
         if result != mavlink.MAV_RESULT_ACCEPTED:
             raise GroundError(f"vehicle {vehicle.system_id} answered {_command_name(command)} "
                               f"with {result_name(result)}{self._reason(before)}")
+
+    def emergency_stop(self) -> None:
+        """Stop the vehicle now: a forced disarm (COMPONENT_ARM_DISARM, param2 21196), the
+        emergency stop of QGroundControl and ArduRover; the robot holds until re-armed.
+
+        Raises:
+            GroundError: refused or unanswered.
+        """
+        self.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, FORCE_ARM_MAGIC)
+
+    def arm(self) -> None:
+        """Arm the vehicle (COMPONENT_ARM_DISARM 1): ends an emergency stop's hold.
+
+        Raises:
+            GroundError: refused or unanswered.
+        """
+        self.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)
 
     def set_mode(self, mode: Mode) -> None:
         """Switch the vehicle to ``mode`` (DO_SET_MODE, ArduPilot encoding).

@@ -84,6 +84,13 @@ def add_parser(subparsers: Subparsers) -> None:
     ground_keygen_cmd.add_parser(sub)
     sub.add_parser("drive", help="keyboard teleoperation in MANUAL: w/s speed, a/d turn, "
                    "space stop, q quit").set_defaults(action=run_drive)
+    sub.add_parser("stop", help="emergency stop: the robot stops at once and holds until "
+                   "re-armed", description="Force-disarm the robot (COMPONENT_ARM_DISARM "
+                   "with param2 21196, QGroundControl's emergency stop): it stops within "
+                   "one control period, with the Pioneer's E_STOP, ends any mission and "
+                   "holds until `vmnav ground arm`.").set_defaults(action=run_stop)
+    sub.add_parser("arm", help="arm the robot (ends an emergency stop's hold)"
+                   ).set_defaults(action=run_arm)
     ground.set_defaults(run=run)
 
 
@@ -179,6 +186,23 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     why = not_reached_text(station.mission_outcome, args.wait_timeout, vehicle.notices)
     print(f"vmnav ground: goal not reached: {why}", file=sys.stderr)
     return 1
+
+
+def run_stop(station: GroundStation, args: argparse.Namespace) -> int:
+    """The emergency stop, acknowledged."""
+    started_ns = station.clock.now_ns()
+    station.emergency_stop()
+    took_ms = (station.clock.now_ns() - started_ns) / 1e6
+    print(f"vehicle {station.vehicle.system_id}: emergency stop accepted in {took_ms:.0f} ms; "
+          "holding until `vmnav ground arm`")
+    return 0
+
+
+def run_arm(station: GroundStation, args: argparse.Namespace) -> int:
+    """Arm the robot."""
+    station.arm()
+    print(f"vehicle {station.vehicle.system_id}: armed")
+    return 0
 
 
 def run_drive(station: GroundStation, args: argparse.Namespace) -> int:

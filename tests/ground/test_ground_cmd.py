@@ -168,6 +168,14 @@ def test_teach_start_and_stop_reach_the_app(vehicle: UdpVehicle, app: FakeApp,
                                       "with MAV_RESULT_DENIED (teach stop: not teaching)\n")
 
 
+def test_stop_force_disarms_and_arm_arms(vehicle: UdpVehicle, app: FakeApp,
+                                          capsys: Capsys) -> None:
+    assert run_ground(vehicle, "stop") == 0
+    assert "vehicle 1: emergency stop accepted in " in capsys.readouterr().out
+    assert run_ground(vehicle, "arm") == 0
+    assert app.called("arm") == [(False, True), (True, False)]
+
+
 def test_drive_needs_a_terminal(vehicle: UdpVehicle, monkeypatch: pytest.MonkeyPatch,
                                 capsys: Capsys) -> None:
     monkeypatch.setattr("sys.stdin", io.StringIO(""))

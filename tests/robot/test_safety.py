@@ -1,0 +1,170 @@
+"""Tests of robot/safety.py: the safety layer's rules, on P3-AT sonar geometry."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from robot.config import SafetyConfig
+from robot.safety import SafetyGovernor
+from shared.aria.p3at import SONAR_POSES
+from shared.clock import ns_from_s
+from shared.interfaces import BaseState, RangeReading
+from shared.pose import Pose2
+
+CONFIG = SafetyConfig()
+FRONT_CENTRE = 3  # the front array's sonar at +10 deg, 245 mm ahead of the centre
+NOTHING_M = 5.0  # the P3's maximum range: no echo
+ORIGIN = Pose2(0.0, 0.0, 0.0)
+
+
+def state(ranges: dict[int, float] | None = None, *, t_ns: int = 0,
+          at: Pose2 = ORIGIN, read_at: Pose2 | None = None,
+          bumped: bool = False, read_ns: int | None = None) -> BaseState:
+    """The base at ``at`` (odometry frame) whose 16 sonars read ``ranges`` (default: no
+    echo), taken at ``read_ns`` (default ``t_ns``) from ``read_at`` (default ``at``)."""
+    ranges = ranges or {}
+    readings = tuple(
+        RangeReading(k, pose, ranges.get(k, NOTHING_M), t_ns if read_ns is None else read_ns,
+                     at if read_at is None else read_at)
+        for k, pose in enumerate(SONAR_POSES))
+    return BaseState(at, 0.0, bumped, False, 13.0, True, ranges=readings)
+
+
+def echo_ahead(distance_m: float) -> dict[int, float]:
+    """The front-centre sonar's range whose echo lies ``distance_m`` ahead of the front."""
+    x, _, heading = SONAR_POSES[FRONT_CENTRE]
+    return {FRONT_CENTRE: (CONFIG.front_m + distance_m - x) / math.cos(heading)}
+
+
+class TestForward:
+    def test_a_clear_way_passes_the_command(self) -> None:
+        a = SafetyGovernor(CONFIG).assess(0, state(), 0.3, 0.1)
+        assert (a.v_m_s, a.omega_rad_s, a.blocked) == (0.3, 0.1, None)
+
+    def test_an_echo_inside_the_stop_line_stops_forward_motion(self) -> None:
+        a = SafetyGovernor(CONFIG).assess(0, state(echo_ahead(0.35)), 0.2, 0.0)
+        assert a.v_m_s == 0.0 and a.blocked is not None and a.blocked.cause == "obstacle"
+        assert a.blocked.distance_m == pytest.approx(0.35)
+        turning = SafetyGovernor(CONFIG).assess(0, state(echo_ahead(0.35)), 0.2, 0.05)
+        assert turning.v_m_s == 0.0 and turning.omega_rad_s == 0.05  # in place: allowed
+        assert a.blocked.describe() == "obstacle 0.35 m ahead"
+
+    def test_nearer_echoes_slow_the_robot_down_on_the_same_arc(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        a = governor.assess(0, state(echo_ahead(0.8)), 0.2, 0.0)
+        ratio = (0.8 - CONFIG.stop_distance_m) / (CONFIG.slow_distance_m - CONFIG.stop_distance_m)
+        assert a.v_m_s == pytest.approx(0.2 * ratio) and a.blocked is None
+        arc = governor.assess(0, state(echo_ahead(0.8)), 0.2, 0.02)
+        assert arc.v_m_s < 0.2 and arc.omega_rad_s / arc.v_m_s == pytest.approx(0.02 / 0.2)
+        near = governor.assess(1, state(echo_ahead(0.42), t_ns=1), 0.2, 0.0)
+        assert near.v_m_s == pytest.approx(0.2 * CONFIG.min_speed_ratio)
+
+    def test_an_echo_beside_the_corridor_is_passed(self) -> None:
+        side = {1: 0.6}  # the +50 deg sonar: the echo is 0.65 m to the left
+        a = SafetyGovernor(CONFIG).assess(0, state(side), 0.2, 0.0)
+        assert a.v_m_s == 0.2 and a.ahead_m == math.inf
+
+    def test_the_corridor_follows_the_arc_of_the_command(self) -> None:
+        left = {1: 0.3}  # ahead and to the left: (0.39, 0.35) m
+        turning_left = SafetyGovernor(CONFIG).assess(0, state(left), 0.2, 0.4)  # R = 0.5 m
+        assert turning_left.blocked is not None
+        turning_right = SafetyGovernor(CONFIG).assess(0, state(left), 0.2, -0.4)
+        assert turning_right.blocked is None and turning_right.v_m_s == 0.2
+
+    def test_an_echo_stays_where_it_was_while_the_robot_drives_on(self) -> None:
+        moved = state(echo_ahead(0.85), at=Pose2(0.5, 0.0, 0.0), read_at=Pose2(0.0, 0.0, 0.0))
+        a = SafetyGovernor(CONFIG).assess(0, moved, 0.2, 0.0)
+        assert a.ahead_m == pytest.approx(0.35) and a.v_m_s == 0.0
+
+
+class TestHysteresis:
+    def test_the_way_clears_after_the_margin_and_the_dwell(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        assert governor.assess(0, state(echo_ahead(0.3)), 0.2, 0.0).blocked is not None
+        inside = CONFIG.stop_distance_m + CONFIG.clear_margin_m - 0.01
+        t = ns_from_s(0.5)
+        assert governor.assess(t, state(echo_ahead(inside), t_ns=t), 0.2, 0.0).v_m_s == 0.0
+        t = ns_from_s(1.0)
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).blocked is not None  # clear: dwell
+        t += CONFIG.clear_dwell_ns - 1
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).blocked is not None
+        t += 1
+        a = governor.assess(t, state(t_ns=t), 0.2, 0.0)
+        assert a.blocked is None and a.v_m_s == 0.2
+
+    def test_an_echo_returning_during_the_dwell_restarts_it(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        governor.assess(0, state(echo_ahead(0.3)), 0.0, 0.0)
+        governor.assess(ns_from_s(0.2), state(t_ns=ns_from_s(0.2)), 0.0, 0.0)
+        t = ns_from_s(0.9)
+        governor.assess(t, state(echo_ahead(0.45), t_ns=t), 0.0, 0.0)
+        t = ns_from_s(1.5)
+        assert governor.assess(t, state(t_ns=t), 0.0, 0.0).blocked is not None
+
+
+class TestSilence:
+    def test_stale_front_readings_are_not_clear(self) -> None:
+        stale = state(t_ns=ns_from_s(5.0), read_ns=ns_from_s(3.0))
+        a = SafetyGovernor(CONFIG).assess(ns_from_s(5.0), stale, 0.2, 0.0)
+        assert a.v_m_s == 0.0 and a.blocked is not None and a.blocked.cause == "sonar_silent"
+
+    def test_a_base_without_sonars_cannot_drive_forward(self) -> None:
+        bare = BaseState(Pose2(0.0, 0.0, 0.0), 0.0, False, False, 13.0, True)
+        a = SafetyGovernor(CONFIG).assess(0, bare, 0.2, 0.0)
+        assert a.v_m_s == 0.0 and a.blocked is not None and a.blocked.cause == "sonar_silent"
+
+    def test_one_silent_front_sonar_is_enough(self) -> None:
+        base = state(t_ns=ns_from_s(5.0))
+        readings = list(base.ranges)
+        readings[FRONT_CENTRE] = RangeReading(FRONT_CENTRE, SONAR_POSES[FRONT_CENTRE], 5.0,
+                                              ns_from_s(3.0), Pose2(0.0, 0.0, 0.0))
+        silent = BaseState(base.odom_pose, 0.0, False, False, 13.0, True, ranges=tuple(readings))
+        assert SafetyGovernor(CONFIG).assess(ns_from_s(5.0), silent, 0.2, 0.0).v_m_s == 0.0
+
+
+class TestTurningAndReversing:
+    def test_turning_in_place_is_refused_with_an_echo_inside_the_swept_circle(self) -> None:
+        close = {0: 0.2}  # the left sonar: an echo 0.34 m left of the centre
+        a = SafetyGovernor(CONFIG).assess(0, state(close), 0.0, 0.5)
+        assert a.omega_rad_s == 0.0
+        assert SafetyGovernor(CONFIG).assess(0, state({0: 0.6}), 0.0, 0.5).omega_rad_s == 0.5
+
+    def test_reversing_watches_the_rear_sonars(self) -> None:
+        behind = {11: 0.2}  # the rear array's -170 deg sonar
+        a = SafetyGovernor(CONFIG).assess(0, state(behind), -0.2, 0.0)
+        assert a.v_m_s == 0.0
+        blocked_ahead = SafetyGovernor(CONFIG).assess(0, state(echo_ahead(0.2)), -0.2, 0.0)
+        assert blocked_ahead.v_m_s == -0.2  # backing away from an obstacle is allowed
+
+
+class TestHolds:
+    def test_a_bumper_hit_stops_and_holds_until_released(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        hit = governor.assess(0, state(bumped=True), 0.2, 0.3)
+        assert (hit.v_m_s, hit.omega_rad_s, hit.blocked.cause) == (0.0, 0.0, "bumper")
+        assert governor.assess(1, state(t_ns=1), 0.2, 0.0).v_m_s == 0.0  # released bumper
+        governor.release()
+        assert governor.assess(2, state(t_ns=2), 0.2, 0.0).v_m_s == 0.2
+
+    def test_the_emergency_stop_holds_until_released(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        governor.emergency_stop(5)
+        a = governor.assess(6, state(t_ns=6), 0.2, 0.3)
+        assert (a.v_m_s, a.omega_rad_s) == (0.0, 0.0)
+        assert a.blocked is not None and (a.blocked.cause, a.blocked.since_ns) == ("e_stop", 5)
+        governor.release()
+        assert governor.assess(7, state(t_ns=7), 0.2, 0.3).v_m_s == 0.2
+
+
+class TestConfig:
+    @pytest.mark.parametrize(("changes", "problem"), [
+        ({"stop_distance_m": 0.0}, "stop_distance_m must be > 0"),
+        ({"slow_distance_m": 0.3}, "slow_distance_m must be > stop_distance_m"),
+        ({"min_speed_ratio": 0.0}, "min_speed_ratio must be in"),
+        ({"clear_dwell_ns": -1}, "clear_dwell_ns must be >= 0"),
+    ])
+    def test_bad_values_are_refused(self, changes: dict[str, float], problem: str) -> None:
+        with pytest.raises(ValueError, match=problem):
+            SafetyConfig(**changes)
