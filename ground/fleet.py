@@ -45,6 +45,7 @@ class VehicleState:
         last_heartbeat_ns: when its last HEARTBEAT arrived, station clock, ns.
         custom_mode: HEARTBEAT ``custom_mode`` (ArduRover numbering).
         system_status: HEARTBEAT ``system_status``, a ``MAV_STATE``.
+        armed: HEARTBEAT ``base_mode`` has ``MAV_MODE_FLAG_SAFETY_ARMED``.
         telemetry: message type -> the last message of that type from the system.
         notices: STATUSTEXT texts, chunks joined, oldest first.
     """
@@ -54,6 +55,7 @@ class VehicleState:
     last_heartbeat_ns: int
     custom_mode: int = 0
     system_status: int = 0
+    armed: bool = False
     telemetry: dict[str, Any] = field(default_factory=dict)
     notices: list[str] = field(default_factory=list)
     _chunks: dict[int, str] = field(default_factory=dict)
@@ -111,6 +113,7 @@ class Fleet:
                 self.vehicles[source.system_id] = vehicle
             vehicle.address, vehicle.last_heartbeat_ns = source, now_ns
             vehicle.custom_mode, vehicle.system_status = msg.custom_mode, msg.system_status
+            vehicle.armed = bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
         if vehicle is None:
             return None
         vehicle.peer = peer if peer is not None else vehicle.peer

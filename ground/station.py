@@ -87,6 +87,9 @@ HEARTBEAT_PERIOD_NS = NS_PER_S
 REASON_WAIT_NS = 300_000_000
 #: Backstop for an operation whose core never ends it (cores end every one), ns.
 OPERATION_LIMIT_NS = 600 * NS_PER_S
+#: How long :meth:`GroundStation.arm` waits for a HEARTBEAT saying armed (heartbeats come
+#: at 1 Hz), ns.
+ARM_WAIT_NS = 5 * NS_PER_S
 #: MANUAL_CONTROL value of an axis not sent (common.xml).
 UNUSED_AXIS = 0x7FFF
 #: Signing link id of the station (the vehicle signs as link 0).
@@ -401,12 +404,18 @@ class GroundStation:
         self.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, FORCE_ARM_MAGIC)
 
     def arm(self) -> None:
-        """Arm the vehicle (COMPONENT_ARM_DISARM 1): ends an emergency stop's hold.
+        """Arm the vehicle (COMPONENT_ARM_DISARM 1), which ends an emergency stop's hold, and
+        wait until its HEARTBEAT says armed (the robot applies the request on its next
+        frame; a mission started before that is refused).
 
         Raises:
-            GroundError: refused or unanswered.
+            GroundError: refused, unanswered, or not armed within :data:`ARM_WAIT_NS`.
         """
+        vehicle = self._target("arm")
         self.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        if not self.run_until(lambda: vehicle.armed, ARM_WAIT_NS):
+            raise GroundError(f"vehicle {vehicle.system_id} accepted arming but did not "
+                              f"report armed within {ARM_WAIT_NS // NS_PER_S} s")
 
     def set_mode(self, mode: Mode) -> None:
         """Switch the vehicle to ``mode`` (DO_SET_MODE, ArduPilot encoding).

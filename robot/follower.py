@@ -94,6 +94,8 @@ class FollowStep:
             estimate).
         switch: the key image switch this frame completed, if any.
         lost: the estimator's LOST event, if this frame declared it.
+        verified: the estimator took this frame's vision estimate (the robot's place
+            along the route was verified by vision, not odometry alone).
     """
 
     t_ns: int
@@ -106,6 +108,7 @@ class FollowStep:
     s_m: float | None
     switch: KeyImageSwitch | None
     lost: EstimatorLost | None
+    verified: bool = False
 
     @property
     def arrived(self) -> bool:
@@ -214,9 +217,10 @@ class RouteFollower:
         index = self.target_index
         corners = self._front_end.describe(image)
         vision = self._vision(index, corners)
+        verified = False
         if vision is not None and vision.state.ok and self._trusted(index, vision):
-            self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
-                                   vision.state.theta_rad)
+            verified = self._estimator.update(t_ns, vision.state.s_m, vision.state.y_m,
+                                              vision.state.theta_rad).used
         lost = self._estimator.poll(t_ns)
         estimate = self._estimator.estimate
         final = index == len(self.targets) - 1
@@ -237,7 +241,7 @@ class RouteFollower:
             y_m=None if estimate is None else estimate.y_m,
             theta_rad=None if estimate is None else estimate.theta_rad,
             s_m=None if estimate is None else estimate.s_m,
-            switch=switch, lost=lost,
+            switch=switch, lost=lost, verified=verified,
         )
 
     def _keyframe(self, index: int) -> Keyframe:

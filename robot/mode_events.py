@@ -126,9 +126,17 @@ class GcsLost:
     action: str
 
 
+@dataclass(frozen=True, slots=True)
+class TimeLimit:
+    """A supervisor's time limit for the run (a benchmark's, a test rig's) ran out; ``text``
+    says which."""
+
+    text: str
+
+
 Event = (SetMode | Arm | StartGoals | GotoPhoto | PhotoFound | PhotoNotFound | TeachStart
          | TeachStop | PathStored | PathNotStored | RunEnded | GoalGone | BaseLost | BaseBack
-         | GcsLost)
+         | GcsLost | TimeLimit)
 
 #: Events that bring their own line for the operator (``text`` at ``level``).
 TOLD = (PhotoFound, PhotoNotFound, PathStored, PathNotStored, GoalGone)

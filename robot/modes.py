@@ -47,7 +47,8 @@ Rules (the table below is the whole behaviour):
    frames; a run ends with ``hold`` (MissionConfig.base_lost_action "hold") or pauses
    ("continue") until ``BaseBack``.
 8. The GCS failsafe (``GcsLost``): "stop" drops the stick, "hold" is rule 2's HOLD,
-   "continue" changes nothing.
+   "continue" changes nothing. A supervisor's ``TimeLimit`` ends a run in HOLD too,
+   with its own cause; with no run it changes nothing.
 9. An edge may carry a refusal: the state stays and the operator gets the line
    (WARNING). A pair missing from the table is a bug in the runtime and raises
    :class:`~shared.errors.IllegalEventError` (e.g. ``RunEnded`` with no run,
@@ -76,6 +77,7 @@ from robot.mode_events import (
     StartGoals,
     TeachStart,
     TeachStop,
+    TimeLimit,
 )
 from shared.errors import IllegalEventError
 from shared.mavlink.modes import Mode
@@ -238,6 +240,7 @@ _TRANSITIONS: dict[Activity, dict[type, tuple[_Edge, ...]]] = {
                            actions=(*_MODE, A.START_TEACH)),),
         TeachStop: (_refuse("teach stop refused: not teaching"),),
         GcsLost: _GCS_QUIET,
+        TimeLimit: (_Edge(),),
         **_WORKER,
         **_BASE_QUIET,
     },
@@ -265,6 +268,7 @@ _TRANSITIONS: dict[Activity, dict[type, tuple[_Edge, ...]]] = {
                   _Edge(_Guard.GCS_HOLD, activity=_IDLE, mode=Mode.HOLD,
                         actions=(A.END_RUN, *_MODE)),
                   _Edge()),
+        TimeLimit: (_Edge(activity=_IDLE, mode=Mode.HOLD, actions=(A.END_RUN, *_MODE)),),
         **_WORKER,
     },
     Activity.TEACHING: {
@@ -276,6 +280,7 @@ _TRANSITIONS: dict[Activity, dict[type, tuple[_Edge, ...]]] = {
         TeachStart: (_refuse("teach start refused: already teaching"),),
         TeachStop: (_Edge(activity=_IDLE, actions=(A.STOP, A.SAVE_PATH)),),
         GcsLost: _GCS_QUIET,
+        TimeLimit: (_Edge(),),
         **_WORKER,
         **_BASE_QUIET,
     },
@@ -365,4 +370,6 @@ def _why(event: Event, mode: Mode) -> tuple[str, str]:
             return "new_goal", "a new goal"
         case BaseLost():
             return "base_lost", "the base stopped reporting"
+        case TimeLimit(text=text):
+            return "time_limit", text
     raise AssertionError(f"no reason for ending a run on {event!r}")

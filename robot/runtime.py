@@ -95,6 +95,7 @@ from robot.mode_events import (
     StartGoals,
     TeachStart,
     TeachStop,
+    TimeLimit,
 )
 from robot.modes import Action, Activity, Decision, Drive, TopState, decide, drive_of
 from robot.runtime_log import RuntimeLog
@@ -305,6 +306,11 @@ class RobotRuntime:
             return False
         self._requests.append(TeachStop())
         return True
+
+    def time_limit(self, text: str) -> None:
+        """A supervisor's time limit ran out (a benchmark, a test rig): a run in progress
+        ends in HOLD with the cause ``time_limit`` and ``text``; safe from any thread."""
+        self._requests.append(TimeLimit(text))
 
     def gcs_lost(self, action: GcsLostAction) -> None:
         self._requests.append(GcsLost(action))

@@ -146,6 +146,11 @@ class People:
         self._blocked_s[index] = 0.0
         self._sidestepping[index] = False
 
+    def hold(self, index: int, seconds: float) -> None:
+        """Person ``index`` stands still for ``seconds``, then walks on to their goal (for
+        scenarios: someone standing in a corridor)."""
+        self._wait_s[index] = float(seconds)
+
     def clear_robot_start(self) -> None:
         """Move anyone standing within :data:`_START_CLEARANCE_M` of the robot to a new start
         place (call after the robot was placed somewhere else than where people started)."""

@@ -24,6 +24,7 @@ from robot.mode_events import (
     StartGoals,
     TeachStart,
     TeachStop,
+    TimeLimit,
 )
 from robot.modes import _TRANSITIONS, Action, Activity, Drive, TopState, decide, drive_of
 from shared.errors import IllegalEventError
@@ -87,6 +88,12 @@ class TestRule2LeavingAMissionMode:
         assert (d.state.mode, d.state.activity) == (Mode.HOLD, Activity.IDLE)
         assert Action.END_RUN in d.actions
         assert (d.cause, d.why) == ("gcs_lost", "ground heartbeat lost: mode HOLD")
+
+    def test_a_time_limit_ends_the_run_in_hold_with_its_cause(self) -> None:
+        d = decide(RUNNING, TimeLimit("time limit 90 s reached"))
+        assert (d.state.mode, d.state.activity) == (Mode.HOLD, Activity.IDLE)
+        assert (d.cause, d.why) == ("time_limit", "time limit 90 s reached")
+        assert decide(IDLE, TimeLimit("late")).actions == ()
 
     def test_a_forced_disarm_ends_the_run_as_the_emergency_stop(self) -> None:
         d = decide(RUNNING, Arm(False, emergency=True))

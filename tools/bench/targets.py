@@ -32,6 +32,7 @@ from tools.bench.hostile_messages import MIN_HEARTBEAT_HZ
 from tools.bench.hostile_stall import DISTANCE_TARGET_M, STOP_TARGET_S
 from tools.bench.hostile_traffic import MAX_FTP_CACHE_MB, MAX_REJECTED_LOG_MB
 from tools.bench.real import TARGETS as REAL_TARGETS
+from tools.bench.safety import TARGETS as SAFETY_TARGETS
 from tools.bench.sim import CORNER_ERROR_TARGET_PX, RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
 from tools.harness.demo import DEMO_LAW
@@ -123,6 +124,8 @@ TARGETS: tuple[Target, ...] = (
     )),
     *(Target("real", figure, comparison, bound, "issue 16")
       for figure, (comparison, bound) in REAL_TARGETS.items()),
+    *(Target("safety", f"summary.{figure}", comparison, bound, "issue 17")
+      for figure, (comparison, bound) in SAFETY_TARGETS.items()),
 )
 
 

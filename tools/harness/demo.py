@@ -166,7 +166,8 @@ def start_pose(taught: TaughtMemory) -> Pose2:
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                   sim_config: SimConfig, change: SceneChange, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
-                  robot_log: FieldLog | None = None, ground_log: Path | None = None) -> RepeatRun:
+                  robot_log: FieldLog | None = None, ground_log: Path | None = None,
+                  on_sim: Callable[[Simulation], None] | None = None) -> RepeatRun:
     """Place the robot, dispatch the goal from the ground station, and let the robot
     localize, plan and follow (see the module docstring).
 
@@ -184,6 +185,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
             traffic stamped on the simulation clock), finished when the repeat ends;
             None: no robot log.
         ground_log: the ground station's log folder; None: no ground log.
+        on_sim: called with the repeat's simulation once the robot is placed (a
+            benchmark's truth: step hooks).
 
     Raises:
         InputError: ``goal_id`` is not a key image of the memory, the start
@@ -213,6 +216,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     sim = Simulation(changed.world, sim_config, landmark_world=taught_world)
     sim.light_gain_at = change.lighting.gain_at
     sim.place_robot(start)
+    if on_sim is not None:
+        on_sim(sim)
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
@@ -277,8 +282,8 @@ class _RepeatWatch:
     held (:attr:`~robot.process.AfterStep.HOLD_CLOCK`): the mission starts on the same
     frame however fast the ground station answers, and every run gives the same figures.
     The repeat ends when the robot is back in HOLD, or when the ground station has not
-    started the mission within :data:`_DISPATCH_TIMEOUT_S` (wall time); the operator
-    aborts the mission (HOLD) after ``limit_ns`` of simulated time.
+    started the mission within :data:`_DISPATCH_TIMEOUT_S` (wall time); it
+    ends the mission (HOLD, cause ``time_limit``) after ``limit_ns`` of simulated time.
     """
 
     def __init__(self, runtime: RobotRuntime, sim: Simulation, frames: SimFrameSource,
@@ -317,5 +322,6 @@ class _RepeatWatch:
         if mode is Mode.HOLD:
             return AfterStep.STOP
         if self._sim.now_ns - self._started_ns > self._limit_ns:
-            self._runtime.set_mode(Mode.HOLD)  # the operator's abort at the time limit
+            self._runtime.time_limit(f"time limit {self._limit_ns / 1e9:.0f} s of simulated "
+                                     "time reached")
         return AfterStep.NEXT_FRAME

@@ -28,7 +28,7 @@ from shared.config import GCS_LOST_ACTIONS, AriaLinkConfig, MavlinkConfig
 from shared.logs import topics
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
-from tools.harness.hil_rig import Hil, Taught, expect, open_hil
+from tools.harness.hil_rig import STILL_M_S, Hil, Taught, expect, open_hil
 
 #: Driven before a fault is injected, m (the robot is following by then).
 DRIVEN_BEFORE_FAULT_M = 0.4
@@ -270,6 +270,57 @@ def robot_sigkill(taught: Taught, folder: Path) -> None:
                                              f"{hil.robot.last_line()}")
         value = hil.station.get_param(KILL_PARAM)
         expect(value == speed, f"{KILL_PARAM} = {value} after the restart, set to {speed}")
+
+
+def emergency_stop_once(hil: Hil) -> tuple[float, float]:
+    """``vmnav ground stop`` while the robot drives: wait until the body stands still.
+
+    Returns:
+        From the ground station's send to the emulated Pioneer's E_STOP (its motors off),
+        and to the body at rest, s of simulated time (which runs at the wall clock's pace).
+
+    Raises:
+        FaultCaseError: the E_STOP never came, or the body did not come to rest in 5 s.
+    """
+    sim = hil.sim
+    stopped_ns: list[int] = []
+
+    def watch(now_ns: int, dt_ns: int) -> None:
+        if not stopped_ns and not sim.emulator.motors_enabled:
+            stopped_ns.append(now_ns)
+
+    sent_ns = sim.now_ns
+    sim.sim.add_step_hook(watch)
+    hil.station.emergency_stop()
+    hil.wait_sim(sent_ns + 5 * NS_PER_S)
+    expect(bool(stopped_ns), "the emulated Pioneer never got E_STOP")
+    rest = [t for t, speed in sim.truth.speeds(sent_ns, sent_ns + 5 * NS_PER_S)
+            if speed >= STILL_M_S]
+    at_rest_ns = (rest[-1] if rest else sent_ns) - sent_ns
+    expect(at_rest_ns < 5 * NS_PER_S - BRAKE_NS, "the body was still moving 4.5 s after the stop")
+    return (stopped_ns[0] - sent_ns) / NS_PER_S, at_rest_ns / NS_PER_S
+
+
+def emergency_stop(taught: Taught, folder: Path) -> None:
+    """``vmnav ground stop`` mid-route (a forced disarm): the Pioneer gets E_STOP and the body
+    comes to rest within :data:`BRAKE_NS`; the mission ends as ``e_stop``; the robot holds
+    while disarmed; armed again and restarted, it reaches its goal."""
+    goal = taught.keyframe_ids[-1]
+    with open_hil(taught, folder) as hil:
+        hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
+        since = len(hil.notices())
+        _, rest_s = emergency_stop_once(hil)
+        expect(rest_s <= BRAKE_NS / NS_PER_S + 0.5,
+               f"at rest {rest_s:.2f} s after the emergency stop")
+        hil.run_until(lambda: hil.notice("e_stop: emergency stop", since) is not None, 5.0,
+                      "the robot's 'e_stop: emergency stop'")
+        held_ns = hil.sim.now_ns
+        hil.wait_sim(held_ns + round(STALL_S * NS_PER_S))
+        moving = hil.sim.truth.still(held_ns, held_ns + round(STALL_S * NS_PER_S))
+        expect(moving is None, f"the robot moved while emergency-stopped: {moving}")
+        hil.station.arm()
+        hil.station.start_mission()
+        hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
 
 
 def stored_files(folder: Path) -> dict[str, bytes]:
