@@ -58,8 +58,9 @@ failsafes, photo goals) in one table; what they rest on here:
    are bounded by the sonars and bumpers (``robot.safety``). A forced disarm is the
    emergency stop (QGroundControl's and ArduRover's: COMPONENT_ARM_DISARM with param2
    21196): the link thread stops the base on receipt (the Pioneer's E_STOP) and the
-   hold lasts until the operator arms again or changes mode, which also ends a
-   bumper's hold.
+   hold lasts until the operator arms again (the robot stays disarmed until then). A
+   bumper's hold ends when the operator, armed, changes mode, sends a goal or starts
+   teaching.
 """
 
 from __future__ import annotations
@@ -343,8 +344,10 @@ class RobotRuntime:
         """Feed ``event`` to the table and carry out its decision."""
         decision = decide(self._top, event)
         self._top = decision.state
-        if (isinstance(event, Arm) and event.armed) or isinstance(event, SetMode):
-            self._base.release()  # rule 9
+        if (isinstance(event, Arm) and event.armed) or (
+                isinstance(event, SetMode | StartGoals | PhotoFound | TeachStart)
+                and self._top.armed and not decision.refused):
+            self._base.release()  # rule 9: the operator acted
         for action in decision.actions:
             self._act(action, t_ns, event, decision)
 

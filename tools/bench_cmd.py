@@ -12,6 +12,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
+from tools import bench_safety_cmd
 from tools.harness.scene_args import add_change_arguments
 from tools.harness.sim_args import add_sim_arguments
 
@@ -157,47 +158,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     hostile.add_argument("--seed", type=int, default=0, help="seed of every part [default: 0]")
     hostile.set_defaults(run=runner("hostile"))
     real = bench_sub.add_parser(
-        "real",
-        help="issue 16: real images: catadioptric calibration, equidistant import, the "
-             "fisheye pair's relative pose per front end",
+        "real", help="issue 16: real images: catadioptric calibration, equidistant import, "
+        "the fisheye pair's relative pose per front end",
         description="Calibrate OpenCV's catadioptric test set (../shared/realdata) against "
         "its reference focal lengths and xi; fit the unified model to the vendored fisheye "
         "pair's equidistant calibrations (residual); match the pair and fit its relative "
         "pose with the paper's front end and the default, against the reference from the "
-        "rig's T_BS, timing each pair on one core. About 20 s.",
-    )
+        "rig's T_BS, timing each pair on one core. About 20 s.")
     real.add_argument("--repeats", type=int, default=10, metavar="N",
                       help="timed runs of each front end on the pair [default: 10]")
     real.set_defaults(run=runner("real"))
-    safety = bench_sub.add_parser(
-        "safety",
-        help="issue 17: obstacle scenarios, people walking into the route, the emergency "
-             "stop, the safety layer's cost",
-        description="Run the safety scenarios (a person crossing, standing 10 s and 90 s, "
-        "walking towards the robot, a box on the route, a glass door the sonar misses) on "
-        "the lab's short route; repeat the demo's mission per world and seed with people "
-        "who do not avoid the robot and without them (contacts the robot caused, goals "
-        "reached, lateral RMS, distance driven without verified localization, from the "
-        "simulator's truth); time emergency stops on the hardware-in-the-loop rig; time "
-        "the safety layer per frame. Prints JSON; progress on stderr.")
-    safety.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
-    safety.add_argument("--camera", metavar="FILE",
-                        help="camera calibration JSON [default: 800x600, 185 deg]")
-    safety.add_argument("--worlds", nargs="+", default=["lab", "campus"], metavar="WORLD",
-                        help="worlds of the people runs [default: lab campus]")
-    safety.add_argument("--seed", type=int, default=1, help="first seed [default: 1]")
-    safety.add_argument("--seeds", type=int, default=20, metavar="N",
-                        help="seeds per world of the people runs [default: 20]")
-    safety.add_argument("--people", type=int, default=5, metavar="N",
-                        help="people walking in the people runs [default: 5]")
-    safety.add_argument("--estops", type=int, default=20, metavar="N",
-                        help="emergency stops timed [default: 20]")
-    safety.add_argument("--parts", nargs="+", default=["scenarios", "people", "e_stop"],
-                        choices=["scenarios", "people", "e_stop"],
-                        help="parts to run [default: all three; the layer's cost always]")
-    safety.add_argument("--out", type=Path, default=Path("out/bench_safety"), metavar="DIR",
-                        help="where memories and rigs live [default: out/bench_safety]")
-    safety.set_defaults(run=runner("safety"))
+    bench_safety_cmd.add_parser(bench_sub, runner("safety"))
     chance = bench_sub.add_parser("chance", help="issue 16: pairs of unrelated real images "
                                   "through localization's acceptance test (target: none pass)")
     chance.add_argument("--realdata", type=Path, metavar="DIR", help="real image sets' folder")

@@ -13,8 +13,9 @@ open to the network is refused unless ``--insecure`` (a warning on stderr).
 
 The subcommands with actions of their own are modules of their own, registered here:
 ``memory`` (:mod:`tools.ground_memory_cmd`), ``teach`` (:mod:`tools.ground_teach_cmd`),
-``params`` (:mod:`tools.ground_params_cmd`), ``keygen`` (:mod:`tools.ground_keygen_cmd`,
-which connects to nothing). Every other action is ``(station, args) -> exit code``,
+``params`` (:mod:`tools.ground_params_cmd`), ``stop`` and ``arm``
+(:mod:`tools.ground_stop_cmd`), ``keygen`` (:mod:`tools.ground_keygen_cmd`, which
+connects to nothing). Every other action is ``(station, args) -> exit code``,
 called by :func:`run` once the vehicle is heard.
 """
 
@@ -26,7 +27,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tools import ground_keygen_cmd, ground_memory_cmd, ground_params_cmd, ground_teach_cmd
+from tools import (
+    ground_keygen_cmd,
+    ground_memory_cmd,
+    ground_params_cmd,
+    ground_stop_cmd,
+    ground_teach_cmd,
+)
 
 if TYPE_CHECKING:
     from ground.station import GroundStation
@@ -84,13 +91,7 @@ def add_parser(subparsers: Subparsers) -> None:
     ground_keygen_cmd.add_parser(sub)
     sub.add_parser("drive", help="keyboard teleoperation in MANUAL: w/s speed, a/d turn, "
                    "space stop, q quit").set_defaults(action=run_drive)
-    sub.add_parser("stop", help="emergency stop: the robot stops at once and holds until "
-                   "re-armed", description="Force-disarm the robot (COMPONENT_ARM_DISARM "
-                   "with param2 21196, QGroundControl's emergency stop): it stops within "
-                   "one control period, with the Pioneer's E_STOP, ends any mission and "
-                   "holds until `vmnav ground arm`.").set_defaults(action=run_stop)
-    sub.add_parser("arm", help="arm the robot (ends an emergency stop's hold)"
-                   ).set_defaults(action=run_arm)
+    ground_stop_cmd.add_parser(sub)
     ground.set_defaults(run=run)
 
 
@@ -186,23 +187,6 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
     why = not_reached_text(station.mission_outcome, args.wait_timeout, vehicle.notices)
     print(f"vmnav ground: goal not reached: {why}", file=sys.stderr)
     return 1
-
-
-def run_stop(station: GroundStation, args: argparse.Namespace) -> int:
-    """The emergency stop, acknowledged."""
-    started_ns = station.clock.now_ns()
-    station.emergency_stop()
-    took_ms = (station.clock.now_ns() - started_ns) / 1e6
-    print(f"vehicle {station.vehicle.system_id}: emergency stop accepted in {took_ms:.0f} ms; "
-          "holding until `vmnav ground arm`")
-    return 0
-
-
-def run_arm(station: GroundStation, args: argparse.Namespace) -> int:
-    """Arm the robot."""
-    station.arm()
-    print(f"vehicle {station.vehicle.system_id}: armed")
-    return 0
 
 
 def run_drive(station: GroundStation, args: argparse.Namespace) -> int:

@@ -183,8 +183,9 @@ def scenarios(stand_s: float = 90.0) -> dict[str, Scenario]:
                  "blocked", 1, _stand(0, (3.7, 10.0), stand_s, out), stand_s + 30.0),
         Scenario("box", "a box is put on the route after teaching, taken away after 15 s",
                  "arrived", 0, _box((3.6, 10.0), 15.0), 60.0),
-        Scenario("towards", "a person walks along the corridor towards the robot",
-                 "arrived", 1, _walk(0, (6.5, 10.0), (0.8, 10.0), 0.5), 60.0, False),
+        Scenario("towards", "a person walks along the corridor towards the robot and passes "
+                 "it by a hand's breadth (the paper's Fig. 12)", "arrived", 1,
+                 _walk(0, (6.5, 10.55), (0.8, 10.55), 0.5), 60.0, False),
         Scenario("glass_door", "a glass door the sonar does not hear closes the corridor",
                  "bumper", 0, _box((3.6, 10.0), None, sonar=False, size=(0.05, 1.9)),
                  40.0, False),

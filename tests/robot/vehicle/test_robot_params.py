@@ -7,12 +7,17 @@ import dataclasses
 import pytest
 
 from robot.config import ControlConfig, VmnavConfig
-from robot.vehicle.robot_params import ROBOT_PARAMS, config_with_params, robot_param_table
+from robot.vehicle.robot_params import (
+    ROBOT_PARAMS,
+    config_with_params,
+    param_problem,
+    robot_param_table,
+)
 from shared.config import MavlinkConfig
 from shared.errors import ConfigError
 from shared.mavlink.params.gcs import ParamClient
 from shared.mavlink.params.table import NAME_LEN
-from shared.mavlink.params.vehicle import ParamChanged, ParamServer
+from shared.mavlink.params.vehicle import ParamChanged, ParamRefused, ParamServer
 from tests.shared.mavlink.link import GCS, VEHICLE, Endpoint, Link, events
 
 
@@ -71,3 +76,23 @@ def test_param_set_over_the_link_changes_the_config_the_robot_uses() -> None:
     assert config == dataclasses.replace(
         VmnavConfig(), switching=dataclasses.replace(VmnavConfig().switching,
                                                      err_image_max_px=15.0))
+
+
+def test_a_value_that_contradicts_another_parameter_is_refused_with_param_error() -> None:
+    config = VmnavConfig()
+    table = robot_param_table(config)
+    client = ParamClient(GCS, VEHICLE)
+    server = ParamServer(table, VEHICLE,
+                         check=lambda name, value: param_problem(config, table, name, value))
+    link = Link(Endpoint(GCS, client), Endpoint(VEHICLE, server))
+    link.send(link.ground, client.set("SAFE_SLOW_DIST", 0.3, 0))  # below SAFE_STOP_DIST 0.4
+    link.run(lambda: client.operation is None)
+    (refused,) = events(server)
+    assert isinstance(refused, ParamRefused) and refused.name == "SAFE_SLOW_DIST"
+    assert "slow_distance_m must be > stop_distance_m" in refused.reason
+    assert table.value("SAFE_SLOW_DIST") == pytest.approx(1.2)
+    assert param_problem(config, table, "SAFE_SLOW_DIST", 2.0) is None
+
+
+def test_the_safety_layer_has_no_off_switch_among_the_parameters() -> None:
+    assert not [b for b in ROBOT_PARAMS if b.section == "safety" and b.field == "enabled"]

@@ -69,15 +69,17 @@ class TestCone:
         post_at(sim, 3, 1.5, 25.0)
         assert ping(sim, 3) == pytest.approx(before)
 
-    def test_a_ping_costs_well_under_a_tenth_of_a_millisecond(self) -> None:
+    def test_a_ping_costs_well_under_a_millisecond_of_cpu(self) -> None:
+        # CPU time of this thread, not wall time: a busy machine does not fail it. About
+        # 27 us measured; the bound leaves a slow machine 30 times that.
         sim = room(Pose2(4.0, 3.0, 0.3))
         ring = SonarRing(sim.space, EmulatorConfig(), np.random.default_rng(0))
         pose = sim.body.pose_w
-        start = time.perf_counter()
+        start = time.thread_time()
         for k in range(800):
             ring.range_m(k % 16, pose)
-        per_ping_s = (time.perf_counter() - start) / 800
-        assert per_ping_s < 1e-4, f"{per_ping_s * 1e6:.0f} us a ping"
+        per_ping_s = (time.thread_time() - start) / 800
+        assert per_ping_s < 1e-3, f"{per_ping_s * 1e6:.0f} us a ping"
 
 
 class TestSpecularMisses:

@@ -1,0 +1,56 @@
+"""Tests of ``vmnav bench safety`` (tools/bench/safety.py): its cheap part through the
+command line, its truth helpers on made-up samples (the scenarios have their own tests in
+tests/tools/harness/test_safety_scenarios.py, the emergency stop its fault case)."""
+
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+
+import pytest
+
+from tools.bench.safety import blind_distance_m, summary
+from tools.cli import main
+
+
+def test_the_governor_part_prints_its_cost(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "safety", "--parts", "governor"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["benchmark"] == "safety" and result["lost_distance_m"] == 1.0
+    assert 0 < result["governor"]["ms_p50"] <= result["governor"]["ms_p95"]
+    assert result["summary"] == {"governor_ms_p95": result["governor"]["ms_p95"]}
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--seeds", "0"], "--seeds: must be >= 1, got 0"),
+    (["--people", "-3"], "--people: must be >= 1, got -3"),
+    (["--estops", "0"], "--estops: must be >= 1, got 0"),
+])
+def test_bad_arguments_are_one_line(args: list[str], message: str,
+                                    capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "safety", *args]) == 1
+    assert message in capsys.readouterr().err
+
+
+def sample(x: float, *, verified: bool = False, localized: bool = False) -> SimpleNamespace:
+    follow = SimpleNamespace(verified=verified)
+    localization = SimpleNamespace(ok=True) if localized else None
+    return SimpleNamespace(pose_w=(x, 0.0, 0.0), record=SimpleNamespace(
+        follow=None if localized else follow, localization=localization))
+
+
+def test_blind_distance_restarts_at_each_verification() -> None:
+    samples = [sample(0.0, localized=True), sample(0.3), sample(0.5, verified=True),
+               sample(0.9), sample(1.6), sample(1.7, verified=True), sample(1.8)]
+    assert blind_distance_m(samples) == pytest.approx(1.2)  # 0.5 -> 1.7
+
+
+def test_summary_holds_the_parts_that_ran() -> None:
+    people = {"lab": {"seeds": [{}, {}], "reached_with_people": 1, "contacts_moving": 0,
+                      "lateral_rms_delta_m_max": 0.004, "blind_m_max": 1.02}}
+    result = {"lost_distance_m": 1.0, "scenarios": [{"passed": True}, {"passed": False}],
+              "people": people, "governor": {"ms_p95": 0.05}}
+    assert summary(result) == {
+        "scenarios_failed": 1, "people_contacts_moving": 0, "people_reached_short": 1,
+        "people_lateral_rms_delta_m_max": 0.004, "blind_m_over_bound": -0.03,
+        "governor_ms_p95": 0.05}
