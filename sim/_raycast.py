@@ -257,15 +257,17 @@ def _light(values, origin, res, x, y):
 
 @numba.njit(cache=True, fastmath=_FAST)
 def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
-               textures, light, sky, sun_w, grey_scale, out_grey, out_depth, out_label):
+               textures, light, sky, sun_w, grey_scale, dest, out_grey, out_depth, out_label):
     """Grey, distance and label of the surface each world ray meets first.
 
     Args:
         rays_w: (M, 3) unit rays, world frame; wedge: (M,) their wedges; angles: (M,)
             the angular size of the area each one stands for, rad.
         o, start, ids, quads ... grey_scale: as :func:`trace` takes them.
-        out_grey, out_depth, out_label: (M,) outputs. Labels: a primitive's id, -1 the
-            floor, -2 - j ceiling j, :data:`_LAMP` - i lamp i, :data:`_SKY` the sky.
+        dest: (M,) where in ``out_grey`` and ``out_depth`` ray p's results go.
+        out_grey, out_depth: outputs, written at ``dest``; out_label: (M,) output.
+            Labels: a primitive's id, -1 the floor, -2 - j ceiling j, :data:`_LAMP` - i
+            lamp i, :data:`_SKY` the sky.
     """
     qa, qd, qlen, qn, qz, qtex, quv, qshade, qemit = quads
     fc, fax, fhalf, fz, fup, ftex, fuv = flats
@@ -360,8 +362,8 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
                     best, hit, plane = t, -1, 1 + j
         if hit < 0 and plane < 0:
             elevation = max(rz, 0.0)
-            out_grey[p] = sky[0] + (sky[1] - sky[0]) * math.sqrt(elevation)
-            out_depth[p] = np.inf
+            out_grey[dest[p]] = sky[0] + (sky[1] - sky[0]) * math.sqrt(elevation)
+            out_depth[dest[p]] = np.inf
             out_label[p] = _SKY
             continue
         t = best
@@ -442,110 +444,131 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
             foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
             shade = 0.45 + 0.35 * dz / r_s + 0.35 * max(0.0, (dx * sun_w[0] + dy * sun_w[1]) / r_s)
         albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u, label, bits)
+        q = dest[p]
         if emit > 0.0:
-            out_grey[p] = albedo * emit * grey_scale
+            out_grey[q] = albedo * emit * grey_scale
         else:
-            out_grey[p] = albedo * shade * _light(lvalues, lorigin, lres, lx, ly) * grey_scale
-        out_depth[p] = t
+            out_grey[q] = albedo * shade * _light(lvalues, lorigin, lres, lx, ly) * grey_scale
+        out_depth[q] = t
         out_label[p] = label
 
 
 @numba.njit(cache=True, fastmath=_FAST)
-def trace(pixels, rays_c, pix_wedge, pix_angle, R, yaw, wedges, o, start, ids, quads, flats,
-          cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, width,
+def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, R, o, start, ids,
+          quads, flats, cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, work,
           out_grey, out_depth):
     """Shade every pixel (step 2 of the module docstring), edges anti-aliased.
 
     First one ray through each pixel's centre. Then each pixel whose surface label
     differs from a neighbour's (an edge between two surfaces) is shaded again as the
     mean of :data:`_AA` x :data:`_AA` rays on a regular grid inside the pixel (their
-    bearings interpolated from the neighbours', to second order), so edges fall at
-    sub-pixel positions as a real sensor integrates them.
+    bearings interpolated from the neighbours', to second order: :func:`sub_rays`,
+    once per camera), so edges fall at sub-pixel positions as a real sensor
+    integrates them.
 
     Args:
         pixels: (P,) flat indices of the valid pixels in the output images.
+        neighbours: (P, 4) int64 the valid pixels' indices (into ``pixels``) of their
+            right, lower, left and upper neighbours; all four -1 where one of them is
+            not valid (such a pixel is never anti-aliased). Fixed for a camera.
         rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
         pix_wedge: (P,) wedge of each pixel's azimuth in the robot frame.
         pix_angle: (P,) angular size of each pixel, rad.
-        R: (3, 3) camera-to-world rotation; yaw: the robot's heading, rad;
-            wedges: the number of wedges; o: (3,) optical centre, world frame, m.
+        sub_c, sub_wedge_c: :func:`sub_rays` of the pixels (camera frame, their wedges).
+        R: (3, 3) camera-to-world rotation; o: (3,) optical centre, world frame, m.
         start, ids: the wedges' candidates (:func:`bin_primitives`).
         quads, flats, cyls, sphs, planes, lamps: :class:`sim.surfaces.Scene`'s arrays.
         textures: (texels, levels, level_count, wraps) of the atlas.
         light: (values, origin, res) of the light map.
         sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
         grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
-        width: image width, px.
+        work: ((P, 3) float64, (P,) int64) scratch arrays, reused from frame to frame
+            (no page faults on fresh memory every frame).
         out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
             exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
     """
     n = rays_c.shape[0]
-    size = out_grey.shape[0]
+    world, lab = work
     # world = rays_c @ R.T, without BLAS (whose threads spin while they wait).
-    world = np.empty((n, 3))
     for p in range(n):
         x, y, z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
         for i in range(3):
             world[p, i] = R[i, 0] * x + R[i, 1] * y + R[i, 2] * z
-    grey = np.empty(n, np.float32)
-    depth = np.empty(n, np.float32)
-    lab = np.empty(n, np.int64)
     shade_rays(world, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
-               lamps, textures, light, sky, sun_w, grey_scale, grey, depth, lab)
-    label = np.full(size, _OUTSIDE, np.int64)
-    where = np.full(size, -1, np.int64)
-    for p in range(n):
-        q = pixels[p]
-        out_grey[q], out_depth[q], label[q], where[q] = grey[p], depth[p], lab[p], p
+               lamps, textures, light, sky, sun_w, grey_scale, pixels, out_grey, out_depth, lab)
     # Edge pixels: those whose four neighbours are all valid and not all of their label.
-    edge = np.zeros(n, np.bool_)
     count = 0
     for p in range(n):
-        q = pixels[p]
-        if q < width or q >= size - width:
+        right = neighbours[p, 0]
+        if right < 0:
             continue
-        if where[q - 1] < 0 or where[q + 1] < 0 or where[q - width] < 0 or where[q + width] < 0:
-            continue
-        c = label[q]
-        if label[q - 1] != c or label[q + 1] != c or label[q - width] != c or label[q + width] != c:
-            edge[p] = True
+        c = lab[p]
+        if (lab[right] != c or lab[neighbours[p, 1]] != c or lab[neighbours[p, 2]] != c
+                or lab[neighbours[p, 3]] != c):
             count += 1
     samples = _AA * _AA
     sub = np.empty((count * samples, 3))
     sub_wedge = np.empty(count * samples, np.int64)
     sub_angle = np.empty(count * samples)
     owner = np.empty(count, np.int64)
-    wedge_width = 2.0 * math.pi / wedges
     m = 0
     for p in range(n):
-        if not edge[p]:
+        right = neighbours[p, 0]
+        if right < 0:
             continue
-        q = pixels[p]
-        owner[m // samples] = q
-        right, down, left, up = where[q + 1], where[q + width], where[q - 1], where[q - width]
+        c = lab[p]
+        if (lab[right] == c and lab[neighbours[p, 1]] == c and lab[neighbours[p, 2]] == c
+                and lab[neighbours[p, 3]] == c):
+            continue
+        owner[m // samples] = pixels[p]
         for i in range(samples):
-            sx = ((i % _AA) + 0.5) / _AA - 0.5
-            sy = ((i // _AA) + 0.5) / _AA - 0.5
-            hx = right if sx > 0 else left
-            hy = down if sy > 0 else up
-            ax, ay = abs(sx), abs(sy)
-            rx = world[p, 0] + ax * (world[hx, 0] - world[p, 0]) + ay * (world[hy, 0] - world[p, 0])
-            ry = world[p, 1] + ax * (world[hx, 1] - world[p, 1]) + ay * (world[hy, 1] - world[p, 1])
-            rz = world[p, 2] + ax * (world[hx, 2] - world[p, 2]) + ay * (world[hy, 2] - world[p, 2])
-            norm = math.sqrt(rx * rx + ry * ry + rz * rz)
-            sub[m, 0], sub[m, 1], sub[m, 2] = rx / norm, ry / norm, rz / norm
-            azimuth = math.atan2(ry, rx) - yaw
-            k = math.floor(((azimuth + math.pi) % (2.0 * math.pi)) / wedge_width)
-            sub_wedge[m] = min(max(k, 0), wedges - 1)
+            x, y, z = sub_c[p, i, 0], sub_c[p, i, 1], sub_c[p, i, 2]
+            for j in range(3):
+                sub[m, j] = R[j, 0] * x + R[j, 1] * y + R[j, 2] * z
+            sub_wedge[m] = sub_wedge_c[p, i]
             sub_angle[m] = pix_angle[p] / _AA
             m += 1
     sub_grey = np.empty(m, np.float32)
     sub_depth = np.empty(m, np.float32)
     sub_label = np.empty(m, np.int64)
     shade_rays(sub, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
-               lamps, textures, light, sky, sun_w, grey_scale, sub_grey, sub_depth, sub_label)
+               lamps, textures, light, sky, sun_w, grey_scale, np.arange(m), sub_grey,
+               sub_depth, sub_label)
     for j in range(count):
         total = 0.0
         for i in range(samples):
             total += min(sub_grey[j * samples + i], 400.0)
         out_grey[owner[j]] = total / samples
+
+
+def sub_rays(rays_c, neighbours, R_base_cam, wedges):
+    """The anti-aliasing rays of each pixel (:func:`trace`), once per camera.
+
+    Args:
+        rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
+        neighbours: (P, 4) as :func:`trace` takes them.
+        R_base_cam: (3, 3) camera-to-robot rotation (the wedges are azimuths there).
+        wedges: the number of wedges.
+
+    Returns:
+        sub_c: (P, _AA * _AA, 3) float64 unit bearings on a regular grid inside each
+            pixel, camera frame: interpolated from the pixel's and its neighbours'
+            (zero where the pixel has no four neighbours).
+        sub_wedge: (P, _AA * _AA) int64 their wedges.
+    """
+    n = rays_c.shape[0]
+    samples = _AA * _AA
+    sub = np.zeros((n, samples, 3))
+    ok = neighbours[:, 0] >= 0
+    for i in range(samples):
+        sx = ((i % _AA) + 0.5) / _AA - 0.5
+        sy = ((i // _AA) + 0.5) / _AA - 0.5
+        hx = neighbours[ok, 0] if sx > 0 else neighbours[ok, 2]
+        hy = neighbours[ok, 1] if sy > 0 else neighbours[ok, 3]
+        b = rays_c[ok]
+        ray = b + abs(sx) * (rays_c[hx] - b) + abs(sy) * (rays_c[hy] - b)
+        sub[ok, i] = ray / np.linalg.norm(ray, axis=1)[:, None]
+    base = sub @ R_base_cam.T
+    azimuth = np.arctan2(base[..., 1], base[..., 0])
+    wedge = np.floor((azimuth + math.pi) / (2.0 * math.pi / wedges)).astype(np.int64)
+    return sub, np.clip(wedge, 0, wedges - 1)
