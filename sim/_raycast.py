@@ -37,7 +37,7 @@ _BLEND_BAND = 0.3
 """Width of the band of mip levels (in levels) over which two levels are blended."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _wedges_of(a0: float, a1: float, wedges: int) -> tuple[int, int]:
     """First wedge and count of wedges the angular interval [a0, a0 + (a1 - a0) mod ...] spans.
 
@@ -52,14 +52,14 @@ def _wedges_of(a0: float, a1: float, wedges: int) -> tuple[int, int]:
     return k0, k1 - k0 + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _seg_dist(px: float, py: float, ax: float, ay: float, dx: float, dy: float,
               length: float) -> float:
     s = min(max((px - ax) * dx + (py - ay) * dy, 0.0), length)
     return math.hypot(px - ax - s * dx, py - ay - s * dy)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, quad_n, quad_z,
                    flat_c, flat_ax, flat_half, cyl_c, cyl_r, sph_c, sph_r):
     """Candidates per wedge (step 1 of the module docstring).
@@ -151,7 +151,7 @@ def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, qu
     return start, ids
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _bilinear(texels, off, w, h, u, v):
     """Bilinear sample at texture coordinates (u, v) in [0, 1] of a ``w`` x ``h`` level.
 
@@ -174,7 +174,7 @@ def _bilinear(texels, off, w, h, u, v):
     return top + (bottom - top) * fy
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _repeat_flips(iu, iv, surface):
     """Two pseudo-random bits for the repeat (iu, iv) of a tiling texture on ``surface``:
     bit 0 mirrors the repeat in u, bit 1 in v (a hash of the three integers)."""
@@ -184,7 +184,7 @@ def _repeat_flips(iu, iv, surface):
     return (h >> 17) & 3
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface, bits):
     """Sample of texture ``tex`` at (u, v) for a footprint of ``footprint_uv`` (u units).
 
@@ -240,7 +240,7 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
     return a + (b - a) * f
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _light(values, origin, res, x, y):
     """Bilinear light at floor-plan point (x, y)."""
     h, w = values.shape
@@ -255,7 +255,7 @@ def _light(values, origin, res, x, y):
     return top * (1 - ay) + bottom * ay
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
                textures, light, sky, sun_w, grey_scale, dest, out_grey, out_depth, out_label):
     """Grey, distance and label of the surface each world ray meets first.
@@ -453,7 +453,7 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
         out_label[p] = label
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, R, o, start, ids,
           quads, flats, cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, work,
           out_grey, out_depth):
