@@ -241,11 +241,11 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
-def _light(values, origin, res, x, y):
-    """Bilinear light at floor-plan point (x, y)."""
+def _light(values, origin, inv_res, x, y):
+    """Bilinear light at floor-plan point (x, y); ``inv_res``: 1 / the cell side, 1/m."""
     h, w = values.shape
-    fx = (x - origin[0]) / res - 0.5
-    fy = (y - origin[1]) / res - 0.5
+    fx = (x - origin[0]) * inv_res - 0.5
+    fy = (y - origin[1]) * inv_res - 0.5
     c0 = min(max(math.floor(fx), 0), w - 2)
     r0 = min(max(math.floor(fy), 0), h - 2)
     ax = min(max(fx - c0, 0.0), 1.0)
@@ -283,6 +283,13 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
     lamp_res = 0.1
     scratch = np.empty(1)
     bits = (scratch, scratch.view(np.int64))
+    # Texture scales as reciprocals (u, v per metre): a multiplication per pixel, not a
+    # division.
+    floor_inv = 1.0 / floor_uv[:, :2]
+    ceil_inv = 1.0 / ceil_uv[:, :2]
+    quad_inv = 1.0 / quv[:, :2]
+    flat_inv = 1.0 / fuv[:, :2]
+    inv_lres = 1.0 / lres
     for p in range(rays_w.shape[0]):
         rx, ry, rz = rays_w[p, 0], rays_w[p, 1], rays_w[p, 2]
         k = wedge[p]
@@ -378,15 +385,15 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
             c_ = min(max(int((x - origin[0]) / fres), 0), floor_map.shape[1] - 1)
             m = floor_map[r_, c_]
             tex = floor_tex[m]
-            su, sv = floor_uv[m, 0], floor_uv[m, 1]
-            u, v = x / su, -y / sv
-            foot_u = footprint / math.sqrt(max(-rz, 0.05)) / su
+            iu, iv = floor_inv[m, 0], floor_inv[m, 1]
+            u, v = x * iu, -y * iv
+            foot_u = footprint * iu / math.sqrt(max(-rz, 0.05))
         elif plane > 0:
             j = plane - 1
             tex = ceil_tex[j]
-            su, sv = ceil_uv[j, 0], ceil_uv[j, 1]
-            u, v = x / su, y / sv
-            foot_u = footprint / math.sqrt(max(rz, 0.05)) / su
+            iu, iv = ceil_inv[j, 0], ceil_inv[j, 1]
+            u, v = x * iu, y * iv
+            foot_u = footprint * iu / math.sqrt(max(rz, 0.05))
             shade = 0.8
             r_ = min(max(int((y - origin[1]) / lamp_res), 0), lamp_map.shape[0] - 1)
             c_ = min(max(int((x - origin[0]) / lamp_res), 0), lamp_map.shape[1] - 1)
@@ -405,21 +412,21 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
                     label = _LAMP - lamp
         elif hit < nq:
             tex = qtex[hit]
-            su, sv, u0, v0 = quv[hit, 0], quv[hit, 1], quv[hit, 2], quv[hit, 3]
-            u, v = (hs - u0) / su, (v0 - z) / sv
+            iu, iv, u0, v0 = quad_inv[hit, 0], quad_inv[hit, 1], quv[hit, 2], quv[hit, 3]
+            u, v = (hs - u0) * iu, (v0 - z) * iv
             cos_i = abs(rx * qn[hit, 0] + ry * qn[hit, 1])
-            foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
+            foot_u = footprint * iu / math.sqrt(max(cos_i, 0.05))
             shade, emit = qshade[hit], qemit[hit]
             lx, ly = x + 0.15 * qn[hit, 0], y + 0.15 * qn[hit, 1]
         elif hit < nq + nf:
             f = hit - nq
             tex = ftex[f]
-            su, sv, u0, v0 = fuv[f, 0], fuv[f, 1], fuv[f, 2], fuv[f, 3]
+            iu, iv, u0, v0 = flat_inv[f, 0], flat_inv[f, 1], fuv[f, 2], fuv[f, 3]
             dx, dy = x - fc[f, 0], y - fc[f, 1]
             a1 = dx * fax[f, 0] + dy * fax[f, 1]
             a2_ = -dx * fax[f, 1] + dy * fax[f, 0]
-            u, v = (a1 - u0) / su, (v0 - a2_) / sv
-            foot_u = footprint / math.sqrt(max(abs(rz), 0.05)) / su
+            u, v = (a1 - u0) * iu, (v0 - a2_) * iv
+            foot_u = footprint * iu / math.sqrt(max(abs(rz), 0.05))
             shade = 1.0 if fup[f] > 0 else 0.5
         elif hit < nq + nf + nc:
             c = hit - nq - nf
@@ -448,7 +455,7 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
         if emit > 0.0:
             out_grey[q] = albedo * emit * grey_scale
         else:
-            out_grey[q] = albedo * shade * _light(lvalues, lorigin, lres, lx, ly) * grey_scale
+            out_grey[q] = albedo * shade * _light(lvalues, lorigin, inv_lres, lx, ly) * grey_scale
         out_depth[q] = t
         out_label[p] = label
 
