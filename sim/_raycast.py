@@ -256,13 +256,14 @@ def _light(values, origin, inv_res, x, y):
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
+def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
                textures, light, sky, sun_w, grey_scale, dest, out_grey, out_depth, out_label):
     """Grey, distance and label of the surface each world ray meets first.
 
     Args:
-        rays_w: (M, 3) unit rays, world frame; wedge: (M,) their wedges; angles: (M,)
-            the angular size of the area each one stands for, rad.
+        rays_c: (M, 3) unit rays, camera frame; R: (3, 3) camera-to-world rotation (each
+            ray is turned into the world frame as it is traced); wedge: (M,) their
+            wedges; angles: (M,) the angular size of the area each one stands for, rad.
         o, start, ids, quads ... grey_scale: as :func:`trace` takes them.
         dest: (M,) where in ``out_grey`` and ``out_depth`` ray p's results go.
         out_grey, out_depth: outputs, written at ``dest``; out_label: (M,) output.
@@ -290,8 +291,14 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
     quad_inv = 1.0 / quv[:, :2]
     flat_inv = 1.0 / fuv[:, :2]
     inv_lres = 1.0 / lres
-    for p in range(rays_w.shape[0]):
-        rx, ry, rz = rays_w[p, 0], rays_w[p, 1], rays_w[p, 2]
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    for p in range(rays_c.shape[0]):
+        ray_x, ray_y, ray_z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
+        rx = r00 * ray_x + r01 * ray_y + r02 * ray_z
+        ry = r10 * ray_x + r11 * ray_y + r12 * ray_z
+        rz = r20 * ray_x + r21 * ray_y + r22 * ray_z
         k = wedge[p]
         best = np.inf
         hit = -1
@@ -489,19 +496,14 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
         light: (values, origin, res) of the light map.
         sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
         grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
-        work: ((P, 3) float64, (P,) int64) scratch arrays, reused from frame to frame
+        work: (P,) int64 scratch array (the pixels' labels), reused from frame to frame
             (no page faults on fresh memory every frame).
         out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
             exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
     """
     n = rays_c.shape[0]
-    world, lab = work
-    # world = rays_c @ R.T, without BLAS (whose threads spin while they wait).
-    for p in range(n):
-        x, y, z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
-        for i in range(3):
-            world[p, i] = R[i, 0] * x + R[i, 1] * y + R[i, 2] * z
-    shade_rays(world, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+    lab = work
+    shade_rays(rays_c, R, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
                lamps, textures, light, sky, sun_w, grey_scale, pixels, out_grey, out_depth, lab)
     # Edge pixels: those whose four neighbours are all valid and not all of their label.
     count = 0
@@ -529,16 +531,15 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
             continue
         owner[m // samples] = pixels[p]
         for i in range(samples):
-            x, y, z = sub_c[p, i, 0], sub_c[p, i, 1], sub_c[p, i, 2]
             for j in range(3):
-                sub[m, j] = R[j, 0] * x + R[j, 1] * y + R[j, 2] * z
+                sub[m, j] = sub_c[p, i, j]
             sub_wedge[m] = sub_wedge_c[p, i]
             sub_angle[m] = pix_angle[p] / _AA
             m += 1
     sub_grey = np.empty(m, np.float32)
     sub_depth = np.empty(m, np.float32)
     sub_label = np.empty(m, np.int64)
-    shade_rays(sub, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+    shade_rays(sub, R, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
                lamps, textures, light, sky, sun_w, grey_scale, np.arange(m), sub_grey,
                sub_depth, sub_label)
     for j in range(count):
