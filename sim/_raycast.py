@@ -8,8 +8,9 @@ Two steps per frame, both on one core:
    camera; a wall face that spans a whole wedge from the floor to above every
    other surface hides what lies beyond its far end in that wedge, so farther
    primitives are left out. A few candidates per wedge remain.
-2. :func:`trace`: each pixel's ray (the camera model's bearing, precomputed, turned
-   by the camera's rotation) is tested against its wedge's candidates, the floor,
+2. :func:`trace`: each pixel's ray (the camera model's bearing, precomputed once per
+   camera with the pixel's neighbours and anti-aliasing rays, turned by the camera's
+   rotation as it is traced) is tested against its wedge's candidates, the floor,
    the ceilings and the sky; the nearest hit is textured (bilinear in the two mip
    levels around the pixel's footprint, blended: trilinear filtering) and lit.
 
