@@ -497,13 +497,13 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
         light: (values, origin, res) of the light map.
         sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
         grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
-        work: (P,) int64 scratch array (the pixels' labels), reused from frame to frame
-            (no page faults on fresh memory every frame).
+        work: two (P,) int64 scratch arrays (the pixels' labels, the edge pixels),
+            reused from frame to frame (no page faults on fresh memory every frame).
         out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
             exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
     """
     n = rays_c.shape[0]
-    lab = work
+    lab, edges = work
     shade_rays(rays_c, R, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
                lamps, textures, light, sky, sun_w, grey_scale, pixels, out_grey, out_depth, lab)
     # Edge pixels: those whose four neighbours are all valid and not all of their label.
@@ -515,6 +515,7 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
         c = lab[p]
         if (lab[right] != c or lab[neighbours[p, 1]] != c or lab[neighbours[p, 2]] != c
                 or lab[neighbours[p, 3]] != c):
+            edges[count] = p
             count += 1
     samples = _AA * _AA
     sub = np.empty((count * samples, 3))
@@ -522,15 +523,9 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
     sub_angle = np.empty(count * samples)
     owner = np.empty(count, np.int64)
     m = 0
-    for p in range(n):
-        right = neighbours[p, 0]
-        if right < 0:
-            continue
-        c = lab[p]
-        if (lab[right] == c and lab[neighbours[p, 1]] == c and lab[neighbours[p, 2]] == c
-                and lab[neighbours[p, 3]] == c):
-            continue
-        owner[m // samples] = pixels[p]
+    for e in range(count):
+        p = edges[e]
+        owner[e] = pixels[p]
         for i in range(samples):
             for j in range(3):
                 sub[m, j] = sub_c[p, i, j]

@@ -157,7 +157,8 @@ class FisheyeRenderer:
         bearings, valid = cam.lift(pixels)
         self._pixels = np.flatnonzero(valid)
         self._neighbours = _neighbours(self._pixels, cam.width, cam.height)
-        self._work = np.empty(self._pixels.shape[0], np.int64)
+        self._work = (np.empty(self._pixels.shape[0], np.int64),
+                      np.empty(self._pixels.shape[0], np.int64))
         rays = bearings[self._pixels]
         self._rays_c = np.ascontiguousarray(rays)
         base = rays @ R_base_cam.T
