@@ -4,6 +4,11 @@ Each texture gets an id in the order it is first asked for. Its pyramid starts a
 the picture itself (shrunk to at most :data:`MAX_SIDE_PX` on its longer side) and
 halves, area-averaged (``cv2.INTER_AREA``: no aliasing), down to a few pixels. A
 tiling texture is shrunk with wrap-around borders, so its levels still tile.
+
+Each level is stored with a border of one texel on every side: the opposite edge's
+texels for a tiling texture (wrap-around), copies of its own edge otherwise (clamp).
+The kernel's bilinear filter then reads its four texels without any wrapping or
+clamping of indices (:func:`sim._raycast._bilinear`).
 """
 
 from __future__ import annotations
@@ -27,9 +32,11 @@ class Atlas:
     """Texture pyramids in one flat array.
 
     Attributes:
-        texels: (N,) float32, every level of every texture, row-major, grey 0..255.
-        levels: (T, MAX_LEVELS, 3) int64: offset into ``texels``, width, height of
-            each level (width 0 past a pyramid's last level).
+        texels: (N,) float32, every level of every texture, row-major with its
+            one-texel border (module docstring), grey 0..255.
+        levels: (T, MAX_LEVELS, 3) int64: offset into ``texels`` of texel (0, 0)
+            (inside the border), width, height of each level (width 0 past a
+            pyramid's last level); a level's rows are ``width + 2`` texels apart.
         level_count: (T,) int64, levels of each pyramid.
         wraps: (T,) bool, whether the texture tiles (else its border is clamped).
         names: texture name of each id.
@@ -56,11 +63,13 @@ class Atlas:
             return self.names.index(name)
         texture = self.library.get(name)
         table = np.zeros((MAX_LEVELS, 3), np.int64)
+        border = cv2.BORDER_WRAP if texture.tiles else cv2.BORDER_REPLICATE
         for k, level in enumerate(_pyramid(texture)):
             h, w = level.shape
-            table[k] = (self._size, w, h)
-            self._chunks.append(level.ravel())
-            self._size += level.size
+            table[k] = (self._size + (w + 2) + 1, w, h)
+            padded = cv2.copyMakeBorder(level, 1, 1, 1, 1, border)
+            self._chunks.append(padded.ravel())
+            self._size += padded.size
         self._levels.append(table)
         self.names.append(name)
         return len(self.names) - 1

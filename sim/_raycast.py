@@ -8,8 +8,9 @@ Two steps per frame, both on one core:
    camera; a wall face that spans a whole wedge from the floor to above every
    other surface hides what lies beyond its far end in that wedge, so farther
    primitives are left out. A few candidates per wedge remain.
-2. :func:`trace`: each pixel's ray (the camera model's bearing, precomputed, turned
-   by the camera's rotation) is tested against its wedge's candidates, the floor,
+2. :func:`trace`: each pixel's ray (the camera model's bearing, precomputed once per
+   camera with the pixel's neighbours and anti-aliasing rays, turned by the camera's
+   rotation as it is traced) is tested against its wedge's candidates, the floor,
    the ceilings and the sky; the nearest hit is textured (bilinear in the two mip
    levels around the pixel's footprint, blended: trilinear filtering) and lit.
 
@@ -37,7 +38,7 @@ _BLEND_BAND = 0.3
 """Width of the band of mip levels (in levels) over which two levels are blended."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _wedges_of(a0: float, a1: float, wedges: int) -> tuple[int, int]:
     """First wedge and count of wedges the angular interval [a0, a0 + (a1 - a0) mod ...] spans.
 
@@ -52,14 +53,14 @@ def _wedges_of(a0: float, a1: float, wedges: int) -> tuple[int, int]:
     return k0, k1 - k0 + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _seg_dist(px: float, py: float, ax: float, ay: float, dx: float, dy: float,
               length: float) -> float:
     s = min(max((px - ax) * dx + (py - ay) * dy, 0.0), length)
     return math.hypot(px - ax - s * dx, py - ay - s * dy)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, quad_n, quad_z,
                    flat_c, flat_ax, flat_half, cyl_c, cyl_r, sph_c, sph_r):
     """Candidates per wedge (step 1 of the module docstring).
@@ -151,38 +152,30 @@ def bin_primitives(ox, oy, yaw, wedges, max_height, quad_a, quad_d, quad_len, qu
     return start, ids
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
-def _bilinear(texels, off, w, h, u, v, wraps):
-    """Bilinear sample at texture coordinates (u, v) in [0, 1) of a ``w`` x ``h`` level.
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+def _bilinear(texels, off, w, h, u, v):
+    """Bilinear sample at texture coordinates (u, v) in [0, 1] of a ``w`` x ``h`` level.
 
-    A tiling level wraps its neighbour texels around (``u``, ``v`` in [0, 1]: :func:`_sample`
-    brings them there); another clamps at its border.
+    ``off`` is the level's texel (0, 0) in ``texels``; its rows are ``w + 2`` apart and
+    it has a one-texel border (:mod:`sim._atlas`: wrap-around for a tiling texture,
+    clamped otherwise), so the four texels are read without wrapping their indices.
     """
-    x = u * w - 0.5
-    y = v * h - 0.5
-    x0 = math.floor(x)
-    y0 = math.floor(y)
-    fx, fy = x - x0, y - y0
-    xa, xb, ya, yb = x0, x0 + 1, y0, y0 + 1
-    if wraps:
-        if xa < 0:
-            xa += w
-        if xb >= w:
-            xb -= w
-        if ya < 0:
-            ya += h
-        if yb >= h:
-            yb -= h
-    else:
-        xa, xb = min(max(xa, 0), w - 1), min(max(xb, 0), w - 1)
-        ya, yb = min(max(ya, 0), h - 1), min(max(yb, 0), h - 1)
-    row_a, row_b = off + ya * w, off + yb * w
-    top = texels[row_a + xa] + (texels[row_a + xb] - texels[row_a + xa]) * fx
-    bottom = texels[row_b + xa] + (texels[row_b + xb] - texels[row_b + xa]) * fx
+    # x = u * w - 0.5 is in [-0.5, w - 0.5]: x + 1 > 0, so int() is floor() + 1.
+    x = u * w + 0.5
+    y = v * h + 0.5
+    xi = int(x)
+    yi = int(y)
+    fx, fy = x - xi, y - yi
+    stride = w + 2
+    i = off + (yi - 1) * stride + (xi - 1)
+    a, b = texels[i], texels[i + 1]
+    c, d = texels[i + stride], texels[i + stride + 1]
+    top = a + (b - a) * fx
+    bottom = c + (d - c) * fx
     return top + (bottom - top) * fy
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _repeat_flips(iu, iv, surface):
     """Two pseudo-random bits for the repeat (iu, iv) of a tiling texture on ``surface``:
     bit 0 mirrors the repeat in u, bit 1 in v (a hash of the three integers)."""
@@ -192,8 +185,8 @@ def _repeat_flips(iu, iv, surface):
     return (h >> 17) & 3
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
-def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface):
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface, bits):
     """Sample of texture ``tex`` at (u, v) for a footprint of ``footprint_uv`` (u units).
 
     "Brilinear" filtering: the mip level is ``log2(footprint in texels)`` (approximated);
@@ -207,18 +200,24 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
     too; the floor, ceiling and walls then do not repeat exactly every period. They
     would otherwise: a 1.2 m ceiling tile and a 0.8 m floor tile make two places 4.8 m
     apart in a corridor the same picture, which no real building is (stains, wear,
-    vents), and the front end rightly matches them.
+    vents), and the front end rightly matches them. Another texture is clamped at its
+    border.
+
+    ``bits``: a (1,) float64 scratch array and its (1,) int64 view (one per kernel
+    call), to read the footprint's exponent and mantissa.
     """
-    # log2 of the footprint in texels, to within 0.09 (linear in the mantissa, as GPUs
-    # approximate it): 3 ms less per 800 x 600 frame than math.log2.
-    mantissa, exponent = math.frexp(max(footprint_uv * levels[tex, 0, 1], 1e-6))
-    lod = exponent - 2.0 + 2.0 * mantissa
+    # log2 of the footprint in texels, to within 0.09: the float's exponent plus its
+    # mantissa's fraction (linear in the mantissa, as GPUs approximate it), read from
+    # its bits (math.frexp is a library call: 1.4 ms per 800 x 600 frame).
+    scratch, scratch_bits = bits
+    scratch[0] = max(footprint_uv * levels[tex, 0, 1], 1e-6)
+    b = scratch_bits[0]
+    lod = float((b >> 52) - 1023) + float(b & 0xFFFFFFFFFFFFF) * (1.0 / 4503599627370496.0)
     last = level_count[tex] - 1
     lod = min(max(lod, 0.0), float(last))
     l0 = int(lod)
     f = (lod - l0 - 0.5) / _BLEND_BAND + 0.5
-    wrap = wraps[tex]
-    if wrap:
+    if wraps[tex]:
         iu = math.floor(u)
         iv = math.floor(v)
         flips = _repeat_flips(iu, iv, surface)
@@ -228,23 +227,26 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
             u = 1.0 - u
         if flips & 2:
             v = 1.0 - v
+    else:
+        u = min(max(u, 0.0), 1.0)
+        v = min(max(v, 0.0), 1.0)
     if f >= 1.0 and l0 < last:
         l0 += 1
         f = 0.0
-    a = _bilinear(texels, levels[tex, l0, 0], levels[tex, l0, 1], levels[tex, l0, 2], u, v, wrap)
+    a = _bilinear(texels, levels[tex, l0, 0], levels[tex, l0, 1], levels[tex, l0, 2], u, v)
     if f <= 0.0 or l0 == last:
         return a
     l1 = l0 + 1
-    b = _bilinear(texels, levels[tex, l1, 0], levels[tex, l1, 1], levels[tex, l1, 2], u, v, wrap)
+    b = _bilinear(texels, levels[tex, l1, 0], levels[tex, l1, 1], levels[tex, l1, 2], u, v)
     return a + (b - a) * f
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
-def _light(values, origin, res, x, y):
-    """Bilinear light at floor-plan point (x, y)."""
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+def _light(values, origin, inv_res, x, y):
+    """Bilinear light at floor-plan point (x, y); ``inv_res``: 1 / the cell side, 1/m."""
     h, w = values.shape
-    fx = (x - origin[0]) / res - 0.5
-    fy = (y - origin[1]) / res - 0.5
+    fx = (x - origin[0]) * inv_res - 0.5
+    fy = (y - origin[1]) * inv_res - 0.5
     c0 = min(max(math.floor(fx), 0), w - 2)
     r0 = min(max(math.floor(fy), 0), h - 2)
     ax = min(max(fx - c0, 0.0), 1.0)
@@ -254,17 +256,20 @@ def _light(values, origin, res, x, y):
     return top * (1 - ay) + bottom * ay
 
 
-@numba.njit(cache=True, fastmath=_FAST)
-def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
-               textures, light, sky, sun_w, grey_scale, out_grey, out_depth, out_label):
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
+               textures, light, sky, sun_w, grey_scale, dest, out_grey, out_depth, out_label):
     """Grey, distance and label of the surface each world ray meets first.
 
     Args:
-        rays_w: (M, 3) unit rays, world frame; wedge: (M,) their wedges; angles: (M,)
-            the angular size of the area each one stands for, rad.
+        rays_c: (M, 3) unit rays, camera frame; R: (3, 3) camera-to-world rotation (each
+            ray is turned into the world frame as it is traced); wedge: (M,) their
+            wedges; angles: (M,) the angular size of the area each one stands for, rad.
         o, start, ids, quads ... grey_scale: as :func:`trace` takes them.
-        out_grey, out_depth, out_label: (M,) outputs. Labels: a primitive's id, -1 the
-            floor, -2 - j ceiling j, :data:`_LAMP` - i lamp i, :data:`_SKY` the sky.
+        dest: (M,) where in ``out_grey`` and ``out_depth`` ray p's results go.
+        out_grey, out_depth: outputs, written at ``dest``; out_label: (M,) output.
+            Labels: a primitive's id, -1 the floor, -2 - j ceiling j, :data:`_LAMP` - i
+            lamp i, :data:`_SKY` the sky.
     """
     qa, qd, qlen, qn, qz, qtex, quv, qshade, qemit = quads
     fc, fax, fhalf, fz, fup, ftex, fuv = flats
@@ -278,8 +283,23 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
     ox, oy, oz = o[0], o[1], o[2]
     fres = 0.01
     lamp_res = 0.1
-    for p in range(rays_w.shape[0]):
-        rx, ry, rz = rays_w[p, 0], rays_w[p, 1], rays_w[p, 2]
+    scratch = np.empty(1)
+    bits = (scratch, scratch.view(np.int64))
+    # Texture scales as reciprocals (u, v per metre): a multiplication per pixel, not a
+    # division.
+    floor_inv = 1.0 / floor_uv[:, :2]
+    ceil_inv = 1.0 / ceil_uv[:, :2]
+    quad_inv = 1.0 / quv[:, :2]
+    flat_inv = 1.0 / fuv[:, :2]
+    inv_lres = 1.0 / lres
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    for p in range(rays_c.shape[0]):
+        ray_x, ray_y, ray_z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
+        rx = r00 * ray_x + r01 * ray_y + r02 * ray_z
+        ry = r10 * ray_x + r11 * ray_y + r12 * ray_z
+        rz = r20 * ray_x + r21 * ray_y + r22 * ray_z
         k = wedge[p]
         best = np.inf
         hit = -1
@@ -357,8 +377,8 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
                     best, hit, plane = t, -1, 1 + j
         if hit < 0 and plane < 0:
             elevation = max(rz, 0.0)
-            out_grey[p] = sky[0] + (sky[1] - sky[0]) * math.sqrt(elevation)
-            out_depth[p] = np.inf
+            out_grey[dest[p]] = sky[0] + (sky[1] - sky[0]) * math.sqrt(elevation)
+            out_depth[dest[p]] = np.inf
             out_label[p] = _SKY
             continue
         t = best
@@ -373,15 +393,15 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
             c_ = min(max(int((x - origin[0]) / fres), 0), floor_map.shape[1] - 1)
             m = floor_map[r_, c_]
             tex = floor_tex[m]
-            su, sv = floor_uv[m, 0], floor_uv[m, 1]
-            u, v = x / su, -y / sv
-            foot_u = footprint / math.sqrt(max(-rz, 0.05)) / su
+            iu, iv = floor_inv[m, 0], floor_inv[m, 1]
+            u, v = x * iu, -y * iv
+            foot_u = footprint * iu / math.sqrt(max(-rz, 0.05))
         elif plane > 0:
             j = plane - 1
             tex = ceil_tex[j]
-            su, sv = ceil_uv[j, 0], ceil_uv[j, 1]
-            u, v = x / su, y / sv
-            foot_u = footprint / math.sqrt(max(rz, 0.05)) / su
+            iu, iv = ceil_inv[j, 0], ceil_inv[j, 1]
+            u, v = x * iu, y * iv
+            foot_u = footprint * iu / math.sqrt(max(rz, 0.05))
             shade = 0.8
             r_ = min(max(int((y - origin[1]) / lamp_res), 0), lamp_map.shape[0] - 1)
             c_ = min(max(int((x - origin[0]) / lamp_res), 0), lamp_map.shape[1] - 1)
@@ -400,21 +420,21 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
                     label = _LAMP - lamp
         elif hit < nq:
             tex = qtex[hit]
-            su, sv, u0, v0 = quv[hit, 0], quv[hit, 1], quv[hit, 2], quv[hit, 3]
-            u, v = (hs - u0) / su, (v0 - z) / sv
+            iu, iv, u0, v0 = quad_inv[hit, 0], quad_inv[hit, 1], quv[hit, 2], quv[hit, 3]
+            u, v = (hs - u0) * iu, (v0 - z) * iv
             cos_i = abs(rx * qn[hit, 0] + ry * qn[hit, 1])
-            foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
+            foot_u = footprint * iu / math.sqrt(max(cos_i, 0.05))
             shade, emit = qshade[hit], qemit[hit]
             lx, ly = x + 0.15 * qn[hit, 0], y + 0.15 * qn[hit, 1]
         elif hit < nq + nf:
             f = hit - nq
             tex = ftex[f]
-            su, sv, u0, v0 = fuv[f, 0], fuv[f, 1], fuv[f, 2], fuv[f, 3]
+            iu, iv, u0, v0 = flat_inv[f, 0], flat_inv[f, 1], fuv[f, 2], fuv[f, 3]
             dx, dy = x - fc[f, 0], y - fc[f, 1]
             a1 = dx * fax[f, 0] + dy * fax[f, 1]
             a2_ = -dx * fax[f, 1] + dy * fax[f, 0]
-            u, v = (a1 - u0) / su, (v0 - a2_) / sv
-            foot_u = footprint / math.sqrt(max(abs(rz), 0.05)) / su
+            u, v = (a1 - u0) * iu, (v0 - a2_) * iv
+            foot_u = footprint * iu / math.sqrt(max(abs(rz), 0.05))
             shade = 1.0 if fup[f] > 0 else 0.5
         elif hit < nq + nf + nc:
             c = hit - nq - nf
@@ -438,111 +458,121 @@ def shade_rays(rays_w, wedge, angles, o, start, ids, quads, flats, cyls, sphs, p
             cos_i = abs(rx * dx + ry * dy + rz * dz) / r_s
             foot_u = footprint / math.sqrt(max(cos_i, 0.05)) / su
             shade = 0.45 + 0.35 * dz / r_s + 0.35 * max(0.0, (dx * sun_w[0] + dy * sun_w[1]) / r_s)
-        albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u, label)
+        albedo = _sample(texels, levels, level_count, wraps, tex, u, v, foot_u, label, bits)
+        q = dest[p]
         if emit > 0.0:
-            out_grey[p] = albedo * emit * grey_scale
+            out_grey[q] = albedo * emit * grey_scale
         else:
-            out_grey[p] = albedo * shade * _light(lvalues, lorigin, lres, lx, ly) * grey_scale
-        out_depth[p] = t
+            out_grey[q] = albedo * shade * _light(lvalues, lorigin, inv_lres, lx, ly) * grey_scale
+        out_depth[q] = t
         out_label[p] = label
 
 
-@numba.njit(cache=True, fastmath=_FAST)
-def trace(pixels, rays_c, pix_wedge, pix_angle, R, yaw, wedges, o, start, ids, quads, flats,
-          cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, width,
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, R, o, start, ids,
+          quads, flats, cyls, sphs, planes, lamps, textures, light, sky, sun_w, grey_scale, work,
           out_grey, out_depth):
     """Shade every pixel (step 2 of the module docstring), edges anti-aliased.
 
     First one ray through each pixel's centre. Then each pixel whose surface label
     differs from a neighbour's (an edge between two surfaces) is shaded again as the
     mean of :data:`_AA` x :data:`_AA` rays on a regular grid inside the pixel (their
-    bearings interpolated from the neighbours', to second order), so edges fall at
-    sub-pixel positions as a real sensor integrates them.
+    bearings interpolated from the neighbours', to second order: :func:`sub_rays`,
+    once per camera), so edges fall at sub-pixel positions as a real sensor
+    integrates them.
 
     Args:
         pixels: (P,) flat indices of the valid pixels in the output images.
+        neighbours: (P, 4) int64 the valid pixels' indices (into ``pixels``) of their
+            right, lower, left and upper neighbours; all four -1 where one of them is
+            not valid (such a pixel is never anti-aliased). Fixed for a camera.
         rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
         pix_wedge: (P,) wedge of each pixel's azimuth in the robot frame.
         pix_angle: (P,) angular size of each pixel, rad.
-        R: (3, 3) camera-to-world rotation; yaw: the robot's heading, rad;
-            wedges: the number of wedges; o: (3,) optical centre, world frame, m.
+        sub_c, sub_wedge_c: :func:`sub_rays` of the pixels (camera frame, their wedges).
+        R: (3, 3) camera-to-world rotation; o: (3,) optical centre, world frame, m.
         start, ids: the wedges' candidates (:func:`bin_primitives`).
         quads, flats, cyls, sphs, planes, lamps: :class:`sim.surfaces.Scene`'s arrays.
         textures: (texels, levels, level_count, wraps) of the atlas.
         light: (values, origin, res) of the light map.
         sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
         grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
-        width: image width, px.
+        work: two (P,) int64 scratch arrays (the pixels' labels, the edge pixels),
+            reused from frame to frame (no page faults on fresh memory every frame).
         out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
             exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
     """
     n = rays_c.shape[0]
-    size = out_grey.shape[0]
-    # world = rays_c @ R.T, without BLAS (whose threads spin while they wait).
-    world = np.empty((n, 3))
-    for p in range(n):
-        x, y, z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]
-        for i in range(3):
-            world[p, i] = R[i, 0] * x + R[i, 1] * y + R[i, 2] * z
-    grey = np.empty(n, np.float32)
-    depth = np.empty(n, np.float32)
-    lab = np.empty(n, np.int64)
-    shade_rays(world, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
-               lamps, textures, light, sky, sun_w, grey_scale, grey, depth, lab)
-    label = np.full(size, _OUTSIDE, np.int64)
-    where = np.full(size, -1, np.int64)
-    for p in range(n):
-        q = pixels[p]
-        out_grey[q], out_depth[q], label[q], where[q] = grey[p], depth[p], lab[p], p
+    lab, edges = work
+    shade_rays(rays_c, R, pix_wedge, pix_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+               lamps, textures, light, sky, sun_w, grey_scale, pixels, out_grey, out_depth, lab)
     # Edge pixels: those whose four neighbours are all valid and not all of their label.
-    edge = np.zeros(n, np.bool_)
     count = 0
     for p in range(n):
-        q = pixels[p]
-        if q < width or q >= size - width:
+        right = neighbours[p, 0]
+        if right < 0:
             continue
-        if where[q - 1] < 0 or where[q + 1] < 0 or where[q - width] < 0 or where[q + width] < 0:
-            continue
-        c = label[q]
-        if label[q - 1] != c or label[q + 1] != c or label[q - width] != c or label[q + width] != c:
-            edge[p] = True
+        c = lab[p]
+        if (lab[right] != c or lab[neighbours[p, 1]] != c or lab[neighbours[p, 2]] != c
+                or lab[neighbours[p, 3]] != c):
+            edges[count] = p
             count += 1
     samples = _AA * _AA
     sub = np.empty((count * samples, 3))
     sub_wedge = np.empty(count * samples, np.int64)
     sub_angle = np.empty(count * samples)
     owner = np.empty(count, np.int64)
-    wedge_width = 2.0 * math.pi / wedges
     m = 0
-    for p in range(n):
-        if not edge[p]:
-            continue
-        q = pixels[p]
-        owner[m // samples] = q
-        right, down, left, up = where[q + 1], where[q + width], where[q - 1], where[q - width]
+    for e in range(count):
+        p = edges[e]
+        owner[e] = pixels[p]
         for i in range(samples):
-            sx = ((i % _AA) + 0.5) / _AA - 0.5
-            sy = ((i // _AA) + 0.5) / _AA - 0.5
-            hx = right if sx > 0 else left
-            hy = down if sy > 0 else up
-            ax, ay = abs(sx), abs(sy)
-            rx = world[p, 0] + ax * (world[hx, 0] - world[p, 0]) + ay * (world[hy, 0] - world[p, 0])
-            ry = world[p, 1] + ax * (world[hx, 1] - world[p, 1]) + ay * (world[hy, 1] - world[p, 1])
-            rz = world[p, 2] + ax * (world[hx, 2] - world[p, 2]) + ay * (world[hy, 2] - world[p, 2])
-            norm = math.sqrt(rx * rx + ry * ry + rz * rz)
-            sub[m, 0], sub[m, 1], sub[m, 2] = rx / norm, ry / norm, rz / norm
-            azimuth = math.atan2(ry, rx) - yaw
-            k = math.floor(((azimuth + math.pi) % (2.0 * math.pi)) / wedge_width)
-            sub_wedge[m] = min(max(k, 0), wedges - 1)
+            for j in range(3):
+                sub[m, j] = sub_c[p, i, j]
+            sub_wedge[m] = sub_wedge_c[p, i]
             sub_angle[m] = pix_angle[p] / _AA
             m += 1
     sub_grey = np.empty(m, np.float32)
     sub_depth = np.empty(m, np.float32)
     sub_label = np.empty(m, np.int64)
-    shade_rays(sub, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
-               lamps, textures, light, sky, sun_w, grey_scale, sub_grey, sub_depth, sub_label)
+    shade_rays(sub, R, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
+               lamps, textures, light, sky, sun_w, grey_scale, np.arange(m), sub_grey,
+               sub_depth, sub_label)
     for j in range(count):
         total = 0.0
         for i in range(samples):
             total += min(sub_grey[j * samples + i], 400.0)
         out_grey[owner[j]] = total / samples
+
+
+def sub_rays(rays_c, neighbours, R_base_cam, wedges):
+    """The anti-aliasing rays of each pixel (:func:`trace`), once per camera.
+
+    Args:
+        rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
+        neighbours: (P, 4) as :func:`trace` takes them.
+        R_base_cam: (3, 3) camera-to-robot rotation (the wedges are azimuths there).
+        wedges: the number of wedges.
+
+    Returns:
+        sub_c: (P, _AA * _AA, 3) float64 unit bearings on a regular grid inside each
+            pixel, camera frame: interpolated from the pixel's and its neighbours'
+            (zero where the pixel has no four neighbours).
+        sub_wedge: (P, _AA * _AA) int64 their wedges.
+    """
+    n = rays_c.shape[0]
+    samples = _AA * _AA
+    sub = np.zeros((n, samples, 3))
+    ok = neighbours[:, 0] >= 0
+    for i in range(samples):
+        sx = ((i % _AA) + 0.5) / _AA - 0.5
+        sy = ((i // _AA) + 0.5) / _AA - 0.5
+        hx = neighbours[ok, 0] if sx > 0 else neighbours[ok, 2]
+        hy = neighbours[ok, 1] if sy > 0 else neighbours[ok, 3]
+        b = rays_c[ok]
+        ray = b + abs(sx) * (rays_c[hx] - b) + abs(sy) * (rays_c[hy] - b)
+        sub[ok, i] = ray / np.linalg.norm(ray, axis=1)[:, None]
+    base = sub @ R_base_cam.T
+    azimuth = np.arctan2(base[..., 1], base[..., 0])
+    wedge = np.floor((azimuth + math.pi) / (2.0 * math.pi / wedges)).astype(np.int64)
+    return sub, np.clip(wedge, 0, wedges - 1)

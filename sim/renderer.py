@@ -41,7 +41,7 @@ from shared.config import CameraMountConfig
 from shared.pose import Pose2
 from sim._atlas import Atlas
 from sim._patches import NEAR_M, PatchPainter
-from sim._raycast import bin_primitives, trace
+from sim._raycast import bin_primitives, sub_rays, trace
 from sim.camera_effects import CameraEffects, camera_motion
 from sim.config import RenderConfig, SensorConfig
 from sim.landmarks import LandmarkField
@@ -153,12 +153,16 @@ class FisheyeRenderer:
         return int(self.scene.picture_corners_w.shape[0] * 4)
 
     def _rays(self, R_base_cam: FloatArray) -> None:
-        """Per valid pixel: index, bearing, wedge of its azimuth, angular size (once)."""
+        """Per valid pixel: index, neighbours, bearing, wedge of its azimuth, angular size
+        (once); the ray kernel's scratch arrays."""
         cam = self.camera
         u, v = np.meshgrid(np.arange(cam.width, dtype=np.float64), np.arange(cam.height))
         pixels = np.column_stack([u.ravel(), v.ravel()])
         bearings, valid = cam.lift(pixels)
         self._pixels = np.flatnonzero(valid)
+        self._neighbours = _neighbours(self._pixels, cam.width, cam.height)
+        self._work = (np.empty(self._pixels.shape[0], np.int64),
+                      np.empty(self._pixels.shape[0], np.int64))
         rays = bearings[self._pixels]
         self._rays_c = np.ascontiguousarray(rays)
         base = rays @ R_base_cam.T
@@ -174,6 +178,8 @@ class FisheyeRenderer:
             sizes.append(np.where(ok_a & ok_b, np.arccos(cos), np.nan))
         size = np.sqrt(sizes[0] * sizes[1])
         self._pix_angle = np.where(np.isfinite(size), size, np.nanmedian(size))
+        self._sub_c, self._sub_wedge = sub_rays(self._rays_c, self._neighbours, R_base_cam,
+                                                WEDGES)
 
     def render(self, sim: Simulation) -> RenderedFrame:
         """Render the simulation's current state from the robot's camera.
@@ -238,8 +244,8 @@ class FisheyeRenderer:
         depth = np.full(cam.height * cam.width, np.inf, np.float32)
         atlas, light = sc.atlas, sc.light
         trace(
-            self._pixels, self._rays_c, self._wedge, self._pix_angle, R, yaw_rad, WEDGES, o,
-            start, ids,
+            self._pixels, self._neighbours, self._rays_c, self._wedge, self._pix_angle,
+            self._sub_c, self._sub_wedge, R, o, start, ids,
             (sc.quad_a, sc.quad_d, sc.quad_len, sc.quad_n, sc.quad_z, sc.quad_tex, sc.quad_uv,
              sc.quad_shade, sc.quad_emit),
             (sc.flat_c, sc.flat_ax, sc.flat_half, sc.flat_z, sc.flat_up, sc.flat_tex, sc.flat_uv),
@@ -250,7 +256,7 @@ class FisheyeRenderer:
             (sc.lamp_map, sc.lamp_c, sc.lamp_ax, sc.lamp_half, sc.lamp_tex, sc.lamp_emit),
             (atlas.texels, atlas.levels, atlas.level_count, atlas.wraps),
             (light.values, light.origin, light.res_m),
-            sc.sky, sc.sun_w, self._brightness / 128.0, cam.width, radiance, depth)
+            sc.sky, sc.sun_w, self._brightness / 128.0, self._work, radiance, depth)
         return radiance.reshape(cam.height, cam.width), depth.reshape(cam.height, cam.width)
 
     def _picture_corners(
@@ -321,3 +327,17 @@ class FisheyeRenderer:
                                           self._brightness, self._rng.spawn(1)[0])
         self._figures.draw_people(sim, image, R_cam_world, centre_w, depth_m,
                                   self.scene.light.at)
+
+
+def _neighbours(pixels: npt.NDArray[np.int64], width: int, height: int) -> npt.NDArray[np.int64]:
+    """(P, 4) the valid pixels' right, lower, left and upper neighbours as indices into
+    ``pixels`` (flat indices of the valid pixels), or all four -1 where a neighbour is not
+    valid or the pixel is on the first or last row (see :func:`sim._raycast.trace`)."""
+    size = width * height
+    where = np.full(size, -1, np.int64)
+    where[pixels] = np.arange(pixels.shape[0])
+    steps = np.array([1, width, -1, -width])
+    around = where[np.clip(pixels[:, None] + steps, 0, size - 1)]
+    ok = (pixels >= width) & (pixels < size - width) & (around >= 0).all(axis=1)
+    around[~ok] = -1
+    return np.ascontiguousarray(around)
