@@ -28,7 +28,6 @@ from shared.mavlink.modes import Mode
 from shared.memory import read_memory
 from shared.pose import Pose2
 from sim.config import SimConfig
-from sim.decor import PlacedObject
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
@@ -187,30 +186,8 @@ class TestMissions:
 
 
 class TestSafety:
-    """Issue 17 in lock-step: a box on the route, the emergency stop."""
-
-    def test_a_box_on_the_route_stops_the_robot_short_and_removing_it_resumes(
-            self, taught, memory_dir) -> None:
-        robot = SimRobot(taught[0], memory_dir, EAST_A)
-        goal = robot.runtime.memory.paths[0].keyframe_ids[-1]
-        box = robot.sim.add_object(PlacedObject("box", (3.6, 10.0), (0.4, 0.4), 0.5))
-        robot.runtime.start_mission((Goal(goal),), 0)
-        robot.run(30.0, until=lambda t: t.mission_state is MissionState.WAITING)
-        t = robot.runtime.telemetry()
-        assert t.mission_state is MissionState.WAITING, t.mission_detail
-        assert t.mission_detail.startswith("obstacle 0.") and t.mission_detail.endswith(
-            "m ahead: waiting")
-        robot.run(3.0)
-        front_gap_m = 3.6 - 0.2 - (robot.pose[0] + 0.313)
-        assert front_gap_m >= 0.25
-        robot.sim.remove_object(box)
-        cleared_ns = robot.clock.now_ns()
-        robot.run(5.0, until=lambda t: t.mission_state is MissionState.FOLLOWING)
-        assert robot.clock.now_ns() - cleared_ns <= 2_000_000_000
-        assert robot.runtime.telemetry().mission_detail.startswith("resumed: way clear after")
-        robot.run(60.0, until=lambda t: t.mode is Mode.HOLD)
-        t = robot.runtime.telemetry()
-        assert t.mission_state is MissionState.ARRIVED, t.mission_detail
+    """Issue 17 in lock-step: the emergency stop's hold (the obstacle scenarios are in
+    tests/tools/harness/test_safety_scenarios.py)."""
 
     def test_the_emergency_stop_stops_at_once_and_holds_until_armed(
             self, taught, memory_dir) -> None:
