@@ -125,35 +125,20 @@ class ScenarioResult:
 PARKED = (26.0, 10.0)
 
 
-def _stand(person: int, at: tuple[float, float], until_s: float,
-           leave_to: tuple[float, float]) -> Script:
-    """A person standing at ``at`` until ``until_s``, then walking to ``leave_to``."""
-    left = [False]
-
-    def script(stage: Stage, t_s: float) -> None:
-        people = stage.sim.people
-        if t_s == 0.0:
-            people.place(person, at, at)
-            people.hold(person, until_s + 1.0)
-        elif t_s >= until_s and not left[0]:
-            people.place(person, at, leave_to)
-            left[0] = True
-    return script
-
-
-def _walk(person: int, start: tuple[float, float], goal: tuple[float, float],
-          at_s: float) -> Script:
-    """A person appearing at ``start`` at ``at_s`` and walking to ``goal`` (parked at
-    :data:`PARKED` before)."""
+def _person(person: int, wait_at: tuple[float, float], until_s: float,
+            walk_from: tuple[float, float], walk_to: tuple[float, float]) -> Script:
+    """A person standing at ``wait_at`` until ``until_s``, then walking from ``walk_from``
+    to ``walk_to`` (standing in the way, then leaving: ``walk_from`` = ``wait_at``;
+    appearing for a walk: parked at :data:`PARKED` first)."""
     walking = [False]
 
     def script(stage: Stage, t_s: float) -> None:
         people = stage.sim.people
         if t_s == 0.0:
-            people.place(person, PARKED, PARKED)
-            people.hold(person, at_s + 1.0)
-        elif t_s >= at_s and not walking[0]:
-            people.place(person, start, goal)
+            people.place(person, wait_at, wait_at)
+            people.hold(person, until_s + 1.0)
+        elif t_s >= until_s and not walking[0]:
+            people.place(person, walk_from, walk_to)
             walking[0] = True
     return script
 
@@ -176,16 +161,17 @@ def scenarios(stand_s: float = 90.0) -> dict[str, Scenario]:
     out = (4.0, 11.6)  # a doorway to the north rooms: out of the corridor
     return {s.name: s for s in (
         Scenario("crossing", "a person crosses the corridor 1.5 m ahead of the robot",
-                 "arrived", 1, _walk(0, (3.9, 8.8), (3.9, 12.5), 2.0), 40.0, False),
+                 "arrived", 1, _person(0, PARKED, 2.0, (3.9, 8.8), (3.9, 12.5)), 40.0, False),
         Scenario("standing_short", "a person stands on the route for 10 s, then leaves",
-                 "arrived", 1, _stand(0, (3.7, 10.0), 10.0, out), 60.0),
+                 "arrived", 1, _person(0, (3.7, 10.0), 10.0, (3.7, 10.0), out), 60.0),
         Scenario("standing_long", f"a person stands on the route for {stand_s:.0f} s",
-                 "blocked", 1, _stand(0, (3.7, 10.0), stand_s, out), stand_s + 30.0),
+                 "blocked", 1, _person(0, (3.7, 10.0), stand_s, (3.7, 10.0), out),
+                 stand_s + 30.0),
         Scenario("box", "a box is put on the route after teaching, taken away after 15 s",
                  "arrived", 0, _box((3.6, 10.0), 15.0), 60.0),
         Scenario("towards", "a person walks along the corridor towards the robot and passes "
                  "it by a hand's breadth (the paper's Fig. 12)", "arrived", 1,
-                 _walk(0, (6.5, 10.55), (0.8, 10.55), 0.5), 60.0, False),
+                 _person(0, PARKED, 0.5, (6.5, 10.55), (0.8, 10.55)), 60.0, False),
         Scenario("glass_door", "a glass door the sonar does not hear closes the corridor",
                  "bumper", 0, _box((3.6, 10.0), None, sonar=False, size=(0.05, 1.9)),
                  40.0, False),
