@@ -9,8 +9,8 @@ taken away. The simulator's truth judges the run, physics step by physics step:
 * contacts between the robot and a person (any overlap of their shapes), split by
   whether the robot was moving towards the person (> 2 cm/s towards them) at any step
   of the contact, or the person walked into a robot that stood still;
-* the gap between the robot's front and the scripted obstacle ahead while the robot
-  stood still for it;
+* the gap between the robot's front and the nearest obstacle ahead (its centre beyond
+  the front, within the swept corridor) while the robot stood still;
 * when the way truly cleared (no person or placed object within the stop distance
   plus the clear margin ahead, in the robot's swept corridor) and how long after
   that the mission resumed.
@@ -209,13 +209,13 @@ class SafetyTruth:
                 self._touching[i] = self._touching.get(i, False) or towards
             elif i in self._touching:
                 self._count(self._touching.pop(i))
-            if abs(ry) <= half_width + self._safety.side_margin_m + radius and rx > 0:
+            if abs(ry) <= half_width + self._safety.side_margin_m + radius and rx > half_length:
                 ahead.append(rx - radius - half_length)
         for obj in sim.added_objects.values():
             (ox, oy), (length, width), _ = obj.footprint()
             rx, ry = c * (ox - x) + s * (oy - y), -s * (ox - x) + c * (oy - y)
             reach = max(length, width) / 2
-            if abs(ry) <= half_width + self._safety.side_margin_m + reach and rx > 0:
+            if abs(ry) <= half_width + self._safety.side_margin_m + reach and rx > half_length:
                 ahead.append(rx - min(length, width) / 2 - half_length)
         near = min(ahead, default=math.inf)
         blocked = near <= self._safety.stop_distance_m + self._safety.clear_margin_m
