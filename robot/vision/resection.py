@@ -25,9 +25,10 @@ point is far, the two-view fit can trade a sideways shift for a turn (measured i
 yaws 2-4 degrees off, and the refinement then stayed in that basin, |y| errors up to
 58 cm). For yaws within 10 degrees of the fit's, each pair of points gives the centre
 by linear least squares; when the best hypothesis has more points within
-``point_threshold_rad`` than the first result, it is refined as well (from its own
-inliers), and the result with the lower truncated (MSAC) cost over all points and
-matches is kept.
+``point_threshold_rad`` than the first result and, unrefined, already a lower truncated
+(MSAC) cost over all points and matches, it is refined as well (from its own inliers),
+and the result with the lower cost is kept (the test spares the second refinement in
+nearly every frame where the first start was right).
 """
 
 from __future__ import annotations
@@ -214,10 +215,18 @@ def _refine(x: FloatArray, bp: FloatArray, Xp: FloatArray, pairs: EpipolarPairs,
         point_residual = 2.0 * np.arcsin(np.minimum(chord / 2.0, 1.0))
         use_p = point_residual < point_thr
         use_e = np.abs(r[3 * len(bp):]) < epi_thr
-    epi = np.abs(r[3 * len(bp):])
-    cost = float(np.sum(np.minimum(point_residual / point_thr, 1.0) ** 2)
-                 + np.sum(np.minimum(epi / epi_thr, 1.0) ** 2))
-    return x, use_p, use_e, point_residual, cost
+    return x, use_p, use_e, point_residual, _truncated_cost(point_residual,
+                                                           np.abs(r[3 * len(bp):]), config)
+
+
+def _truncated_cost(point_residual: FloatArray, epipolar_residual: FloatArray,
+                    config: PathStateConfig) -> float:
+    """MSAC cost of a pose: each point's and each match's squared residual in units of its
+    tolerance, capped at 1."""
+    point_thr = config.point_threshold_rad
+    epi_thr = config.pose_before_resection.inlier_threshold_rad
+    return float(np.sum(np.minimum(point_residual / point_thr, 1.0) ** 2)
+                 + np.sum(np.minimum(epipolar_residual / epi_thr, 1.0) ** 2))
 
 
 def resect_planar(
@@ -272,18 +281,20 @@ def resect_planar(
     best = _refine(np.array([yaw, scale * t0[0], scale * t0[2]]), bp, Xp, pairs, use_p, use_e,
                    config)
     from_points = _start_from_points(bp, Xp, yaw, config.point_threshold_rad)
-    if from_points is not None and from_points[1] >= np.count_nonzero(best[1]):
-        # More points agree with a pose the two-view fit did not lead to: refine that one
-        # too, from its own inliers, and keep the better of the two.
+    if from_points is not None and from_points[1] > np.count_nonzero(best[1]):
         x0 = from_points[0]
         r, _ = _residuals(x0, bp, Xp, pairs)
-        chord = np.linalg.norm(r[: 3 * len(bp)].reshape(3, -1), axis=0)
-        other = _refine(x0, bp, Xp, pairs,
-                        chord < 2.0 * math.sin(config.point_threshold_rad / 2.0),
-                        np.abs(r[3 * len(bp):]) < config.pose_before_resection.inlier_threshold_rad,
-                        config)
-        if other[4] < best[4]:
-            best = other
+        point_residual = 2.0 * np.arcsin(np.minimum(
+            np.linalg.norm(r[: 3 * len(bp)].reshape(3, -1), axis=0) / 2.0, 1.0))
+        epi = np.abs(r[3 * len(bp):])
+        if _truncated_cost(point_residual, epi, config) < best[4]:
+            # Unrefined, it already explains the points and matches better than the
+            # refined first result: a pose the two-view fit did not lead to. Refine it
+            # from its own inliers and keep the better of the two.
+            other = _refine(x0, bp, Xp, pairs, point_residual < config.point_threshold_rad,
+                            epi < config.pose_before_resection.inlier_threshold_rad, config)
+            if other[4] < best[4]:
+                best = other
     x, use_p, use_e, point_residual, _ = best
     point_inliers = np.zeros(len(fc), dtype=bool)
     point_inliers[rows] = use_p
