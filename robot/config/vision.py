@@ -287,15 +287,24 @@ class PathStateConfig:
     relative_pose: RelativePoseConfig = field(default_factory=RelativePoseConfig)
     """Relative pose of two key images, and of the two-view state (refined)."""
     pose_before_resection: RelativePoseConfig = field(
-        default_factory=lambda: RelativePoseConfig(refine_passes=1))
+        default_factory=lambda: RelativePoseConfig(inlier_threshold_rad=0.008,
+                                                   huber_scale_rad=0.004, refine_passes=1))
     """Relative pose of the current view and the next key image in the three-view state:
-    the planar resection refines it further, so one refinement pass suffices."""
+    the planar resection refines it further, so one refinement pass suffices. Its
+    tolerance (also the resection's epipolar tolerance) is 0.008 rad (0.46 degree), tighter
+    than the key pair's 0.012: where every point is far (the ``campus`` courtyard, 8-13 m)
+    a sideways shift of the robot moves the rays by less than 0.012 rad, so at 0.012 a pose
+    shifted 20-50 cm sideways and turned a few degrees kept as many inliers as the true one
+    (``vmnav bench vision --world campus``: |y| p90 6.6 cm at 0.012 and 0.02, 3.2 cm at
+    0.008 and 0.012; the lab 1.9 and 1.7 cm)."""
     min_parallax_deg: float = 2.0
     """Triangulated key-pair points need at least this angle between their two rays, degrees."""
     max_point_distance_m: float = 30.0
     """Triangulated points farther than this from the next key image are dropped, m."""
-    point_threshold_rad: float = 0.02
-    """A 3D point is an inlier of the current pose when it reprojects within this angle, rad."""
+    point_threshold_rad: float = 0.012
+    """A 3D point is an inlier of the current pose when it reprojects within this angle, rad
+    (0.69 degree; 0.02 let a far point vote for a pose 20 cm off sideways: see
+    ``pose_before_resection``)."""
     min_points: int = 3
     """The three-view state needs at least this many inlier key-pair points in the current
     view (the epipolar matches fix yaw and direction; the points fix the scale, one degree
@@ -367,6 +376,14 @@ class LocalizeConfig:
     """... and at least this share of its matches inliers, in (0, 1]: true views reach
     0.37-0.5 with ORB's whole-image matching in ``campus`` (0.76 and more with Harris +
     ZNCC); unrelated real images, never more than 10 inliers, up to 0.56 with few matches."""
+    neighbour_weight: float = 0.5
+    """Among the accepted key images the one with the most *path support* wins: its inliers
+    plus this times those of its two path neighbours (accepted ones among the candidates).
+    A view between key images is seen by several neighbours with nearly equal inliers,
+    where far points change little from one key image to the next (the ``campus``
+    courtyard: 2 key images off in 8 of 200 queries by inliers alone, 0.96; 0.99 with
+    support 0.5); an aliased place elsewhere has no neighbours to support it. 0: inliers
+    alone."""
     max_yaw_deg: float = 45.0
     """... and the query turned about the vertical by at most this from the key image, deg."""
     max_tilt_deg: float = 10.0
@@ -390,6 +407,8 @@ class LocalizeConfig:
     def __post_init__(self) -> None:
         require(self.candidates >= 1, f"candidates must be >= 1, got {self.candidates}")
         require(self.min_inliers >= 5, f"min_inliers must be >= 5, got {self.min_inliers}")
+        require(self.neighbour_weight >= 0,
+                f"neighbour_weight must be >= 0, got {self.neighbour_weight}")
         require(0 < self.min_inlier_ratio <= 1,
                 f"min_inlier_ratio must be in (0, 1], got {self.min_inlier_ratio}")
         require(0 < self.max_yaw_deg <= 180,

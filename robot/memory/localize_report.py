@@ -85,6 +85,7 @@ def candidate_json(memory: VisualMemory, candidate: Candidate) -> dict[str, Any]
         "matches": candidate.matches,
         "inliers": None if v is None else v.inliers,
         "inlier_ratio": _ratio(candidate),
+        "path_support": None if math.isnan(candidate.support) else round(candidate.support, 1),
         "yaw_deg": None if v is None or math.isnan(v.yaw_deg) else round(v.yaw_deg, 2),
         "tilt_deg": None if v is None or math.isnan(v.tilt_deg) else round(v.tilt_deg, 2),
         "verdict": None if v is None else v.verdict,

@@ -14,6 +14,8 @@ import pytest
 from robot.config import (
     CameraSourceConfig,
     ControlConfig,
+    PathStateConfig,
+    RelativePoseConfig,
     VmnavConfig,
     config_from_log,
     load_config,
@@ -100,8 +102,12 @@ class TestConfigFromLog:
         assert config_from_log(dataclasses.asdict(config), "log.mcap", "config") == config
 
     def test_the_old_layout_reads_as_it_ran(self) -> None:
-        expected = VmnavConfig(control=ControlConfig(law="paper+ff",
-                                                     max_omega_rad_s=math.radians(25.0)))
+        # The three-view state's tolerances it ran with (0.02 and 0.012 rad), since tightened.
+        expected = VmnavConfig(
+            control=ControlConfig(law="paper+ff", max_omega_rad_s=math.radians(25.0)),
+            path_state=PathStateConfig(
+                point_threshold_rad=0.02,
+                pose_before_resection=RelativePoseConfig(refine_passes=1)))
         # Its pixel windows become the angles they were on the default lens: today's defaults.
         assert config_from_log(old_layout(), "log.mcap", "config") == expected
         sizes = PixelSizes.for_camera(expected.features, CameraModel.default())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -163,3 +164,54 @@ def test_localize_config_is_validated() -> None:
     assert config.localize.matching.search_radius_deg is None
     with pytest.raises(ConfigError, match="localize: prefilter_window_px must be odd"):
         from_mapping(VmnavConfig, {"localize": {"prefilter_window_px": 4}}, "f.toml")
+
+
+class TestPathSupport:
+    """Step 3: among accepted key images, the one whose path neighbours agree wins."""
+
+    # Scripted inliers per key image: key image 3 alone has the most; 8, 9, 10 are a run of
+    # consecutive key images that all see the query (as on a path through a far scene).
+    INLIERS: ClassVar[dict[int, int]] = {3: 40, 8: 38, 9: 37, 10: 36}
+
+    def scripted(self, places: list[Place], memory: VisualMemory, weight: float,
+                 monkeypatch: pytest.MonkeyPatch) -> tuple[Localizer, list[int]]:
+        from robot.memory.verification import ACCEPTED, TOO_FEW_INLIERS, Verification
+        from robot.vision.matching import Matches
+
+        config = dataclasses.replace(CONFIG, candidates=len(places), neighbour_weight=weight)
+        localizer = Localizer.from_memory(memory, MOUNT, FEATURES, config)
+        verified: list[int] = []
+        ids = localizer.keyframe_ids
+
+        def match(query: object, key: object, matching: object) -> Matches:
+            k = next(i for i, f in zip(ids, localizer._features, strict=True) if f is key)
+            n = self.INLIERS.get(k, 10) + 5
+            return Matches(np.arange(n), np.arange(n), np.ones(n))
+
+        def verify(query: object, k: int, matches: Matches, rng: object) -> Verification:
+            keyframe_id = ids[k]
+            verified.append(keyframe_id)
+            inliers = self.INLIERS.get(keyframe_id, 0)
+            verdict = ACCEPTED if inliers else TOO_FEW_INLIERS
+            return Verification(len(matches), inliers, inliers / len(matches), 0.0, 0.0, verdict)
+
+        monkeypatch.setattr(localizer._front_end, "match", match)
+        monkeypatch.setattr(localizer, "_verify", verify)
+        return localizer, verified
+
+    def test_the_supported_key_image_wins(self, places: list[Place], memory: VisualMemory,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, verified = self.scripted(places, memory, 0.5, monkeypatch)
+        result = localizer.localize(places[9].query)
+        assert result.ok and result.keyframe_id == 9 and result.inliers == 37
+        winner = result.candidates[0]
+        assert winner.support == pytest.approx(37 + 0.5 * (38 + 36))
+        assert {8, 9, 10} <= set(verified) and len(verified) == len(set(verified))
+
+    def test_weight_zero_is_the_most_inliers(self, places: list[Place], memory: VisualMemory,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, verified = self.scripted(places, memory, 0.0, monkeypatch)
+        result = localizer.localize(places[9].query)
+        assert result.ok and result.keyframe_id == 3
+        # Those whose match counts could beat 40 inliers are verified, most matches first.
+        assert verified == [3, 8, 9, 10]
