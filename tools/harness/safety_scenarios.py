@@ -167,8 +167,8 @@ def scenarios(stand_s: float = 90.0) -> dict[str, Scenario]:
         Scenario("standing_long", f"a person stands on the route for {stand_s:.0f} s",
                  "blocked", 1, _person(0, (3.7, 10.0), stand_s, (3.7, 10.0), out),
                  stand_s + 30.0),
-        Scenario("box", "a box is put on the route after teaching, taken away after 15 s",
-                 "arrived", 0, _box((3.6, 10.0), 15.0), 60.0),
+        Scenario("box", "a box is put on the route after teaching, taken away after 10 s",
+                 "arrived", 0, _box((3.6, 10.0), 10.0), 60.0),
         Scenario("towards", "a person walks along the corridor towards the robot and passes "
                  "it by a hand's breadth (the paper's Fig. 12)", "arrived", 1,
                  _person(0, PARKED, 0.5, (6.5, 10.55), (0.8, 10.55)), 60.0, False),
