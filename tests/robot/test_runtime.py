@@ -32,7 +32,6 @@ from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world
-from tests.tools.short_routes import teach_east_a
 from tools.bench.hostile_images import bogus_chunk_png
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
@@ -43,12 +42,10 @@ pytestmark = pytest.mark.slow
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 
 
-@pytest.fixture(scope="module")
-def taught(tmp_path_factory) -> tuple[Path, Path]:
-    """(world file, memory folder) with ``east_a`` taught (seed 1)."""
-    folder = tmp_path_factory.mktemp("runtime")
-    world_file, _ = teach_east_a(folder, CONFIG)
-    return world_file, folder / "memory"
+@pytest.fixture
+def taught(east_a: tuple[Path, Path]) -> tuple[Path, Path]:
+    """(world file, memory folder) with ``east_a`` taught (seed 1; tests/conftest.py)."""
+    return east_a
 
 
 class SimRobot:

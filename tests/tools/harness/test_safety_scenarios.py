@@ -9,7 +9,6 @@ import pytest
 from robot.config import VmnavConfig
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.safety_scenarios import run_scenario, scenario_config, scenarios
-from tools.harness.short_routes import teach_east_a
 
 CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 #: The long stand, shortened for the suite: 15 s against a 5 s wait (the benchmark runs the
@@ -17,18 +16,11 @@ CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 STAND_S, WAIT_S = 15.0, 5.0
 
 
-@pytest.fixture(scope="module")
-def taught(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    folder = tmp_path_factory.mktemp("safety")
-    world_file, _ = teach_east_a(folder, CONFIG)
-    return world_file, folder / "memory"
-
-
 @pytest.mark.parametrize("name", list(scenarios()))
-def test_scenario(name: str, taught: tuple[Path, Path]) -> None:
+def test_scenario(name: str, east_a: tuple[Path, Path]) -> None:
     scenario = scenarios(stand_s=STAND_S)[name]
     config = scenario_config(CONFIG, WAIT_S if name == "standing_long" else None)
-    result = run_scenario(scenario, *taught, config)
+    result = run_scenario(scenario, *east_a, config)
     assert result.passed, result
     assert result.contacts_moving == 0
     if name in ("standing_short", "box"):
