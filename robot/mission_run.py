@@ -10,7 +10,8 @@ and, while following, the :class:`robot.follower.RouteFollower`; it commands a
 
 Rules of a cycle (:meth:`MissionRun.cycle`):
 
-1. Read the base's state. A pressed bumper or a stall goes to the
+1. Read the base's state. A pressed bumper (unless the safety layer found the robot
+   standing when it was pressed: someone walked into it) or a stall goes to the
    mission first (ABORTED); then the safety layer's hold (``BaseState.blocked``):
    following, a hold makes the mission wait (WAITING: the follower pauses, its
    estimate kept); waiting, its end resumes the route (the follower resumes where
@@ -266,7 +267,8 @@ class MissionRun:
         rules); nothing happens in a final state but the record."""
         started = self._stopwatch()
         base = self._base.state()
-        if base.bumped:
+        pushed = base.blocked is not None and base.blocked.cause == "pushed"
+        if base.bumped and not pushed:  # pushed while standing: the robot waits (rule 1)
             self._feed(Bumper(t_ns))
         elif base.stalled:
             self._feed(Stall(t_ns))

@@ -35,9 +35,13 @@ Rules (``SafetyConfig`` holds every distance and time):
 6. Turning in place is refused (omega = 0) while an echo lies within the circle the
    robot's corners sweep, plus ``turn_margin_m``; otherwise it stays allowed, so a
    stopped robot can still face its route.
-7. Bumper and emergency stop hold: a bumper being pressed (its rising edge) or
-   :meth:`SafetyGovernor.emergency_stop` stops everything until
-   :meth:`SafetyGovernor.release` (the operator re-arms or changes mode).
+7. Bumper and emergency stop hold: a bumper pressed (its rising edge) while the robot
+   moves, or moved in the last :data:`MOVING_GRACE_NS` (it hit something), or
+   :meth:`SafetyGovernor.emergency_stop`, stops everything until
+   :meth:`SafetyGovernor.release` (the operator re-arms or changes mode). A bumper
+   pressed while the robot stood still is someone walking into it ("pushed"): nothing
+   moves while it stays pressed, then the way must clear as after an obstacle (rule 4),
+   and a mission waits instead of ending.
 
 :class:`~shared.interfaces.Blocked` reports the hold that stops forward motion (rules
 3-5, 7), for the mission (wait, resume, give up) and telemetry.
@@ -50,6 +54,10 @@ from dataclasses import dataclass
 
 from robot.config import SafetyConfig
 from shared.interfaces import BaseState, Blocked, RangeReading
+
+#: A bumper pressed this soon after the robot was last allowed to move is its own hit (it
+#: may still be braking: 0.33 s from 0.2 m/s on a P3-AT), ns.
+MOVING_GRACE_NS = 500_000_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,6 +89,7 @@ class SafetyGovernor:
         self._config = config
         self._latched: Blocked | None = None  # rule 7
         self._was_bumped = False
+        self._moving_until_ns: int | None = None  # rule 7: the robot may still move
         self._stopped_since_ns: int | None = None  # rule 4: forward motion stopped
         self._clear_since_ns: int | None = None
 
@@ -111,14 +120,18 @@ class SafetyGovernor:
                omega_rad_s: float) -> Assessment:
         """Bound the command (v_m_s, omega_rad_s) at ``now_ns`` for the base in ``state``."""
         cfg = self._config
-        if state.bumped and not self._was_bumped and self._latched is None:
+        moving = self._moving_until_ns is not None and now_ns < self._moving_until_ns
+        if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
         points = _echo_points(state, now_ns, cfg.sonar_stale_ns)
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, cfg, reverse=False)
-        blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False))
+        blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
+                                     pushed=state.bumped and self._latched is None)
         if self._latched is not None:
             return Assessment(0.0, 0.0, self._latched, ahead_m)
+        if state.bumped:
+            return Assessment(0.0, 0.0, blocked, ahead_m)
         v, omega = v_m_s, omega_rad_s
         if v > 0:
             ratio = 0.0 if blocked is not None else _speed_ratio(ahead_m, cfg)
@@ -134,11 +147,19 @@ class SafetyGovernor:
             omega *= ratio  # slowing down keeps the arc the corridor was checked along
         if omega != 0.0 and _too_close_to_turn(points, cfg):
             omega = 0.0
+        if v != 0.0 or omega != 0.0:
+            self._moving_until_ns = now_ns + MOVING_GRACE_NS
         return Assessment(v, omega, blocked, ahead_m)
 
-    def _forward_hold(self, now_ns: int, ahead_m: float, silent: bool) -> Blocked | None:
-        """Rules 3-5: stop at the line, clear only after the margin and the dwell."""
+    def _forward_hold(self, now_ns: int, ahead_m: float, silent: bool,
+                      pushed: bool) -> Blocked | None:
+        """Rules 3-5 and 7's push: stop at the line, clear only after the margin and the
+        dwell."""
         cfg = self._config
+        if pushed:
+            self._stopped_since_ns = self._stopped_since_ns or now_ns
+            self._clear_since_ns = None
+            return Blocked("pushed", math.nan, self._stopped_since_ns)
         if silent:
             self._stopped_since_ns = self._stopped_since_ns or now_ns
             self._clear_since_ns = None

@@ -63,7 +63,7 @@ class RangeReading:
 
 
 #: Why the safety layer holds the robot (:attr:`Blocked.cause`).
-BLOCK_CAUSES = ("obstacle", "sonar_silent", "bumper", "e_stop")
+BLOCK_CAUSES = ("obstacle", "sonar_silent", "pushed", "bumper", "e_stop")
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,9 +72,10 @@ class Blocked:
 
     Attributes:
         cause: one of :data:`BLOCK_CAUSES`: an echo in the robot's way ("obstacle"),
-            front sonars whose readings went stale ("sonar_silent"), a bumper hit
-            (held until the operator re-arms or changes mode), the operator's
-            emergency stop (held likewise).
+            front sonars whose readings went stale ("sonar_silent"), a bumper pressed
+            while the robot stood still (someone walked into it: "pushed"), a bumper
+            hit while it moved (held until the operator re-arms or changes mode), the
+            operator's emergency stop (held likewise).
         distance_m: for "obstacle", the echo's distance ahead of the robot's front, m;
             NaN otherwise.
         since_ns: when the hold began, ns.
@@ -94,7 +95,7 @@ class Blocked:
         if self.cause == "obstacle":
             return f"obstacle {self.distance_m:.2f} m ahead"
         return {"sonar_silent": "front sonars silent", "bumper": "bumper pressed",
-                "e_stop": "emergency stop"}[self.cause]
+                "pushed": "someone walked into the robot", "e_stop": "emergency stop"}[self.cause]
 
 
 @dataclass(frozen=True, slots=True)

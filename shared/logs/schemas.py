@@ -254,7 +254,8 @@ BASE_STATE = _object("vmnav.BaseState", "What the mobile base reported "
         "battery_v": (["number", "null"], "battery, V (null when not a number)"),
         "motors_enabled": ("boolean", "the motors accept velocity commands"),
         "blocked_cause": (["string", "null"], "why the safety layer holds the robot "
-                          "(obstacle, sonar_silent, bumper, e_stop); null: the way is clear"),
+                          "(obstacle, sonar_silent, pushed, bumper, e_stop); null: the way "
+                          "is clear"),
         "blocked_distance_m": (["number", "null"], "the obstacle ahead of the front, m"),
         "blocked_since_ns": (["integer", "null"], "when the hold began, ns"),
     })["properties"],

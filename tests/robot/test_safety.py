@@ -142,11 +142,24 @@ class TestTurningAndReversing:
 class TestHolds:
     def test_a_bumper_hit_stops_and_holds_until_released(self) -> None:
         governor = SafetyGovernor(CONFIG)
+        assert governor.assess(0, state(), 0.2, 0.0).v_m_s == 0.2  # driving
         hit = governor.assess(0, state(bumped=True), 0.2, 0.3)
         assert (hit.v_m_s, hit.omega_rad_s, hit.blocked.cause) == (0.0, 0.0, "bumper")
         assert governor.assess(1, state(t_ns=1), 0.2, 0.0).v_m_s == 0.0  # released bumper
         governor.release()
         assert governor.assess(2, state(t_ns=2), 0.2, 0.0).v_m_s == 0.2
+
+    def test_someone_walking_into_a_robot_that_stands_is_a_wait_not_a_hold(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        governor.assess(0, state(), 0.2, 0.0)  # drove until t = 0, then stood
+        t = ns_from_s(1.0)
+        pushed = governor.assess(t, state(bumped=True, t_ns=t), 0.2, 0.3)
+        assert (pushed.v_m_s, pushed.omega_rad_s, pushed.blocked.cause) == (0.0, 0.0, "pushed")
+        assert governor.latched is None
+        t = ns_from_s(1.5)  # released: the way must stay clear for the dwell
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.0
+        t += CONFIG.clear_dwell_ns
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.2
 
     def test_the_emergency_stop_holds_until_released(self) -> None:
         governor = SafetyGovernor(CONFIG)
