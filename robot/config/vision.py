@@ -376,14 +376,16 @@ class LocalizeConfig:
     """... and at least this share of its matches inliers, in (0, 1]: true views reach
     0.37-0.5 with ORB's whole-image matching in ``campus`` (0.76 and more with Harris +
     ZNCC); unrelated real images, never more than 10 inliers, up to 0.56 with few matches."""
-    neighbour_weight: float = 0.5
+    neighbour_weight: float = 0.0
     """Among the accepted key images the one with the most *path support* wins: its inliers
     plus this times those of its two path neighbours (accepted ones among the candidates).
     A view between key images is seen by several neighbours with nearly equal inliers,
     where far points change little from one key image to the next (the ``campus``
     courtyard: 2 key images off in 8 of 200 queries by inliers alone, 0.96; 0.99 with
-    support 0.5); an aliased place elsewhere has no neighbours to support it. 0: inliers
-    alone."""
+    support 0.5); an aliased place elsewhere has no neighbours to support it. 0 (the
+    default): inliers alone. Off by default: at 0.5 the demo's repeat relocalized one key
+    image behind the robot (the middle of the run that sees it) and went LOST three times
+    without progress; the rule must only break near-ties before it can be on."""
     max_yaw_deg: float = 45.0
     """... and the query turned about the vertical by at most this from the key image, deg."""
     max_tilt_deg: float = 10.0
