@@ -46,6 +46,10 @@ class InputError(VmnavError):
         self.problem = problem
         super().__init__(f"{self.where}: {problem}")
 
+    def __reduce__(self) -> tuple[type[InputError], tuple[str, str]]:
+        """Pickled as its arguments, so that it crosses to and from worker processes."""
+        return type(self), (self.where, self.problem)
+
 
 class ConfigError(InputError):
     """A config file, world file or config value is malformed or out of range."""

@@ -244,6 +244,12 @@ class Route:
             require(math.dist(p, q) > 0.01, f"route '{self.name}' repeats waypoint {i} at {p}")
         _finite(f"route '{self.name}' waypoint {len(self.waypoints) - 1}", *self.waypoints[-1])
 
+    @property
+    def length_m(self) -> float:
+        """Length of the polyline, m."""
+        return sum(math.dist(p, q) for p, q in zip(self.waypoints, self.waypoints[1:],
+                                                    strict=False))
+
     def start_pose(self) -> Pose2:
         """The pose at the first waypoint, facing the second."""
         (x0, y0), (x1, y1) = self.waypoints[0], self.waypoints[1]

@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import pickle
+
 import pytest
 
 from shared.errors import (
@@ -26,6 +28,13 @@ def test_input_error_names_where() -> None:
     err = ConfigError("world.toml", "walls[3]: zero length")
     assert str(err) == "world.toml: walls[3]: zero length"
     assert err.where == "world.toml"
+
+
+@pytest.mark.parametrize("kind", [InputError, ConfigError, CalibrationError])
+def test_input_errors_cross_process_boundaries_unchanged(kind: type[InputError]) -> None:
+    again = pickle.loads(pickle.dumps(kind("route 'east_a'", "did not reach the end")))
+    assert type(again) is kind and str(again) == "route 'east_a': did not reach the end"
+    assert (again.where, again.problem) == ("route 'east_a'", "did not reach the end")
 
 
 def test_checksum_error_carries_values() -> None:

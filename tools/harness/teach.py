@@ -13,13 +13,19 @@ never imports sim/, sim/ never imports robot/):
    the true pose of every key image (:class:`TaughtMemory`), for everything that
    measures against the truth: ``vmnav demo``, the benchmarks, the fault cases' rig. It
    can join the paths as ``vmnav teach`` does, and store the memory in a folder with a
-   record of what was taught, to be reused when asked again for the same.
+   record of what was taught, to be reused when asked again for the same. The routes'
+   drives are independent (each its own simulation, seeded alike), so they run in
+   parallel, one process per CPU this process may use; joining follows in teaching
+   order, and the memory is the same as taught one route after another.
 """
 
 from __future__ import annotations
 
 import json
+import multiprocessing
+import os
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -217,8 +223,8 @@ def teach_memory(
     true_poses: dict[int, Pose2] = {}
     path_ids: list[int] = []
     taught_routes: list[TaughtRoute] = []
-    for route in routes:
-        taught = teach_in_sim(world, route, config, sim_config, camera)
+    for taught in _drive_routes(world, routes, config, sim_config, camera):
+        route = taught.route
         path = memory.add_path(route.name, [k.record for k in taught.key_images])
         if join:
             join_path(memory, path, config.camera.mount, config.features, config.localize,
@@ -233,6 +239,26 @@ def teach_memory(
              "true_poses": {str(k): v for k, v in true_poses.items()}}))
     return TaughtMemory(memory=memory, true_poses=true_poses, path_ids=tuple(path_ids),
                         routes=tuple(taught_routes), reused=False)
+
+
+def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
+                  sim_config: SimConfig, camera: CameraModel) -> list[TaughtRoute]:
+    """:func:`teach_in_sim` for each of ``routes``, in their order: in this process when
+    one route or one CPU, else in a pool of processes (spawned: this process may hold
+    threads), one per CPU this process may use, at most one per route, the longest
+    routes first so that the pool ends together.
+
+    Raises:
+        InputError: a drive did not reach its route's end (the first such route's).
+    """
+    workers = min(len(routes), len(os.sched_getaffinity(0)))
+    if workers <= 1:
+        return [teach_in_sim(world, route, config, sim_config, camera) for route in routes]
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        longest_first = sorted(routes, key=lambda route: -route.length_m)
+        drives = {route.name: pool.submit(teach_in_sim, world, route, config, sim_config,
+                                          camera) for route in longest_first}
+        return [drives[route.name].result() for route in routes]
 
 
 def _truth_key(sim_config: SimConfig, route_names: list[str], camera: CameraModel,

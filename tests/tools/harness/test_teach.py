@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from robot.config import VmnavConfig
@@ -102,3 +103,19 @@ def test_unjoined_paths_in_memory_only(world: World) -> None:
     taught = teach_memory(world, ["east_a", "east_b"], CONFIG, SimConfig(seed=1), CAMERA,
                           join=False)
     assert taught.memory.junctions == () and len(taught.memory.paths) == 2
+
+
+def test_routes_driven_in_parallel_give_the_memory_driven_one_after_another(
+        world: World, world_file: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    taught = {}
+    for cpus in ({0}, {0, 1}):  # one CPU: this process; two: a pool of two processes
+        monkeypatch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid, c=cpus: c)
+        taught[len(cpus)] = teach_memory(world, ["east_a", "east_b"], CONFIG,
+                                         SimConfig(world=str(world_file), seed=1), CAMERA,
+                                         join=True)
+    one, two = taught[1], taught[2]
+    assert one.true_poses == two.true_poses and one.path_ids == two.path_ids
+    assert one.memory.junctions == two.memory.junctions
+    for key, record in one.memory.keyframes.items():
+        assert np.array_equal(record.image, two.memory.keyframes[key].image)
+
