@@ -16,7 +16,13 @@ Rules (``SafetyConfig`` holds every distance and time):
 1. Echoes. A reading is one point on its sensor's axis at its range (ARIA's
    ``ArSensorReading`` convention), fixed in the odometry frame where the robot stood
    when it arrived and seen from where the robot stands now, so a 300 ms old echo
-   does not move with the robot.
+   does not move with the robot. An echo that moved towards the robot over the same
+   sonar's last two intervals between readings (each time at least ``approach_min_m_s``,
+   and each step shorter than ``approach_gate_m``: a longer one, or a single step, is the
+   beam finding another surface) is something walking at it: it counts where it will be
+   ``approach_horizon_ns`` after now at the slower of the two speeds, so the robot stops
+   before a person who walks at it instead of meeting them at its stop line (a sonar sees
+   a person walking at 1 m/s up to 0.4 m late: its ring takes 320 ms).
 2. The swept corridor. Driving forward at (v, omega) the robot's centre follows the
    arc of curvature omega / v; its body sweeps the band of half-width ``half_width_m``
    + ``side_margin_m`` around that arc. An echo in the band at arc length s lies
@@ -92,6 +98,7 @@ class SafetyGovernor:
         self._moving_until_ns: int | None = None  # rule 7: the robot may still move
         self._stopped_since_ns: int | None = None  # rule 4: forward motion stopped
         self._clear_since_ns: int | None = None
+        self._echoes: dict[tuple[float, float, float], _Echo] = {}  # rule 1, per sensor
 
     @property
     def config(self) -> SafetyConfig:
@@ -124,7 +131,7 @@ class SafetyGovernor:
         if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
-        points = _echo_points(state, now_ns, cfg.sonar_stale_ns)
+        points = self._echo_points(state, now_ns)
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, cfg, reverse=False)
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
@@ -181,24 +188,67 @@ class SafetyGovernor:
         return Blocked("obstacle", ahead_m, self._stopped_since_ns)
 
 
-def _echo_points(state: BaseState, now_ns: int, stale_ns: int) -> list[tuple[float, float]]:
-    """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now."""
-    x0, y0, yaw0 = state.odom_pose
-    c0, s0 = math.cos(yaw0), math.sin(yaw0)
-    points = []
-    for r in state.ranges:
-        if now_ns - r.t_ns > stale_ns:
-            continue
-        ox, oy, oyaw = r.odom_pose
-        sx, sy, sh = r.sensor_pose
+    def _echo_points(self, state: BaseState, now_ns: int) -> list[tuple[float, float]]:
+        """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, moved
+        ahead in time when it comes towards the robot."""
+        cfg = self._config
+        x0, y0, yaw0 = state.odom_pose
+        c0, s0 = math.cos(yaw0), math.sin(yaw0)
+        points = []
+        for r in state.ranges:
+            echo = self._track(r)
+            if now_ns - r.t_ns > cfg.sonar_stale_ns:
+                continue
+            wx, wy = echo.x_m, echo.y_m
+            to_x, to_y = x0 - wx, y0 - wy
+            gap = math.hypot(to_x, to_y)
+            if echo.approach_m_s >= cfg.approach_min_m_s and gap > 1e-9:
+                # no nearer than the body's inner circle: the echo stays in front of it
+                inner = min(cfg.front_m, cfg.rear_m, cfg.half_width_m)
+                step = min(max(0.0, gap - inner), echo.approach_m_s * (
+                    now_ns - r.t_ns + cfg.approach_horizon_ns) / 1e9)
+                wx, wy = wx + to_x / gap * step, wy + to_y / gap * step
+            dx, dy = wx - x0, wy - y0
+            points.append((c0 * dx + s0 * dy, -s0 * dx + c0 * dy))
+        return points
+
+    def _track(self, reading: RangeReading) -> _Echo:
+        """The reading's echo in the odometry frame and how fast it came towards where the
+        robot stood, from the same sensor's previous reading (rule 1)."""
+        ox, oy, oyaw = reading.odom_pose
+        sx, sy, sh = reading.sensor_pose
         c, s = math.cos(oyaw), math.sin(oyaw)
-        # the echo in the odometry frame: the robot's pose then, the sensor, the range
-        ex = sx + r.range_m * math.cos(sh)
-        ey = sy + r.range_m * math.sin(sh)
-        wx, wy = ox + c * ex - s * ey, oy + s * ex + c * ey
-        dx, dy = wx - x0, wy - y0
-        points.append((c0 * dx + s0 * dy, -s0 * dx + c0 * dy))
-    return points
+        ex = sx + reading.range_m * math.cos(sh)
+        ey = sy + reading.range_m * math.sin(sh)
+        x, y = ox + c * ex - s * ey, oy + s * ex + c * ey
+        before = self._echoes.get(reading.sensor_pose)
+        if before is not None and (before.t_ns, before.x_m, before.y_m) == (reading.t_ns, x, y):
+            return before  # the same reading as at the last command
+        step = 0.0
+        if before is not None and reading.t_ns > before.t_ns:
+            moved_x, moved_y = x - before.x_m, y - before.y_m
+            to_x, to_y = ox - before.x_m, oy - before.y_m
+            gap = math.hypot(to_x, to_y)
+            if math.hypot(moved_x, moved_y) <= self._config.approach_gate_m and gap > 1e-9:
+                towards = (moved_x * to_x + moved_y * to_y) / gap
+                step = max(0.0, towards * 1e9 / (reading.t_ns - before.t_ns))
+        approach = 0.0 if before is None else min(step, before.step_m_s)
+        echo = _Echo(reading.t_ns, x, y, step, approach)
+        self._echoes[reading.sensor_pose] = echo
+        return echo
+
+
+@dataclass(frozen=True, slots=True)
+class _Echo:
+    """One sensor's latest echo: when (ns), where in the odometry frame (m), how fast it
+    came towards the robot since the sensor's previous echo, and the slower of that and
+    the interval before (m/s, >= 0)."""
+
+    t_ns: int
+    x_m: float
+    y_m: float
+    step_m_s: float
+    approach_m_s: float
 
 
 def _faces(reading: RangeReading, reverse: bool) -> bool:
@@ -216,7 +266,7 @@ def _silent(state: BaseState, now_ns: int, config: SafetyConfig, reverse: bool) 
 def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s: float,
                    body_m: float, config: SafetyConfig, reverse: bool) -> float:
     """Rule 2: the distance from the body's end to the nearest echo in the swept corridor,
-    m (inf when the corridor is empty)."""
+    m (0 when one is at or inside the end, inf when the corridor is empty)."""
     sign = -1.0 if reverse else 1.0
     curvature = omega_rad_s / v_m_s if v_m_s * sign > 1e-6 else 0.0
     half = config.half_width_m + config.side_margin_m
@@ -225,7 +275,7 @@ def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s:
         x = px * sign  # mirrored when reversing: the curvature keeps its sign
         s, lateral = _arc_coordinates(x, py, curvature)
         if s > 0 and abs(lateral) <= half:
-            nearest = min(nearest, s - body_m)
+            nearest = min(nearest, max(0.0, s - body_m))
     return nearest
 
 

@@ -235,12 +235,23 @@ class SafetyConfig:
     wait_ns: int = 60_000_000_000
     """A mission stopped by an obstacle waits this long for the way to clear, then holds,
     ns."""
+    approach_horizon_ns: int = 1_000_000_000
+    """An echo that comes towards the robot (a person walking at it) counts where it will
+    be this long after now, ns: the time to notice it on the next ping and to brake."""
+    approach_min_m_s: float = 0.4
+    """...when it comes at least this fast, m/s: slower apparent motion is sonar noise, or
+    the echo sliding along an oblique wall as the robot drives."""
+    approach_gate_m: float = 0.7
+    """Two successive echoes of one sonar further apart than this are different things
+    (the beam swept onto another surface), not one thing moving, m."""
 
     def __post_init__(self) -> None:
         for name in ("stop_distance_m", "slow_distance_m", "front_m", "rear_m",
-                     "half_width_m", "sonar_stale_ns", "wait_ns"):
+                     "half_width_m", "sonar_stale_ns", "wait_ns", "approach_min_m_s",
+                     "approach_gate_m"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
-        for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "turn_margin_m"):
+        for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "turn_margin_m",
+                     "approach_horizon_ns"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         require(self.slow_distance_m > self.stop_distance_m,
                 f"slow_distance_m must be > stop_distance_m ({self.stop_distance_m}), "

@@ -122,6 +122,9 @@ ROBOT_PARAMS: tuple[ParamBinding, ...] = (
     ParamBinding("SAFE_WAIT", "safety", "wait_ns", 1.0, 3600.0,
                  "A mission stopped by an obstacle waits this long, then holds, s",
                  Kind.SECONDS),
+    ParamBinding("SAFE_APPR_TIME", "safety", "approach_horizon_ns", 0.0, 3.0,
+                 "An echo coming at the robot counts where it will be this long on, s",
+                 Kind.SECONDS),
 )
 
 

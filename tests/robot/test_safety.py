@@ -58,8 +58,46 @@ class TestForward:
         assert a.v_m_s == pytest.approx(0.2 * ratio) and a.blocked is None
         arc = governor.assess(0, state(echo_ahead(0.8)), 0.2, 0.02)
         assert arc.v_m_s < 0.2 and arc.omega_rad_s / arc.v_m_s == pytest.approx(0.02 / 0.2)
-        near = governor.assess(1, state(echo_ahead(0.42), t_ns=1), 0.2, 0.0)
+        near = SafetyGovernor(CONFIG).assess(0, state(echo_ahead(0.42)), 0.2, 0.0)
         assert near.v_m_s == pytest.approx(0.2 * CONFIG.min_speed_ratio)
+
+    def test_a_person_walking_at_the_robot_stops_it_where_they_will_be(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        ring_ns = ns_from_s(0.32)  # the same sonar fires again
+        for ping, ahead_m in enumerate((1.12, 0.8)):  # 1 m/s towards the robot
+            first = governor.assess(ping * ring_ns, state(echo_ahead(ahead_m),
+                                                          t_ns=ping * ring_ns), 0.2, 0.0)
+            assert first.ahead_m == pytest.approx(ahead_m)  # one step is not yet a walk
+        walking = governor.assess(2 * ring_ns, state(echo_ahead(0.48), t_ns=2 * ring_ns),
+                                  0.2, 0.0)
+        # counted 1 s on (approach_horizon_ns): at the front
+        assert walking.v_m_s == 0.0 and walking.ahead_m == 0.0
+        assert walking.blocked is not None and walking.blocked.cause == "obstacle"
+        still = SafetyGovernor(CONFIG).assess(0, state(echo_ahead(0.48)), 0.2, 0.0)
+        assert still.v_m_s > 0.0 and still.ahead_m == pytest.approx(0.48)
+
+    def test_a_still_echo_does_not_approach_while_the_robot_drives_at_it(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        ring_ns = ns_from_s(0.32)
+        governor.assess(0, state(echo_ahead(1.0)), 0.2, 0.0)
+        driven = Pose2(0.2 * 0.32, 0.0, 0.0)
+        a = governor.assess(ring_ns, state(echo_ahead(1.0 - driven.x_m), t_ns=ring_ns,
+                                           at=driven), 0.2, 0.0)
+        assert a.ahead_m == pytest.approx(1.0 - driven.x_m) and a.v_m_s > 0.0
+
+    @pytest.mark.parametrize("ranges_m", [
+        (4.0, 2.0, 0.5),  # the beam swept onto nearer surfaces: beyond approach_gate_m
+        (1.0, 1.0, 0.6),  # one step: the beam found a person standing before the wall
+        (1.0, 0.9, 0.8),  # 0.31 m/s: below approach_min_m_s (noise, an oblique wall)
+    ])
+    def test_a_jump_or_a_slow_drift_is_not_someone_coming(
+            self, ranges_m: tuple[float, ...]) -> None:
+        governor = SafetyGovernor(CONFIG)
+        ring_ns = ns_from_s(0.32)
+        for ping, ahead_m in enumerate(ranges_m):
+            a = governor.assess(ping * ring_ns, state(echo_ahead(ahead_m),
+                                                      t_ns=ping * ring_ns), 0.2, 0.0)
+        assert a.ahead_m == pytest.approx(ranges_m[-1])
 
     def test_an_echo_beside_the_corridor_is_passed(self) -> None:
         side = {1: 0.6}  # the +50 deg sonar: the echo is 0.65 m to the left
