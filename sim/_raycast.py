@@ -223,9 +223,14 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
     b = scratch_bits[0]
     lod = float((b >> 52) - 1023) + float(b & 0xFFFFFFFFFFFFF) * (1.0 / 4503599627370496.0)
     last = level_count[tex] - 1
-    lod = min(max(lod, 0.0), float(last))
-    l0 = int(lod)
-    f = (lod - l0 - 0.5) / _BLEND_BAND + 0.5
+    # The nearest level, and within half the band of the middle between two levels,
+    # the other one's weight (0.5 at the middle).
+    l0 = int(min(max(lod + 0.5, 0.0), float(last)))
+    e = lod - l0
+    f = (abs(e) - 0.5 * (1.0 - _BLEND_BAND)) / _BLEND_BAND
+    l1 = l0 + 1 if e > 0.0 else l0 - 1
+    if l1 < 0 or l1 > last:
+        f = 0.0
     if wraps[tex]:
         iu = math.floor(u)
         iv = math.floor(v)
@@ -239,13 +244,9 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
     else:
         u = min(max(u, 0.0), 1.0)
         v = min(max(v, 0.0), 1.0)
-    if f >= 1.0 and l0 < last:
-        l0 += 1
-        f = 0.0
     a = _bilinear(texels, levels[tex, l0, 0], levels[tex, l0, 1], levels[tex, l0, 2], u, v)
-    if f <= 0.0 or l0 == last:
+    if f <= 0.0:
         return a
-    l1 = l0 + 1
     b = _bilinear(texels, levels[tex, l1, 0], levels[tex, l1, 1], levels[tex, l1, 2], u, v)
     return a + (b - a) * f
 
