@@ -195,7 +195,7 @@ def _repeat_flips(iu, iv, surface):
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
-def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface, bits):
+def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface):
     """Sample of texture ``tex`` at (u, v) for a footprint of ``footprint_uv`` (u units).
 
     "Brilinear" filtering: the mip level is ``log2(footprint in texels)`` (approximated);
@@ -211,16 +211,11 @@ def _sample(texels, levels, level_count, wraps, tex, u, v, footprint_uv, surface
     apart in a corridor the same picture, which no real building is (stains, wear,
     vents), and the front end rightly matches them. Another texture is clamped at its
     border.
-
-    ``bits``: a (1,) float64 scratch array and its (1,) int64 view (one per kernel
-    call), to read the footprint's exponent and mantissa.
     """
     # log2 of the footprint in texels, to within 0.09: the float's exponent plus its
     # mantissa's fraction (linear in the mantissa, as GPUs approximate it), read from
     # its bits (math.frexp is a library call: 1.4 ms per 800 x 600 frame).
-    scratch, scratch_bits = bits
-    scratch[0] = max(footprint_uv * levels[tex, 0, 1], 1e-6)
-    b = scratch_bits[0]
+    b = np.float64(max(footprint_uv * levels[tex, 0, 1], 1e-6)).view(np.int64)
     lod = float((b >> 52) - 1023) + float(b & 0xFFFFFFFFFFFFF) * (1.0 / 4503599627370496.0)
     last = level_count[tex] - 1
     # The nearest level, and within half the band of the middle between two levels,
@@ -294,8 +289,6 @@ def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs
     ox, oy, oz = o[0], o[1], o[2]
     fres = 0.01
     lamp_res = 0.1
-    scratch = np.empty(1)
-    bits = (scratch, scratch.view(np.int64))
     # Texture scales as reciprocals (u, v per metre): a multiplication per pixel, not a
     # division.
     floor_inv = 1.0 / floor_uv[:, :2]
@@ -492,7 +485,7 @@ def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs
             tex = hit_tex[b]
             if tex >= 0:
                 albedo = _sample(texels, levels, level_count, wraps, tex, hit_uv[b, 0],
-                                 hit_uv[b, 1], hit_foot[b], hit_surface[b], bits)
+                                 hit_uv[b, 1], hit_foot[b], hit_surface[b])
                 out_grey[dest[first + b]] = albedo * hit_scale[b]
 
 
