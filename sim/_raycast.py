@@ -273,7 +273,7 @@ def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs
             wedges; angles: (M,) the angular size of the area each one stands for, rad.
         o, start, ids, quads ... grey_scale: as :func:`trace` takes them.
         dest: (M,) where in ``out_grey`` and ``out_depth`` ray p's results go.
-        out_grey, out_depth: outputs, written at ``dest``; out_label: (M,) output.
+        out_grey, out_depth: outputs, written at ``dest``; out_label: (M,) int32 output.
             Labels: a primitive's id, -1 the floor, -2 - j ceiling j, :data:`_LAMP` - i
             lamp i, :data:`_SKY` the sky.
     """
@@ -504,7 +504,7 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
 
     Args:
         pixels: (P,) flat indices of the valid pixels in the output images.
-        neighbours: (P, 4) int64 the valid pixels' indices (into ``pixels``) of their
+        neighbours: (P, 4) int32 the valid pixels' indices (into ``pixels``) of their
             right, lower, left and upper neighbours; all four -1 where one of them is
             not valid (such a pixel is never anti-aliased). Fixed for a camera.
         rays_c: (P, 3) unit bearings of the valid pixels, camera frame.
@@ -518,7 +518,7 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
         light: (values, origin, res) of the light map.
         sky: (horizon, zenith) grey; sun_w: (2,) unit direction to the sun on the plan.
         grey_scale: grey of a 128-albedo surface under light 1, divided by 128.
-        work: two (P,) int64 scratch arrays (the pixels' labels, the edge pixels),
+        work: two (P,) int32 scratch arrays (the pixels' labels, the edge pixels),
             reused from frame to frame (no page faults on fresh memory every frame).
         out_grey, out_depth: (H * W,) float32 outputs, written at ``pixels``: grey (may
             exceed 255: lamps, sky) and distance along the ray, m (inf: sky).
@@ -555,7 +555,7 @@ def trace(pixels, neighbours, rays_c, pix_wedge, pix_angle, sub_c, sub_wedge_c, 
             m += 1
     sub_grey = np.empty(m, np.float32)
     sub_depth = np.empty(m, np.float32)
-    sub_label = np.empty(m, np.int64)
+    sub_label = np.empty(m, np.int32)
     shade_rays(sub, R, sub_wedge, sub_angle, o, start, ids, quads, flats, cyls, sphs, planes,
                lamps, textures, light, sky, sun_w, grey_scale, np.arange(m), sub_grey,
                sub_depth, sub_label)
