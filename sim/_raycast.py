@@ -1,6 +1,7 @@
 """The per-pixel ray kernel: nearest surface, textured, lit (numba, compiled once to disk).
 
-Two steps per frame, both on one core:
+Two steps per frame, the second spread over the CPUs (numba's threads, the batches
+of rays split between them: :func:`sim.renderer.set_render_threads`):
 
 1. :func:`bin_primitives`: the azimuths around the robot are cut into ``W`` wedges
    (fixed to the robot's heading). Each primitive facing the camera is listed in
@@ -19,7 +20,8 @@ Two steps per frame, both on one core:
    dependent steps (mip level, texel address, texel reads, blends); in the short loop
    the processor works on several rays' chains at once, where one long loop body per
    ray left it waiting on each (the batches took a frame's main pass from 14.9 to
-   13.6 ms, the same image).
+   13.6 ms, the same image). Each batch writes only its own rays' outputs, so the
+   image does not depend on how the batches are shared between threads.
 
 Primitive ids: vertical quads ``[0, Q)``, horizontal quads ``[Q, Q+F)``, cylinders,
 then spheres (see :mod:`sim.surfaces` for what they are).
@@ -261,7 +263,7 @@ def _light(values, origin, inv_res, x, y):
     return top * (1 - ay) + bottom * ay
 
 
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST, parallel=True)
 def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs, planes, lamps,
                textures, light, sky, sun_w, grey_scale, dest, out_grey, out_depth, out_label):
     """Grey, distance and label of the surface each world ray meets first (in batches:
@@ -300,13 +302,14 @@ def shade_rays(rays_c, R, wedge, angles, o, start, ids, quads, flats, cyls, sphs
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
     r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
     rays = rays_c.shape[0]
-    hit_tex = np.empty(_BATCH, np.int64)
-    hit_surface = np.empty(_BATCH, np.int64)
-    hit_uv = np.empty((_BATCH, 2))
-    hit_foot = np.empty(_BATCH)
-    hit_scale = np.empty(_BATCH)
-    for first in range(0, rays, _BATCH):
+    for batch in numba.prange((rays + _BATCH - 1) // _BATCH):
+        first = batch * _BATCH
         count = min(_BATCH, rays - first)
+        hit_tex = np.empty(_BATCH, np.int64)
+        hit_surface = np.empty(_BATCH, np.int64)
+        hit_uv = np.empty((_BATCH, 2))
+        hit_foot = np.empty(_BATCH)
+        hit_scale = np.empty(_BATCH)
         for b in range(count):
             p = first + b
             ray_x, ray_y, ray_z = rays_c[p, 0], rays_c[p, 1], rays_c[p, 2]

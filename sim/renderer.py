@@ -30,8 +30,10 @@ in a world with landmark patches, the patches' centres.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -60,6 +62,21 @@ _RENDER_STREAM = 0x52454E44
 _CORNER_DEPTH_TOLERANCE = 0.05
 """A picture corner is in view when the depth image there is within this fraction of its
 distance (+ 2 cm) of it, m / m."""
+_KERNEL = threading.Lock()
+"""One frame at a time goes through the ray kernel in a process: its threads are shared
+(numba's default "workqueue" layer aborts the process on concurrent calls)."""
+
+
+def set_render_threads(count: int) -> None:
+    """Spread each frame's rays over ``count`` threads (default: one per usable CPU).
+
+    One per process where several rendering processes share the CPUs (a pool of
+    teaching drives) or where a benchmark measures one core; the image is the same.
+
+    Raises:
+        ValueError: ``count`` is below 1 or above the threads numba started.
+    """
+    numba.set_num_threads(count)
 
 
 @dataclass(frozen=True, eq=False)
@@ -243,20 +260,22 @@ class FisheyeRenderer:
         radiance = np.zeros(cam.height * cam.width, np.float32)
         depth = np.full(cam.height * cam.width, np.inf, np.float32)
         atlas, light = sc.atlas, sc.light
-        trace(
-            self._pixels, self._neighbours, self._rays_c, self._wedge, self._pix_angle,
-            self._sub_c, self._sub_wedge, R, o, start, ids,
-            (sc.quad_a, sc.quad_d, sc.quad_len, sc.quad_n, sc.quad_z, sc.quad_tex, sc.quad_uv,
-             sc.quad_shade, sc.quad_emit),
-            (sc.flat_c, sc.flat_ax, sc.flat_half, sc.flat_z, sc.flat_up, sc.flat_tex, sc.flat_uv),
-            (sc.cyl_c, sc.cyl_r, sc.cyl_z, sc.cyl_tex, sc.cyl_uv),
-            (sc.sph_c, sc.sph_r, sc.sph_tex, sc.sph_uv),
-            (sc.grid_origin, sc.floor_map, sc.floor_tex, sc.floor_uv, sc.ceil_lo, sc.ceil_hi,
-             sc.ceil_z, sc.ceil_tex, sc.ceil_uv),
-            (sc.lamp_map, sc.lamp_c, sc.lamp_ax, sc.lamp_half, sc.lamp_tex, sc.lamp_emit),
-            (atlas.texels, atlas.levels, atlas.level_count, atlas.wraps),
-            (light.values, light.origin, light.res_m),
-            sc.sky, sc.sun_w, self._brightness / 128.0, self._work, radiance, depth)
+        with _KERNEL:
+            trace(
+                self._pixels, self._neighbours, self._rays_c, self._wedge, self._pix_angle,
+                self._sub_c, self._sub_wedge, R, o, start, ids,
+                (sc.quad_a, sc.quad_d, sc.quad_len, sc.quad_n, sc.quad_z, sc.quad_tex, sc.quad_uv,
+                 sc.quad_shade, sc.quad_emit),
+                (sc.flat_c, sc.flat_ax, sc.flat_half, sc.flat_z, sc.flat_up, sc.flat_tex,
+                 sc.flat_uv),
+                (sc.cyl_c, sc.cyl_r, sc.cyl_z, sc.cyl_tex, sc.cyl_uv),
+                (sc.sph_c, sc.sph_r, sc.sph_tex, sc.sph_uv),
+                (sc.grid_origin, sc.floor_map, sc.floor_tex, sc.floor_uv, sc.ceil_lo, sc.ceil_hi,
+                 sc.ceil_z, sc.ceil_tex, sc.ceil_uv),
+                (sc.lamp_map, sc.lamp_c, sc.lamp_ax, sc.lamp_half, sc.lamp_tex, sc.lamp_emit),
+                (atlas.texels, atlas.levels, atlas.level_count, atlas.wraps),
+                (light.values, light.origin, light.res_m),
+                sc.sky, sc.sun_w, self._brightness / 128.0, self._work, radiance, depth)
         return radiance.reshape(cam.height, cam.width), depth.reshape(cam.height, cam.width)
 
     def _picture_corners(

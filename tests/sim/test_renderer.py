@@ -2,9 +2,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
 from pathlib import Path
 
 import cv2
+import numba
 import numpy as np
 import pytest
 
@@ -16,7 +18,7 @@ from sim._geometry import segments_cross
 from sim.config import EmulatorConfig, PeopleConfig, RenderConfig, SensorConfig, SimConfig
 from sim.decor import PlacedObject
 from sim.pioneer.sonar import SonarRing
-from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam
+from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam, set_render_threads
 from sim.simulation import Simulation
 from sim.topdown import _FURNITURE, MapCanvas, draw_topdown
 from sim.world import LandmarkDensity, World, load_world
@@ -214,6 +216,34 @@ class TestNoise:
         gains = [renderer.illumination_gain(t * 10**9) for t in range(0, 40)]
         assert max(gains) <= 1.2 + 1e-12 and min(gains) >= 0.8 - 1e-12
         assert max(gains) - min(gains) > 0.3
+
+
+class TestRenderThreads:
+    def test_the_image_does_not_depend_on_the_threads_or_on_concurrent_callers(self) -> None:
+        if numba.config.NUMBA_NUM_THREADS < 2:
+            pytest.skip("numba started one thread: nothing to share")
+        _, renderer = make(dataclasses.replace(SimConfig(), sensor=SensorConfig.ideal()),
+                           CORRIDOR)
+        T = camera_pose_world(CORRIDOR, renderer.mount)
+        try:
+            set_render_threads(1)
+            alone = renderer.trace(T, CORRIDOR.yaw_rad)
+            set_render_threads(2)
+            shared = renderer.trace(T, CORRIDOR.yaw_rad)
+        finally:
+            set_render_threads(numba.config.NUMBA_NUM_THREADS)
+        results: list[tuple[np.ndarray, np.ndarray]] = []
+        callers = [threading.Thread(
+            target=lambda: results.append(renderer.trace(T, CORRIDOR.yaw_rad)))
+            for _ in range(3)]
+        for caller in callers:
+            caller.start()
+        for caller in callers:
+            caller.join()
+        assert len(results) == 3
+        for grey, depth in [shared, *results]:
+            np.testing.assert_array_equal(grey, alone[0])
+            np.testing.assert_array_equal(depth, alone[1])
 
 
 class TestObjectsPlacedWhileRunning:

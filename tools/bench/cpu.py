@@ -6,8 +6,8 @@ import os
 
 
 def pin_to_one_core() -> list[int]:
-    """Pin this process to one CPU, with one OpenCV thread and one BLAS thread; returns the
-    CPU set.
+    """Pin this process to one CPU, with one OpenCV thread, one BLAS thread and one
+    rendering thread; returns the CPU set.
 
     The BLAS limit matters: OpenBLAS starts one thread per CPU when numpy is imported,
     and its threads spin while they wait, so two of them sharing the pinned CPU made a
@@ -17,8 +17,11 @@ def pin_to_one_core() -> list[int]:
     import cv2
     from threadpoolctl import threadpool_limits
 
+    from sim.renderer import set_render_threads
+
     cpu = min(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpu})
     cv2.setNumThreads(1)
     threadpool_limits(limits=1)
+    set_render_threads(1)
     return sorted(os.sched_getaffinity(0))

@@ -246,7 +246,7 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
     """:func:`teach_in_sim` for each of ``routes``, in their order: in this process when
     one route or one CPU, else in a pool of processes (spawned: this process may hold
     threads), one per CPU this process may use, at most one per route, the longest
-    routes first so that the pool ends together.
+    routes first so that the pool ends together; each renders on one thread.
 
     Raises:
         InputError: a drive did not reach its route's end (the first such route's).
@@ -254,7 +254,10 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
     workers = min(len(routes), len(os.sched_getaffinity(0)))
     if workers <= 1:
         return [teach_in_sim(world, route, config, sim_config, camera) for route in routes]
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    from sim.renderer import set_render_threads
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=set_render_threads, initargs=(1,)) as pool:
         longest_first = sorted(routes, key=lambda route: -route.length_m)
         drives = {route.name: pool.submit(teach_in_sim, world, route, config, sim_config,
                                           camera) for route in longest_first}
