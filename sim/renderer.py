@@ -45,13 +45,13 @@ from sim._atlas import Atlas
 from sim._patches import NEAR_M, PatchPainter
 from sim._raycast import bin_primitives, sub_rays, trace
 from sim.camera_effects import CameraEffects, camera_motion
-from sim.config import RenderConfig, SensorConfig
+from sim.config import RenderConfig, SensorConfig, SimConfig
 from sim.landmarks import LandmarkField
 from sim.person_figure import PersonFigures
 from sim.simulation import Simulation
 from sim.surfaces import Scene, build_scene, with_objects
 from sim.texture_library import TextureLibrary
-from sim.world import World
+from sim.world import World, load_world
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -77,6 +77,19 @@ def set_render_threads(count: int) -> None:
         ValueError: ``count`` is below 1 or above the threads numba started.
     """
     numba.set_num_threads(count)
+
+
+def compile_kernels() -> None:
+    """Compile the ray and light kernels into numba's cache on disk (``sim/__pycache__``)
+    by rendering one frame of the default world; ``make``'s set-up runs it once.
+
+    Processes started later load the compiled kernels at once; without the cache the
+    first frame of each process takes about 14 s (each worker of a parallel teach
+    compiles its own).
+    """
+    config = SimConfig()
+    sim = Simulation(load_world(config.world), config)
+    FisheyeRenderer.for_simulation(sim, CameraModel.default()).render(sim)
 
 
 @dataclass(frozen=True, eq=False)
