@@ -372,6 +372,7 @@ class SimConfig:
     ``[camera.mount]``, never under ``[sim]``)."""
 
     def __post_init__(self) -> None:
+        require(self.seed >= 0, f"seed must be >= 0, got {self.seed}")
         require(self.physics_dt_ns > 0, f"physics_dt_ns must be > 0, got {self.physics_dt_ns}")
         require(
             self.frame_period_ns >= self.physics_dt_ns,

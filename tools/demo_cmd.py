@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
+from tools.arg_types import KEY_IMAGE, POSITIVE
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.harness.scene_args import (
     add_change_arguments,
@@ -56,9 +57,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       "the usual offset")
     demo.add_argument("--routes", default=None, metavar="A,B,...",
                       help="routes to teach, in order [default: all the world's, in its order]")
-    demo.add_argument("--goal", type=int, default=None, metavar="ID",
+    demo.add_argument("--goal", type=KEY_IMAGE, default=None, metavar="ID",
                       help="goal key image [default: the middle of the second route]")
-    demo.add_argument("--max-omega-deg", type=float, default=DEMO_MAX_OMEGA_DEG, metavar="DEG",
+    demo.add_argument("--max-omega-deg", type=POSITIVE, default=DEMO_MAX_OMEGA_DEG, metavar="DEG",
                       help="bound on the turn rate, deg/s [default: %(default)s; the paper's "
                       "10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
     demo.add_argument("--law", choices=CONTROL_LAWS, default=DEMO_LAW,

@@ -34,6 +34,7 @@ from tools import (
     ground_stop_cmd,
     ground_teach_cmd,
 )
+from tools.arg_types import KEY_IMAGE, POSITIVE, SYSTEM_ID
 
 if TYPE_CHECKING:
     from ground.station import GroundStation
@@ -56,14 +57,14 @@ def add_parser(subparsers: Subparsers) -> None:
     ground.add_argument("--connect", metavar="URL",
                         help="udpin:HOST:PORT or udpout:HOST:PORT (default "
                              "udpin:0.0.0.0:14550 with --key, else udpin:127.0.0.1:14550)")
-    ground.add_argument("--system", type=int, metavar="N",
+    ground.add_argument("--system", type=SYSTEM_ID, metavar="N",
                         help="the vehicle's system id (default: the first one heard)")
     ground.add_argument("--key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing key file (32 raw bytes, 64 hex digits "
                              "or a passphrase; `vmnav ground keygen FILE` makes one)")
     ground.add_argument("--insecure", action="store_true",
                         help="allow an unsigned --connect link open to the network")
-    ground.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT_S, metavar="S",
+    ground.add_argument("--timeout", type=POSITIVE, default=DEFAULT_TIMEOUT_S, metavar="S",
                         help=f"wait this long for the vehicle, s (default {DEFAULT_TIMEOUT_S:g})")
     ground.add_argument("--log", type=Path, metavar="DIR",
                         help="log every MAVLink packet in and out to DIR/ground-NNNN.mcap "
@@ -73,17 +74,18 @@ def add_parser(subparsers: Subparsers) -> None:
     sub.add_parser("status", help="vehicles seen, mode, battery, mission state"
                    ).set_defaults(action=run_status)
     watch = sub.add_parser("watch", help="live telemetry lines until Ctrl-C")
-    watch.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    watch.add_argument("--duration", type=POSITIVE, metavar="S", help="stop after S seconds")
     watch.set_defaults(action=run_watch)
     ground_memory_cmd.add_parser(sub)
     goto = sub.add_parser("goto", help="drive to a key image, or to where a photo was taken",
                           description="Upload a one-goal mission and start it, or upload a "
                           "photo and ask the robot to localize it and go there.")
-    goto.add_argument("goal_key", type=int, nargs="?", metavar="KEY", help="goal key image id")
+    goto.add_argument("goal_key", type=KEY_IMAGE, nargs="?", metavar="KEY",
+                      help="goal key image id")
     goto.add_argument("--image", type=Path, metavar="PHOTO", help="goal photo (JPEG, PNG...)")
     goto.add_argument("--wait", action="store_true",
                       help="wait for the outcome; exit code 0 reached, 1 not")
-    goto.add_argument("--wait-timeout", type=float, default=DEFAULT_WAIT_S, metavar="S",
+    goto.add_argument("--wait-timeout", type=POSITIVE, default=DEFAULT_WAIT_S, metavar="S",
                       help=f"give up waiting after S seconds (default {DEFAULT_WAIT_S:g})")
     goto.set_defaults(action=run_goto)
     ground_teach_cmd.add_parser(sub)

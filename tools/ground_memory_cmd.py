@@ -11,6 +11,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from tools.arg_types import KEY_IMAGE
+
 if TYPE_CHECKING:
     from ground.station import GroundStation
 
@@ -25,7 +27,7 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     memory_sub.add_parser("list", help="key images with a thumbnail").set_defaults(
         action=run_list)
     get = memory_sub.add_parser("get", help="download key image thumbnails (PNG)")
-    get.add_argument("ids", type=int, nargs="+", metavar="ID", help="key image ids")
+    get.add_argument("ids", type=KEY_IMAGE, nargs="+", metavar="ID", help="key image ids")
     get.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder to write to")
     get.set_defaults(action=run_get)
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from tools.arg_types import FINITE
+
 if TYPE_CHECKING:
     from ground.station import GroundStation
 
@@ -23,7 +25,7 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     param_get.set_defaults(action=run_get)
     param_set = params_sub.add_parser("set", help="set one parameter (persisted on the robot)")
     param_set.add_argument("name", metavar="NAME")
-    param_set.add_argument("value", type=float, metavar="VALUE")
+    param_set.add_argument("value", type=FINITE, metavar="VALUE")
     param_set.set_defaults(action=run_set)
 
 

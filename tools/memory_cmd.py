@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 
 from tools import memory_localize_cmd
+from tools.arg_types import KEY_IMAGE
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -56,8 +57,9 @@ def add_route_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: i
         "memory's paths and junctions from key image START to key image GOAL, and list it.",
     )
     route.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
-    route.add_argument("start", type=int, metavar="START", help="id of the key image to start from")
-    route.add_argument("goal", type=int, metavar="GOAL", help="id of the goal key image")
+    route.add_argument("start", type=KEY_IMAGE, metavar="START",
+                       help="id of the key image to start from")
+    route.add_argument("goal", type=KEY_IMAGE, metavar="GOAL", help="id of the goal key image")
     route.add_argument("--json", action="store_true", help="print the route as JSON")
     route.set_defaults(run=run_route)
 

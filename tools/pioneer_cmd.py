@@ -17,6 +17,7 @@ import math
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError, TransportError
+from tools.arg_types import FINITE, POSITIVE, POSITIVE_COUNT
 
 if TYPE_CHECKING:
     from robot.pioneer.driver import PioneerDriver
@@ -34,11 +35,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     parser.add_argument("--aria", metavar="URL",
                         help="pyserial URL: /dev/ttyUSB0, a pty path, socket://HOST:8101 "
                              "[default: the config's pioneer.url]")
-    parser.add_argument("--baud", type=int, metavar="N",
+    parser.add_argument("--baud", type=POSITIVE_COUNT, metavar="N",
                         help="serial rate after the 9600 baud attempt [default: 38400]")
-    parser.add_argument("--drive", nargs=2, type=float, metavar=("V_M_S", "OMEGA_DEG_S"),
+    parser.add_argument("--drive", nargs=2, type=FINITE, metavar=("V_M_S", "OMEGA_DEG_S"),
                         help="drive at this speed (m/s) and turn rate (deg/s, left +)")
-    parser.add_argument("--duration", type=float, default=2.0, metavar="S",
+    parser.add_argument("--duration", type=POSITIVE, default=2.0, metavar="S",
                         help="how long to drive, s [default: 2]")
     parser.set_defaults(run=run_pioneer)
 

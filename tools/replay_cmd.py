@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError, VmnavError
+from tools.arg_types import NON_NEGATIVE
 
 if TYPE_CHECKING:
     from robot.replay import ReplayReport
@@ -47,7 +48,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     replay.add_argument("--config", metavar="FILE",
                         help="replay with this vmnav TOML config instead of each mission's "
                         "logged one (to see what a parameter change does)")
-    replay.add_argument("--tolerance", type=float, default=0.0, metavar="X",
+    replay.add_argument("--tolerance", type=NON_NEGATIVE, default=0.0, metavar="X",
                         help="numbers closer than this are equal (absolute, in their units) "
                         "[default: 0, exact]")
     replay.add_argument("--json", action="store_true", help="print the result as JSON")

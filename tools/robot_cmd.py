@@ -31,6 +31,7 @@ import time
 from pathlib import Path
 
 from shared.errors import InputError, TransportError
+from tools.arg_types import POSITIVE, SYSTEM_ID
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -61,7 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                         help="parameters set from the ground, uploaded goal photos and the "
                              "signing timestamps [default: %(default)s]")
     parser.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
-    parser.add_argument("--system", type=int, metavar="N",
+    parser.add_argument("--system", type=SYSTEM_ID, metavar="N",
                         help="MAVLink system id [default: the config's mavlink.system_id]")
     parser.add_argument("--key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing key file (vmnav ground keygen FILE makes one): "
@@ -75,7 +76,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                              "servo state, commands, odometry, SIPs, MAVLink in and out, events "
                              "[default: the config's log.output_dir]")
     parser.add_argument("--no-log", action="store_true", help="write no field log")
-    parser.add_argument("--duration", type=float, metavar="S",
+    parser.add_argument("--duration", type=POSITIVE, metavar="S",
                         help="stop after this long, s [default: until Ctrl-C or SIGTERM]")
     parser.set_defaults(run=run)
 

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from tools import sim_serve_cmd
+from tools.arg_types import FINITE
 from tools.harness.scene_args import add_change_arguments, scene_change_from_args
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
@@ -29,14 +30,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--out", required=True, type=Path, metavar="DIR", help="output folder (created)"
     )
     snap.add_argument(
-        "--x", type=float, metavar="M", help="robot x on the floor plan, m [default: world start]"
+        "--x", type=FINITE, metavar="M", help="robot x on the floor plan, m [default: world start]"
     )
     snap.add_argument(
-        "--y", type=float, metavar="M", help="robot y on the floor plan, m [default: world start]"
+        "--y", type=FINITE, metavar="M", help="robot y on the floor plan, m [default: world start]"
     )
     snap.add_argument(
         "--yaw",
-        type=float,
+        type=FINITE,
         metavar="DEG",
         help="robot heading, degrees CCW from +x [default: 0 with --x/--y]",
     )

@@ -15,6 +15,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from tools.arg_types import SEED
+
 
 def add_parser(vision_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav vision pair``."""
@@ -38,7 +40,7 @@ def add_parser(vision_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     pair.add_argument("--config", type=Path, metavar="FILE",
                       help="vmnav TOML config: the front end of its [features] table and the "
                            "matching of its [localize] table [default: the defaults]")
-    pair.add_argument("--seed", type=int, default=0, help="seed of RANSAC's samples [default: 0]")
+    pair.add_argument("--seed", type=SEED, default=0, help="seed of RANSAC's samples [default: 0]")
     pair.set_defaults(run=run)
 
 

@@ -9,6 +9,7 @@ from robot.config import load_config
 from shared.calibration import load_camera
 from shared.camera_model import CameraModel
 from sim.config import SimConfig, load_sim_config
+from tools.arg_types import COUNT, SEED
 
 
 def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
@@ -20,9 +21,9 @@ def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--world", help="built-in world (lab, campus) or a world TOML file [default: lab]"
     )
-    parser.add_argument("--seed", type=int, help="seed of every random draw [default: 1]")
+    parser.add_argument("--seed", type=SEED, help="seed of every random draw [default: 1]")
     parser.add_argument(
-        "--people", type=int, metavar="N", help="number of people walking about [default: 0]"
+        "--people", type=COUNT, metavar="N", help="number of people walking about [default: 0]"
     )
     parser.add_argument(
         "--camera", metavar="FILE", help="camera calibration JSON [default: 800x600, 185 deg]"
