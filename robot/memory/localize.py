@@ -37,6 +37,17 @@ each is verified geometrically:
    and Wyeth's SeqSLAM). Candidates are verified lazily, best possible support first
    with match counts standing in for the inliers of those not yet verified, until the
    best support is known exactly (branch and bound).
+4. **The walk along the path**: the fitted translation says on which side of the
+   winner the query lies (ahead or behind it along the key image's forward axis, up
+   to scale); the winner's path neighbours towards that side are verified one after
+   the other (at most ``bracket_steps``) until two consecutive ones bracket the query
+   (the first sees it ahead, the next behind), and the second, the first key image
+   ahead of the query, wins: the next one a robot there reaches on the path, where a
+   route from the answer starts (a route started at a key image the robot has just
+   passed begins with a target behind it). Forward views of a far scene give nearly
+   equal inliers over several key images, which put the most inliers 2-3 key images
+   ahead of the nearest in 5 of 200 ``campus`` views; the sign of the translation does
+   not fade with distance as the inlier counts' differences do.
 
 :meth:`Localizer.localize_exhaustive` applies the paper's rule (most matches) to
 every key image and verifies its winner, the baseline the benchmark compares speed
@@ -46,7 +57,7 @@ and answers with.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -112,14 +123,14 @@ class Localization:
     """Where a query image is in the memory.
 
     Attributes:
-        keyframe_id: the best candidate (accepted, then most path support); None when
-            there were no key images to compare with.
+        keyframe_id: the best candidate (accepted, then most path support, then the walk
+            along its path); None when there were no key images to compare with.
         matches: its number of matches (0 when ``keyframe_id`` is None).
         inliers: its verified inliers (0 when ``keyframe_id`` is None).
         ok: whether it passed the geometric verification (a localization).
-        candidates: the key images matched, best first: accepted ones by path
-            support, then by inliers, then by matches (equal ones in prefilter order;
-            all key images in id order for the exhaustive baseline).
+        candidates: the key images matched, best first: the walk's answer, then accepted
+            ones by path support, then by inliers, then by matches (equal ones in
+            prefilter order; all key images in id order for the exhaustive baseline).
         query_features: features found in the query.
     """
 
@@ -166,8 +177,8 @@ class Localizer:
         config: prefilter and verification parameters.
         seed: seeds the verification's RANSAC afresh for every query, so that one
             image always gets the same answer.
-        neighbours: each key image's neighbours on its path (the key images before and
-            after it), for the path support of step 3; None or missing ids: none.
+        places: each key image's place on its path, (path id, index along the path), for
+            the path support of step 3 and the walk of step 4; None or missing ids: none.
 
     Raises:
         ValueError: the three sequences differ in length, or a thumbnail has the wrong shape.
@@ -183,7 +194,7 @@ class Localizer:
         feature_config: FeatureConfig,
         config: LocalizeConfig,
         seed: int = 0,
-        neighbours: Mapping[int, Sequence[int]] | None = None,
+        places: Mapping[int, tuple[int, int]] | None = None,
     ) -> None:
         if not len(keyframe_ids) == len(thumbnails) == len(features):
             raise ValueError(
@@ -191,8 +202,9 @@ class Localizer:
                 f"{len(features)} feature sets: expected one of each per key image",
             )
         self._ids = tuple(int(i) for i in keyframe_ids)
-        self._neighbours = {int(i): tuple(int(j) for j in js)
-                            for i, js in (neighbours or {}).items()}
+        self._places = {int(i): (int(path), int(index))
+                        for i, (path, index) in (places or {}).items()}
+        self._at = {place: i for i, place in self._places.items()}
         self._features = tuple(features)
         self._camera = camera
         self._R_level_cam = rotation_level_cam(mount)
@@ -228,7 +240,7 @@ class Localizer:
             mount,
             feature_config,
             config,
-            neighbours=path_neighbours(memory),
+            places={k.id: (k.path_id, k.index) for k in keyframes},
         )
 
     @property
@@ -263,8 +275,8 @@ class Localizer:
         verifications: list[Verification | None] = [None] * count
         rng = np.random.default_rng(self._seed)
         position = {self._ids[k]: i for i, k in enumerate(best)}
-        around = [[position[j] for j in self._neighbours.get(self._ids[k], ())
-                   if j in position] for k in best]
+        around = [[position[j] for j in self._path_neighbours(self._ids[k]) if j in position]
+                  for k in best]
         weight = self._config.neighbour_weight
 
         def inliers(i: int, bound: bool) -> float:
@@ -296,12 +308,54 @@ class Localizer:
                 break
             for j in pending:
                 verifications[j] = self._verify(query, int(best[j]), matches[j], rng)
-        candidates = [
-            Candidate(self._ids[k], float(similarity[k]), len(m), v,
-                      support(i, False) if v is not None and v.accepted else math.nan)
-            for i, (k, m, v) in enumerate(zip(best, matches, verifications, strict=True))
-        ]
-        return _ranked(candidates, len(query))
+        def candidates() -> list[Candidate]:
+            return [Candidate(self._ids[k], float(similarity[k]), len(m), v,
+                              support(i, False) if v is not None and v.accepted else math.nan)
+                    for i, (k, m, v) in enumerate(zip(best, matches, verifications, strict=True))]
+
+        def verified(keyframe_id: int) -> Verification | None:
+            """A candidate's verification (verified now if it was not); None if not one."""
+            i = position.get(keyframe_id)
+            if i is None:
+                return None
+            if verifications[i] is None:
+                verifications[i] = self._verify(query, int(best[i]), matches[i], rng)
+            return verifications[i]
+
+        ranked = _ranked(candidates(), len(query))
+        if not ranked.ok or self._config.bracket_steps == 0:
+            return ranked
+        answer = self._walk(ranked.keyframe_id, verified)  # may verify more candidates
+        return _ranked(candidates(), len(query), first=answer)
+
+    def _path_neighbours(self, keyframe_id: int) -> list[int]:
+        """The key images before and after one on its path (none without its place)."""
+        place = self._places.get(keyframe_id)
+        if place is None:
+            return []
+        path, index = place
+        return [self._at[(path, j)] for j in (index - 1, index + 1) if (path, j) in self._at]
+
+    def _walk(self, winner: int, verified: Callable[[int], Verification | None]) -> int:
+        """Step 4: the first key image ahead of the query on ``winner``'s path (module
+        docstring); ``winner`` when no pair near it brackets the query."""
+        own = verified(winner)
+        if own is None or winner not in self._places or math.isnan(own.along):
+            return winner
+        path, index = self._places[winner]
+        step = 1 if own.along > 0 else -1
+        previous, previous_along = winner, own.along
+        for n in range(1, self._config.bracket_steps + 1):
+            k = self._at.get((path, index + step * n))
+            v = None if k is None else verified(k)
+            if k is None or v is None or not v.accepted:
+                break
+            if math.isnan(v.along):  # no translation: the query stands at k
+                return k
+            if (v.along > 0) != (previous_along > 0):
+                return previous if previous_along < 0 else k  # the one ahead of the query
+            previous, previous_along = k, v.along
+        return winner
 
     def localize_exhaustive(self, image: GreyImage) -> Localization:
         """The paper's rule over every key image: the one with the most matches (the baseline),
@@ -369,11 +423,14 @@ def verify_matches(
                            key.bearings[matches.idx_b] @ R.T, rng, config)
 
 
-def _ranked(candidates: Sequence[Candidate], query_features: int) -> Localization:
-    """The localization of verified candidates in prefilter order (see :class:`Localization`)."""
+def _ranked(candidates: Sequence[Candidate], query_features: int,
+            first: int | None = None) -> Localization:
+    """The localization of verified candidates in prefilter order (see :class:`Localization`),
+    key image ``first`` (the walk's answer) ahead of the ranking where given."""
     # sorted(reverse=True) is stable: equals keep the prefilter's order (the more similar first).
     ranked = sorted(candidates, key=lambda c: (
-        c.accepted, c.support if c.accepted and not math.isnan(c.support) else c.inliers,
+        c.keyframe_id == first, c.accepted,
+        c.support if c.accepted and not math.isnan(c.support) else c.inliers,
         c.inliers, c.matches), reverse=True)
     winner = ranked[0]
     return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
@@ -435,16 +492,6 @@ def _unit(rows: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
     """Rows scaled to unit norm (all-zero rows stay zero)."""
     norms = np.linalg.norm(rows, axis=1, keepdims=True)
     return (rows / np.where(norms > 0, norms, 1.0)).astype(np.float32)
-
-
-def path_neighbours(memory: VisualMemory) -> dict[int, tuple[int, ...]]:
-    """Each key image's neighbours on its path: the key images before and after it."""
-    result: dict[int, tuple[int, ...]] = {}
-    for path in memory.paths.values():
-        ids = list(path.keyframe_ids)
-        for n, i in enumerate(ids):
-            result[i] = tuple(ids[m] for m in (n - 1, n + 1) if 0 <= m < len(ids))
-    return result
 
 
 def localize(

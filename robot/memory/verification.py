@@ -45,6 +45,9 @@ _ROTATION_SAMPLES = 64
 """2-point samples of :func:`rotation_only`: an all-inlier one with probability 0.9996
 at the lowest inlier ratio accepted, 0.35 (1 - (1 - 0.35^2)^64)."""
 
+_NO_TRANSLATION = 1e-9
+"""A fitted translation shorter than this on the level plane has no direction there."""
+
 #: Why a candidate was refused, in the order the tests are applied (``accepted`` when none).
 ACCEPTED = "accepted"
 TOO_FEW_MATCHES = "too few matches"
@@ -67,6 +70,10 @@ class Verification:
         tilt_deg: angle between the two level frames' vertical axes, degrees in
             [0, 180] (nan when not fitted).
         verdict: :data:`ACCEPTED` or the first test that failed.
+        along: where the query's centre lies from the key image's on the level plane:
+            the cosine of its direction from the key image's forward axis, in [-1, 1]
+            (> 0 ahead of the key image, < 0 behind; the scale is unknown, the side
+            is not); nan when the fit has no translation (a pure rotation, or no fit).
     """
 
     matches: int
@@ -75,6 +82,7 @@ class Verification:
     yaw_deg: float
     tilt_deg: float
     verdict: str
+    along: float = math.nan
 
     @property
     def accepted(self) -> bool:
@@ -185,7 +193,10 @@ def verdict_of_fit(fit: EpipolarFit, matches: int, config: LocalizeConfig) -> Ve
         verdict = TOO_MUCH_TILT
     else:
         verdict = ACCEPTED
-    return Verification(matches, inliers, ratio, yaw_deg, tilt_deg, verdict)
+    t = fit.t_b_a  # the query's centre seen from the key image, level frame (z forward)
+    level = math.hypot(float(t[0]), float(t[2]))
+    along = float(t[2]) / level if level > _NO_TRANSLATION else math.nan
+    return Verification(matches, inliers, ratio, yaw_deg, tilt_deg, verdict, along)
 
 
 def yaw_tilt_deg(R_b_a: np.ndarray) -> tuple[float, float]:

@@ -44,7 +44,6 @@ import numpy.typing as npt
 
 from robot.config import VmnavConfig
 from robot.memory import Localization, Localizer
-from robot.memory.localize import path_neighbours
 from robot.vision.front_end import make_front_end
 from shared.camera_model import CameraModel
 from shared.errors import ConfigError
@@ -244,11 +243,10 @@ def replicated_localizer(
     keyframes = [memory.keyframes[i] for i in sorted(memory.keyframes)]
     chosen = [keyframes[k % len(keyframes)] for k in range(size)]
     front_end = make_front_end(config.features, memory.camera)
-    # New ids k and k +- 1 are path neighbours where their key images are.
-    originals = path_neighbours(memory)
-    neighbours = {k: tuple(j for j in (k - 1, k + 1) if 0 <= j < size
-                           and chosen[j].id in originals.get(chosen[k].id, ()))
-                  for k in range(size)}
+    # Each copy of the memory's paths is a path of its own.
+    copy_paths = max(memory.paths) + 1
+    places = {k: ((k // len(keyframes)) * copy_paths + chosen[k].path_id, chosen[k].index)
+              for k in range(size)}
     return Localizer(
         list(range(size)),
         [k.thumbnail for k in chosen],
@@ -257,7 +255,7 @@ def replicated_localizer(
         config.camera.mount,
         config.features,
         config.localize,
-        neighbours=neighbours,
+        places=places,
     )
 
 

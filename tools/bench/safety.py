@@ -137,6 +137,8 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
                     "waits": sum(1 for e in run.result.events if e.reason == "obstacle"),
                 }
             rows.append(row)
+            print(f"vmnav bench safety: {world} seed {seed}: {json.dumps(row)}", file=sys.stderr,
+                  flush=True)
         with_rows = [r["with"] for r in rows]
         deltas = [r["with"]["lateral_rms_m"] - r["without"]["lateral_rms_m"] for r in rows
                   if r["with"]["lateral_rms_m"] is not None

@@ -215,3 +215,82 @@ class TestPathSupport:
         assert result.ok and result.keyframe_id == 3
         # Those whose match counts could beat 40 inliers are verified, most matches first.
         assert verified == [3, 8, 9, 10]
+
+
+class TestWalkAlongThePath:
+    """Step 4: from the winner, towards the side the query lies on, to the first key image
+    ahead of the query."""
+
+    def scripted(self, places: list[Place], memory: VisualMemory, inliers: dict[int, int],
+                 along: dict[int, float], monkeypatch: pytest.MonkeyPatch,
+                 steps: int = 3) -> tuple[Localizer, list[int]]:
+        from robot.memory.verification import ACCEPTED, TOO_FEW_INLIERS, Verification
+        from robot.vision.matching import Matches
+
+        config = dataclasses.replace(CONFIG, candidates=len(places), bracket_steps=steps)
+        localizer = Localizer.from_memory(memory, MOUNT, FEATURES, config)
+        verified: list[int] = []
+        ids = localizer.keyframe_ids
+
+        def match(query: object, key: object, matching: object) -> Matches:
+            k = next(i for i, f in zip(ids, localizer._features, strict=True) if f is key)
+            n = inliers.get(k, 10) + 5
+            return Matches(np.arange(n), np.arange(n), np.ones(n))
+
+        def verify(query: object, k: int, matches: Matches, rng: object) -> Verification:
+            keyframe_id = ids[k]
+            verified.append(keyframe_id)
+            n = inliers.get(keyframe_id, 0)
+            return Verification(len(matches), n, n / len(matches), 0.0, 0.0,
+                                ACCEPTED if n else TOO_FEW_INLIERS,
+                                along.get(keyframe_id, math.nan))
+
+        monkeypatch.setattr(localizer._front_end, "match", match)
+        monkeypatch.setattr(localizer, "_verify", verify)
+        return localizer, verified
+
+    # Path "a" holds key images 0-6 in order. The query lies between 3 and 4; 5, the
+    # second key image ahead of it, has the most inliers.
+    INLIERS: ClassVar[dict[int, int]] = {2: 25, 3: 30, 4: 35, 5: 40}
+    ALONG: ClassVar[dict[int, float]] = {2: 0.8, 3: 0.2, 4: -0.6, 5: -0.9}
+
+    def test_the_walk_goes_back_to_the_first_key_image_ahead_of_the_query(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, verified = self.scripted(places, memory, self.INLIERS, self.ALONG,
+                                            monkeypatch)
+        result = localizer.localize(places[3].query)
+        assert result.ok and result.keyframe_id == 4 and result.inliers == 35
+        assert result.candidates[0].keyframe_id == 4
+        assert result.candidates[1].keyframe_id == 5  # then the ranking by inliers
+        assert verified[-2:] == [4, 3] and 2 not in verified
+
+    def test_a_query_ahead_of_the_winner_is_walked_forward(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        # Mirror: 1 has the most inliers and sees the query ahead; it lies between 2 and 3.
+        inliers = {1: 40, 2: 35, 3: 30}
+        along = {1: 0.9, 2: 0.5, 3: -0.1}
+        localizer, _ = self.scripted(places, memory, inliers, along, monkeypatch)
+        assert localizer.localize(places[3].query).keyframe_id == 3
+
+    @pytest.mark.parametrize(("change", "steps"), [
+        ({"inliers": {4: 0}}, 3),      # the next key image towards the query is refused
+        ({"along": {5: math.nan}}, 3),  # the winner's fit has no translation: it stands there
+        ({}, 1),                        # one step finds no change of side
+        ({}, 0),                        # the walk is off
+    ])
+    def test_without_a_bracketing_pair_the_winner_stays(
+            self, places: list[Place], memory: VisualMemory, monkeypatch: pytest.MonkeyPatch,
+            change: dict[str, dict[int, float]], steps: int) -> None:
+        inliers = {**self.INLIERS, **change.get("inliers", {})}
+        along = {**self.ALONG, **change.get("along", {})}
+        localizer, _ = self.scripted(places, memory, inliers, along, monkeypatch, steps)
+        assert localizer.localize(places[3].query).keyframe_id == 5
+
+    def test_a_neighbour_without_translation_is_where_the_query_stands(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, _ = self.scripted(places, memory, self.INLIERS,
+                                     {**self.ALONG, 4: math.nan}, monkeypatch)
+        assert localizer.localize(places[3].query).keyframe_id == 4

@@ -88,6 +88,17 @@ class TestVerifyBearings:
         assert result.verdict == ACCEPTED
         assert 95 <= result.inliers <= 105
         assert result.yaw_deg == pytest.approx(10.0, abs=0.5)
+        assert math.isnan(result.along)  # no translation: no side
+
+    @pytest.mark.parametrize("heading_deg", [30.0, 100.0, 160.0, -60.0])
+    def test_along_is_the_side_the_query_lies_on(self, heading_deg: float,
+                                                 rng: np.random.Generator) -> None:
+        # The query's centre is at heading_deg from the key image's forward axis.
+        R, t = planar_motion(5.0, heading_deg)
+        fa, fb = matched_bearings(rng, R, t, n=100)
+        result = verify_bearings(fa, fb, rng, CONFIG)
+        assert result.accepted
+        assert result.along == pytest.approx(math.cos(math.radians(heading_deg)), abs=0.05)
 
     def test_random_matches_are_refused(self, rng: np.random.Generator) -> None:
         fa, fb = _unit(rng.normal(size=(200, 3))), _unit(rng.normal(size=(200, 3)))
