@@ -17,6 +17,7 @@ anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import logging
 import os
 import signal
@@ -51,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
         "(Courbon et al. 2008).",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {importlib.metadata.version('vmnav')}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in COMMANDS:
         module.add_parser(sub)

@@ -145,3 +145,12 @@ def test_help_lists_only_working_commands(capsys: pytest.CaptureFixture[str]) ->
     ]
     assert listed == ["sim", "calibrate", "bench", "memory", "teach", "demo", "pioneer", "robot",
                       "log", "replay", "ground", "vision"]
+
+
+def test_version_is_the_installed_package_s(capsys: pytest.CaptureFixture[str]) -> None:
+    import importlib.metadata
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out == f"vmnav {importlib.metadata.version('vmnav')}\n"
