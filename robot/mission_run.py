@@ -309,16 +309,18 @@ class MissionRun:
         self._events.append(AppEvent(t_ns, "localization", "ok", found.detail))
         goal_id = self._mission.goal_id
         assert goal_id is not None  # set by Start
-        route = self._memory.plan_route(found.keyframe_id, goal_id)
+        start = found.ahead_id  # the first key image ahead: the route's first target
+        assert start is not None  # set with keyframe_id
+        route = self._memory.plan_route(start, goal_id)
         if not route:
-            self._feed(NoRoute(t_ns, f"no route from key image {found.keyframe_id} to "
+            self._feed(NoRoute(t_ns, f"no route from key image {start} to "
                                      f"goal key image {goal_id} in the memory graph"))
             return found
         self._route = tuple(route)
         self._follower = RouteFollower(self._memory, route, self._follower_config, self._rng,
                                        t_ns, base)
         self._reached = 0
-        self._feed(Localized(t_ns, found.keyframe_id, found.matches))
+        self._feed(Localized(t_ns, start, found.matches))
         return found
 
     def _follow(self, t_ns: int, image: npt.NDArray[np.uint8], base: BaseState,

@@ -41,10 +41,11 @@ each is verified geometrically:
    winner the query lies (ahead or behind it along the key image's forward axis, up
    to scale); the winner's path neighbours towards that side are verified one after
    the other (at most ``bracket_steps``) until two consecutive ones bracket the query
-   (the first sees it ahead, the next behind), and the second, the first key image
-   ahead of the query, wins: the next one a robot there reaches on the path, where a
-   route from the answer starts (a route started at a key image the robot has just
-   passed begins with a target behind it). Forward views of a far scene give nearly
+   (the first sees it ahead, the next behind). Of the two, the one the query lies more
+   beside than along is the answer (the nearest along the path), and the second, the
+   first key image ahead of the query, is where a route from it starts
+   (``Localization.ahead_id``: a route started at a key image the robot is level with
+   begins with a target the follower cannot see ahead). Forward views of a far scene give nearly
    equal inliers over several key images, which put the most inliers 2-3 key images
    ahead of the nearest in 5 of 200 ``campus`` views; the sign of the translation does
    not fade with distance as the inlier counts' differences do.
@@ -124,7 +125,8 @@ class Localization:
 
     Attributes:
         keyframe_id: the best candidate (accepted, then most path support, then the walk
-            along its path); None when there were no key images to compare with.
+            along its path to the nearest); None when there were no key images to compare
+            with.
         matches: its number of matches (0 when ``keyframe_id`` is None).
         inliers: its verified inliers (0 when ``keyframe_id`` is None).
         ok: whether it passed the geometric verification (a localization).
@@ -132,6 +134,10 @@ class Localization:
             ones by path support, then by inliers, then by matches (equal ones in
             prefilter order; all key images in id order for the exhaustive baseline).
         query_features: features found in the query.
+        ahead_id: the first key image ahead of the query on ``keyframe_id``'s path, where
+            a route from the query starts (the walk of step 4): ``keyframe_id`` itself, or
+            its next key image when the query lies between the two; None with
+            ``keyframe_id``.
     """
 
     keyframe_id: int | None
@@ -140,6 +146,7 @@ class Localization:
     ok: bool
     candidates: tuple[Candidate, ...]
     query_features: int
+    ahead_id: int | None = None
 
     @property
     def verdict(self) -> str:
@@ -308,6 +315,7 @@ class Localizer:
                 break
             for j in pending:
                 verifications[j] = self._verify(query, int(best[j]), matches[j], rng)
+
         def candidates() -> list[Candidate]:
             return [Candidate(self._ids[k], float(similarity[k]), len(m), v,
                               support(i, False) if v is not None and v.accepted else math.nan)
@@ -325,8 +333,8 @@ class Localizer:
         ranked = _ranked(candidates(), len(query))
         if not ranked.ok or self._config.bracket_steps == 0:
             return ranked
-        answer = self._walk(ranked.keyframe_id, verified)  # may verify more candidates
-        return _ranked(candidates(), len(query), first=answer)
+        nearest, ahead = self._walk(ranked.keyframe_id, verified)  # may verify more candidates
+        return _ranked(candidates(), len(query), first=nearest, ahead=ahead)
 
     def _path_neighbours(self, keyframe_id: int) -> list[int]:
         """The key images before and after one on its path (none without its place)."""
@@ -336,12 +344,13 @@ class Localizer:
         path, index = place
         return [self._at[(path, j)] for j in (index - 1, index + 1) if (path, j) in self._at]
 
-    def _walk(self, winner: int, verified: Callable[[int], Verification | None]) -> int:
-        """Step 4: the first key image ahead of the query on ``winner``'s path (module
-        docstring); ``winner`` when no pair near it brackets the query."""
+    def _walk(self, winner: int,
+              verified: Callable[[int], Verification | None]) -> tuple[int, int]:
+        """Step 4: the key images of ``winner``'s path nearest the query and first ahead of
+        it (module docstring); ``winner`` twice when no pair near it brackets the query."""
         own = verified(winner)
         if own is None or winner not in self._places or math.isnan(own.along):
-            return winner
+            return winner, winner
         path, index = self._places[winner]
         step = 1 if own.along > 0 else -1
         previous, previous_along = winner, own.along
@@ -351,11 +360,13 @@ class Localizer:
             if k is None or v is None or not v.accepted:
                 break
             if math.isnan(v.along):  # no translation: the query stands at k
-                return k
+                return k, k
             if (v.along > 0) != (previous_along > 0):
-                return previous if previous_along < 0 else k  # the one ahead of the query
+                # Along-track nearer the one it lies more beside; the one ahead sees it behind.
+                nearest = previous if abs(previous_along) <= abs(v.along) else k
+                return nearest, previous if previous_along < 0 else k
             previous, previous_along = k, v.along
-        return winner
+        return winner, winner
 
     def localize_exhaustive(self, image: GreyImage) -> Localization:
         """The paper's rule over every key image: the one with the most matches (the baseline),
@@ -377,7 +388,7 @@ class Localizer:
         ]
         winner = candidates[k]
         return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
-                            tuple(candidates), len(query))
+                            tuple(candidates), len(query), winner.keyframe_id)
 
     def _verify(
         self, query: Features, k: int, matches: Matches, rng: np.random.Generator
@@ -424,9 +435,10 @@ def verify_matches(
 
 
 def _ranked(candidates: Sequence[Candidate], query_features: int,
-            first: int | None = None) -> Localization:
+            first: int | None = None, ahead: int | None = None) -> Localization:
     """The localization of verified candidates in prefilter order (see :class:`Localization`),
-    key image ``first`` (the walk's answer) ahead of the ranking where given."""
+    key image ``first`` (the walk's nearest) ahead of the ranking where given, and ``ahead``
+    the walk's first key image ahead (the winner where not given)."""
     # sorted(reverse=True) is stable: equals keep the prefilter's order (the more similar first).
     ranked = sorted(candidates, key=lambda c: (
         c.keyframe_id == first, c.accepted,
@@ -434,7 +446,8 @@ def _ranked(candidates: Sequence[Candidate], query_features: int,
         c.inliers, c.matches), reverse=True)
     winner = ranked[0]
     return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
-                        tuple(ranked), query_features)
+                        tuple(ranked), query_features,
+                        winner.keyframe_id if ahead is None else ahead)
 
 
 class _Prefilter:

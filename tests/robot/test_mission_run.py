@@ -120,3 +120,17 @@ def test_the_time_limit_aborts(memory) -> None:
     app, _ = make_app(memory, FakeBase())
     result = app.run(5, PERIOD_NS)
     assert result.state is MissionState.ABORTED and "time limit" in result.detail
+
+
+def test_the_route_starts_at_the_first_key_image_ahead_of_the_view(memory, monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    base = FakeBase()
+    app, _ = make_app(memory, base, count=2)
+    # Localized nearest key image 2, with 3 the first one ahead of the robot.
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image: Localization(2, 40, 30, True, (), 100, ahead_id=3))
+    result = app.run(5, 10**11)
+    localized = [e.detail for e in result.events if e.reason == "localized"]
+    assert localized and localized[0].endswith("at key image 3 (40 matches)")
+    assert app.mission._route[0] == 3

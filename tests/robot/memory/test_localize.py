@@ -254,25 +254,29 @@ class TestWalkAlongThePath:
     INLIERS: ClassVar[dict[int, int]] = {2: 25, 3: 30, 4: 35, 5: 40}
     ALONG: ClassVar[dict[int, float]] = {2: 0.8, 3: 0.2, 4: -0.6, 5: -0.9}
 
-    def test_the_walk_goes_back_to_the_first_key_image_ahead_of_the_query(
+    def test_the_walk_goes_back_to_the_pair_around_the_query(
             self, places: list[Place], memory: VisualMemory,
             monkeypatch: pytest.MonkeyPatch) -> None:
         localizer, verified = self.scripted(places, memory, self.INLIERS, self.ALONG,
                                             monkeypatch)
         result = localizer.localize(places[3].query)
-        assert result.ok and result.keyframe_id == 4 and result.inliers == 35
-        assert result.candidates[0].keyframe_id == 4
+        # 3 and 4 bracket it: nearer 3 along the path (|0.2| < |-0.6|), and 4 is ahead.
+        assert result.ok and result.keyframe_id == 3 and result.inliers == 30
+        assert result.ahead_id == 4
+        assert result.candidates[0].keyframe_id == 3
         assert result.candidates[1].keyframe_id == 5  # then the ranking by inliers
         assert verified[-2:] == [4, 3] and 2 not in verified
 
     def test_a_query_ahead_of_the_winner_is_walked_forward(
             self, places: list[Place], memory: VisualMemory,
             monkeypatch: pytest.MonkeyPatch) -> None:
-        # Mirror: 1 has the most inliers and sees the query ahead; it lies between 2 and 3.
+        # Mirror: 1 has the most inliers and sees the query ahead; it lies between 2 and 3,
+        # nearer 3.
         inliers = {1: 40, 2: 35, 3: 30}
         along = {1: 0.9, 2: 0.5, 3: -0.1}
         localizer, _ = self.scripted(places, memory, inliers, along, monkeypatch)
-        assert localizer.localize(places[3].query).keyframe_id == 3
+        result = localizer.localize(places[3].query)
+        assert (result.keyframe_id, result.ahead_id) == (3, 3)
 
     @pytest.mark.parametrize(("change", "steps"), [
         ({"inliers": {4: 0}}, 3),      # the next key image towards the query is refused
@@ -286,11 +290,13 @@ class TestWalkAlongThePath:
         inliers = {**self.INLIERS, **change.get("inliers", {})}
         along = {**self.ALONG, **change.get("along", {})}
         localizer, _ = self.scripted(places, memory, inliers, along, monkeypatch, steps)
-        assert localizer.localize(places[3].query).keyframe_id == 5
+        result = localizer.localize(places[3].query)
+        assert (result.keyframe_id, result.ahead_id) == (5, 5)
 
     def test_a_neighbour_without_translation_is_where_the_query_stands(
             self, places: list[Place], memory: VisualMemory,
             monkeypatch: pytest.MonkeyPatch) -> None:
         localizer, _ = self.scripted(places, memory, self.INLIERS,
                                      {**self.ALONG, 4: math.nan}, monkeypatch)
-        assert localizer.localize(places[3].query).keyframe_id == 4
+        result = localizer.localize(places[3].query)
+        assert (result.keyframe_id, result.ahead_id) == (4, 4)
