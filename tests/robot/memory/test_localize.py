@@ -166,6 +166,36 @@ def test_localize_config_is_validated() -> None:
         from_mapping(VmnavConfig, {"localize": {"prefilter_window_px": 4}}, "f.toml")
 
 
+def scripted_localizer(memory: VisualMemory, config: LocalizeConfig, inliers: dict[int, int],
+                       along: dict[int, float], monkeypatch: pytest.MonkeyPatch
+                       ) -> tuple[Localizer, list[int]]:
+    """A localizer whose matching and verification are scripted per key image: ``inliers``
+    (accepted when not 0; 5 more matches) and ``along`` (nan when not given); the list
+    collects the key images verified, in order."""
+    from robot.memory.verification import ACCEPTED, TOO_FEW_INLIERS, Verification
+    from robot.vision.matching import Matches
+
+    localizer = Localizer.from_memory(memory, MOUNT, FEATURES, config)
+    verified: list[int] = []
+    ids = localizer.keyframe_ids
+
+    def match(query: object, key: object, matching: object) -> Matches:
+        k = next(i for i, f in zip(ids, localizer._features, strict=True) if f is key)
+        n = inliers.get(k, 10) + 5
+        return Matches(np.arange(n), np.arange(n), np.ones(n))
+
+    def verify(query: object, k: int, matches: Matches, rng: object) -> Verification:
+        keyframe_id = ids[k]
+        verified.append(keyframe_id)
+        n = inliers.get(keyframe_id, 0)
+        return Verification(len(matches), n, n / len(matches), 0.0, 0.0,
+                            ACCEPTED if n else TOO_FEW_INLIERS, along.get(keyframe_id, math.nan))
+
+    monkeypatch.setattr(localizer._front_end, "match", match)
+    monkeypatch.setattr(localizer, "_verify", verify)
+    return localizer, verified
+
+
 class TestPathSupport:
     """Step 3: among accepted key images, the one whose path neighbours agree wins."""
 
@@ -175,29 +205,8 @@ class TestPathSupport:
 
     def scripted(self, places: list[Place], memory: VisualMemory, weight: float,
                  monkeypatch: pytest.MonkeyPatch) -> tuple[Localizer, list[int]]:
-        from robot.memory.verification import ACCEPTED, TOO_FEW_INLIERS, Verification
-        from robot.vision.matching import Matches
-
         config = dataclasses.replace(CONFIG, candidates=len(places), neighbour_weight=weight)
-        localizer = Localizer.from_memory(memory, MOUNT, FEATURES, config)
-        verified: list[int] = []
-        ids = localizer.keyframe_ids
-
-        def match(query: object, key: object, matching: object) -> Matches:
-            k = next(i for i, f in zip(ids, localizer._features, strict=True) if f is key)
-            n = self.INLIERS.get(k, 10) + 5
-            return Matches(np.arange(n), np.arange(n), np.ones(n))
-
-        def verify(query: object, k: int, matches: Matches, rng: object) -> Verification:
-            keyframe_id = ids[k]
-            verified.append(keyframe_id)
-            inliers = self.INLIERS.get(keyframe_id, 0)
-            verdict = ACCEPTED if inliers else TOO_FEW_INLIERS
-            return Verification(len(matches), inliers, inliers / len(matches), 0.0, 0.0, verdict)
-
-        monkeypatch.setattr(localizer._front_end, "match", match)
-        monkeypatch.setattr(localizer, "_verify", verify)
-        return localizer, verified
+        return scripted_localizer(memory, config, self.INLIERS, {}, monkeypatch)
 
     def test_the_supported_key_image_wins(self, places: list[Place], memory: VisualMemory,
                                           monkeypatch: pytest.MonkeyPatch) -> None:
@@ -224,30 +233,8 @@ class TestWalkAlongThePath:
     def scripted(self, places: list[Place], memory: VisualMemory, inliers: dict[int, int],
                  along: dict[int, float], monkeypatch: pytest.MonkeyPatch,
                  steps: int = 3) -> tuple[Localizer, list[int]]:
-        from robot.memory.verification import ACCEPTED, TOO_FEW_INLIERS, Verification
-        from robot.vision.matching import Matches
-
         config = dataclasses.replace(CONFIG, candidates=len(places), bracket_steps=steps)
-        localizer = Localizer.from_memory(memory, MOUNT, FEATURES, config)
-        verified: list[int] = []
-        ids = localizer.keyframe_ids
-
-        def match(query: object, key: object, matching: object) -> Matches:
-            k = next(i for i, f in zip(ids, localizer._features, strict=True) if f is key)
-            n = inliers.get(k, 10) + 5
-            return Matches(np.arange(n), np.arange(n), np.ones(n))
-
-        def verify(query: object, k: int, matches: Matches, rng: object) -> Verification:
-            keyframe_id = ids[k]
-            verified.append(keyframe_id)
-            n = inliers.get(keyframe_id, 0)
-            return Verification(len(matches), n, n / len(matches), 0.0, 0.0,
-                                ACCEPTED if n else TOO_FEW_INLIERS,
-                                along.get(keyframe_id, math.nan))
-
-        monkeypatch.setattr(localizer._front_end, "match", match)
-        monkeypatch.setattr(localizer, "_verify", verify)
-        return localizer, verified
+        return scripted_localizer(memory, config, inliers, along, monkeypatch)
 
     # Path "a" holds key images 0-6 in order. The query lies between 3 and 4; 5, the
     # second key image ahead of it, has the most inliers.
