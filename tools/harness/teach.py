@@ -22,10 +22,12 @@ never imports sim/, sim/ never imports robot/):
 from __future__ import annotations
 
 import json
+import logging
 import multiprocessing
 import os
+import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -41,6 +43,8 @@ if TYPE_CHECKING:
     from shared.memory import VisualMemory
     from sim.config import SimConfig
     from sim.world import Route, World
+
+_log = logging.getLogger(__name__)
 
 #: The truth of a memory stored by :func:`teach_memory`, beside its ``memory`` folder.
 TRUTH_NAME = "teach.json"
@@ -248,20 +252,34 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
     threads), one per CPU this process may use, at most one per route, the longest
     routes first so that the pool ends together; each renders on one thread.
 
+    Each drive's end is logged as it comes (:func:`_announce`).
+
     Raises:
-        InputError: a drive did not reach its route's end (the first such route's).
+        InputError: a drive did not reach its route's end (the first to end so).
     """
     workers = min(len(routes), len(os.sched_getaffinity(0)))
+    started = time.monotonic()
     if workers <= 1:
-        return [teach_in_sim(world, route, config, sim_config, camera) for route in routes]
+        return [_announce(teach_in_sim(world, route, config, sim_config, camera), started)
+                for route in routes]
     from sim.renderer import set_render_threads
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
                              initializer=set_render_threads, initargs=(1,)) as pool:
         longest_first = sorted(routes, key=lambda route: -route.length_m)
-        drives = {route.name: pool.submit(teach_in_sim, world, route, config, sim_config,
-                                          camera) for route in longest_first}
-        return [drives[route.name].result() for route in routes]
+        drives = {pool.submit(teach_in_sim, world, route, config, sim_config, camera): route.name
+                  for route in longest_first}
+        taught = {drives[drive]: _announce(drive.result(), started)
+                  for drive in as_completed(drives)}
+        return [taught[route.name] for route in routes]
+
+
+def _announce(taught: TaughtRoute, started: float) -> TaughtRoute:
+    """Log that a route's drive ended (progress of a teach that takes minutes)."""
+    _log.info("teach: route %s driven: %d key images, %.1f m in %.1f s simulated (%.0f s "
+              "since the teach started)", taught.route.name, len(taught.key_images),
+              taught.route.length_m, taught.sim_time_s, time.monotonic() - started)
+    return taught
 
 
 def _truth_key(sim_config: SimConfig, route_names: list[str], camera: CameraModel,

@@ -4,6 +4,7 @@ memory or stored in a folder and reused."""
 from __future__ import annotations
 
 import json
+import logging
 import math
 from pathlib import Path
 
@@ -106,13 +107,20 @@ def test_unjoined_paths_in_memory_only(world: World) -> None:
 
 
 def test_routes_driven_in_parallel_give_the_memory_driven_one_after_another(
-        world: World, world_file: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        world: World, world_file: Path, monkeypatch: pytest.MonkeyPatch,
+        caplog: pytest.LogCaptureFixture) -> None:
     taught = {}
     for cpus in ({0}, {0, 1}):  # one CPU: this process; two: a pool of two processes
         monkeypatch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid, c=cpus: c)
-        taught[len(cpus)] = teach_memory(world, ["east_a", "east_b"], CONFIG,
-                                         SimConfig(world=str(world_file), seed=1), CAMERA,
-                                         join=True)
+        caplog.clear()
+        with caplog.at_level(logging.INFO, logger="tools.harness.teach"):
+            taught[len(cpus)] = teach_memory(world, ["east_a", "east_b"], CONFIG,
+                                             SimConfig(world=str(world_file), seed=1), CAMERA,
+                                             join=True)
+        # Each drive's end is announced as it comes (progress of a long teach).
+        announced = sorted(r.getMessage().split()[2] for r in caplog.records
+                           if r.getMessage().startswith("teach: route "))
+        assert announced == ["east_a", "east_b"]
     one, two = taught[1], taught[2]
     assert one.true_poses == two.true_poses and one.path_ids == two.path_ids
     assert one.memory.junctions == two.memory.junctions
