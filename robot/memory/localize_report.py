@@ -55,13 +55,14 @@ def localization_json(memory: VisualMemory, result: Localization) -> dict[str, A
         result: a localization in it.
 
     Returns:
-        ``keyframe_id``, ``ok``, ``verdict``, ``matches``, ``inliers``,
-        ``inlier_ratio``, ``query_features`` and ``candidates`` (best first, each
-        :func:`candidate_json`).
+        ``keyframe_id``, ``ahead_id`` (where a route from the query starts), ``ok``,
+        ``verdict``, ``matches``, ``inliers``, ``inlier_ratio``, ``query_features`` and
+        ``candidates`` (best first, each :func:`candidate_json`).
     """
     best = result.candidates[0] if result.candidates else None
     return {
         "keyframe_id": result.keyframe_id,
+        "ahead_id": result.ahead_id,
         "ok": result.ok,
         "verdict": result.verdict,
         "matches": result.matches,
@@ -89,6 +90,7 @@ def candidate_json(memory: VisualMemory, candidate: Candidate) -> dict[str, Any]
         "yaw_deg": None if v is None or math.isnan(v.yaw_deg) else round(v.yaw_deg, 2),
         "tilt_deg": None if v is None or math.isnan(v.tilt_deg) else round(v.tilt_deg, 2),
         "verdict": None if v is None else v.verdict,
+        "along": None if v is None or math.isnan(v.along) else round(v.along, 3),
     }
 
 

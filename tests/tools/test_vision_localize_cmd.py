@@ -57,10 +57,18 @@ def test_a_view_beside_the_route_is_localized(
     assert abs(best["distance_m"] - 1.1) <= 0.6
     assert best["inliers"] == report["inliers"] >= 20
     assert best["inlier_ratio"] >= 0.5 and abs(best["yaw_deg"]) < 20.0
-    # Every candidate is verified, best first.
+    # Where a route from the view starts: this key image or the next one, which sees the
+    # view behind it.
+    ahead = next(c for c in report["candidates"] if c["keyframe_id"] == report["ahead_id"])
+    assert ahead["path"] == "east_a" and ahead["index"] in (best["index"], best["index"] + 1)
+    assert ahead is best or ahead["along"] < 0
+    # Every candidate is verified; the answer (the walk along the path from the most
+    # inliers, within 3 key images of it) first, then the others by inliers.
     assert all(c["verdict"] is not None for c in report["candidates"])
-    ranked = [(c["verdict"] == "accepted", c["inliers"]) for c in report["candidates"]]
+    ranked = [(c["verdict"] == "accepted", c["inliers"]) for c in others]
     assert ranked == sorted(ranked, reverse=True)
+    most = max(report["candidates"], key=lambda c: c["inliers"])
+    assert most["path"] == best["path"] and abs(most["index"] - best["index"]) <= 3
     assert len(others) == min(20, report["keyframes"]) - 1
 
 
