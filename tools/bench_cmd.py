@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from tools import bench_safety_cmd
-from tools.arg_types import KEY_IMAGE, POSITIVE, POSITIVE_COUNT, SEED, SYSTEM_ID
+from tools.harness.arg_types import KEY_IMAGE, POSITIVE, POSITIVE_COUNT, SEED
 from tools.harness.scene_args import add_change_arguments
 from tools.harness.sim_args import add_sim_arguments
 
@@ -29,8 +29,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "frame on one core; check the camera model's round trip and agreement with cv2.omnidir.",
     )
     add_sim_arguments(sim)
-    sim.add_argument("--frames", type=POSITIVE_COUNT, default=300,
-                     help="frames to time [default: 300]")
+    sim.add_argument("--frames", type=POSITIVE_COUNT, default=300, help="frames [default: 300]")
     sim.set_defaults(run=runner("sim"))
     vision = bench_sub.add_parser(
         "vision",
@@ -45,9 +44,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     vision.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: all]")
     vision.add_argument("--quick", action="store_true",
                         help="few queries (12 state, 10 localization): a smoke run")
-    vision.add_argument("--state-queries", type=POSITIVE_COUNT, metavar="N",
+    vision.add_argument("--state-queries", type=int, metavar="N",
                         help="views for y/theta and frame time [default: 300]")
-    vision.add_argument("--localize-queries", type=POSITIVE_COUNT, metavar="N",
+    vision.add_argument("--localize-queries", type=int, metavar="N",
                         help="views for the localization rate [default: 200]")
     vision.add_argument("--query-seed", type=SEED, default=0, help="seed of the query poses")
     vision.set_defaults(run=runner("vision"))
@@ -59,15 +58,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "law (goal reached, final position error, lateral and heading errors on ground truth).",
     )
     add_sim_arguments(follow)
-    follow.add_argument("--seeds", type=POSITIVE_COUNT, default=20, metavar="N",
+    follow.add_argument("--seeds", type=int, default=20, metavar="N",
                         help="number of seeds, from --seed on [default: 20]")
     follow.add_argument("--laws", nargs="+", default=["paper", "paper+ff"], metavar="LAW",
                         help="control laws to compare [default: paper paper+ff]")
     follow.add_argument("--max-omega-deg", type=POSITIVE, default=None, metavar="DEG",
                         help="turn-rate bound, deg/s [default: the demo's]")
     follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
-    follow.add_argument("--goal", type=KEY_IMAGE, metavar="ID",
-                        help="goal key image [default: the demo's]")
+    follow.add_argument("--goal", type=KEY_IMAGE, metavar="ID", help="goal [default: the demo's]")
     add_change_arguments(follow)
     follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
                         help="where the seeds' memories are cached [default: out/bench_follow]")
@@ -79,7 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "telemetry, alternating phases with MCAP logging off and on; print the process CPU "
         "time per wall second with logging minus without (log_overhead_core_fraction).",
     )
-    log.add_argument("--seconds", type=POSITIVE, default=8.0,
+    log.add_argument("--seconds", type=float, default=8.0,
                      help="total wall time, four phases (off, on, off, on) [default: 8]")
     log.add_argument("--out", type=Path, metavar="DIR",
                      help="keep the logs written in DIR [default: a temporary folder]")
@@ -93,11 +91,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "processes) streaming their default telemetry. The vehicles run a kinematic load "
         "generator, not the robot (tools/bench/link_load.py). About 20 s at the defaults.",
     )
-    link.add_argument("--vehicles", type=SYSTEM_ID, default=20, metavar="N",
+    link.add_argument("--vehicles", type=int, default=20, metavar="N",
                       help="simulated vehicles, system ids 1..N [default: 20]")
-    link.add_argument("--window-s", type=POSITIVE, default=10.0, metavar="S",
+    link.add_argument("--window-s", type=float, default=10.0, metavar="S",
                       help="measured window with every vehicle following, s [default: 10]")
-    link.add_argument("--dispatches", type=POSITIVE_COUNT, default=200, metavar="N",
+    link.add_argument("--dispatches", type=int, default=200, metavar="N",
                       help="timed goal uploads [default: 200]")
     link.add_argument("--vehicle-processes", type=POSITIVE_COUNT, default=2, metavar="N",
                       help="processes the vehicles are spread over [default: 2]")
@@ -113,7 +111,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--repeat times in a row, each time on a fresh rig; print JSON {case: {passed, runs, "
         "failures, wall_s_max}}. One repetition of every case takes about 2 min.",
     )
-    faults.add_argument("--repeat", type=POSITIVE_COUNT, default=10, metavar="N",
+    faults.add_argument("--repeat", type=int, default=10, metavar="N",
                         help="runs of each case [default: 10, issue 8's 'passes 10 times in "
                              "a row']")
     faults.add_argument("--cases", metavar="NAMES",
@@ -132,12 +130,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "crashes (any exception but the project's input errors), hangs, the slowest "
         "input, and the first crashing inputs with their errors (docs/fuzzing.md).",
     )
-    fuzz.add_argument("--inputs", type=POSITIVE_COUNT, default=100_000, metavar="N",
+    fuzz.add_argument("--inputs", type=int, default=100_000, metavar="N",
                       help="inputs per target [default: 100000]")
     fuzz.add_argument("--targets", metavar="NAMES",
                       help="comma-separated targets to fuzz [default: all]")
     fuzz.add_argument("--seed", type=SEED, default=0, help="seed of the inputs [default: 0]")
-    fuzz.add_argument("--time-limit-s", type=POSITIVE, default=10.0, metavar="S",
+    fuzz.add_argument("--time-limit-s", type=float, default=10.0, metavar="S",
                       help="an input running longer is a hang, s [default: 10]")
     fuzz.add_argument("--memory-limit-mb", type=POSITIVE_COUNT, default=1024, metavar="MB",
                       help="address space a worker may add to what it holds after setup, "
@@ -167,7 +165,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "pair's equidistant calibrations (residual); match the pair and fit its relative "
         "pose with the paper's front end and the default, against the reference from the "
         "rig's T_BS, timing each pair on one core. About 20 s.")
-    real.add_argument("--repeats", type=POSITIVE_COUNT, default=10, metavar="N",
+    real.add_argument("--repeats", type=int, default=10, metavar="N",
                       help="timed runs of each front end on the pair [default: 10]")
     real.set_defaults(run=runner("real"))
     bench_safety_cmd.add_parser(bench_sub, runner("safety"))
@@ -198,7 +196,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                        "(repeatable; they come last, so they override)")
     every.add_argument("--out", type=Path, default=Path("out/bench_all"), metavar="DIR",
                        help="results and follow's memory cache [default: out/bench_all]")
-    every.add_argument("--timeout-s", type=POSITIVE, default=7200.0, metavar="S",
+    every.add_argument("--timeout-s", type=float, default=7200.0, metavar="S",
                        help="time limit of each benchmark, s [default: 7200]")
     every.set_defaults(run=runner("run_all"), registry=bench_sub.choices)
 

@@ -6,7 +6,7 @@ import argparse
 from collections.abc import Callable
 from pathlib import Path
 
-from tools.arg_types import COUNT, POSITIVE_COUNT, SEED
+from tools.harness.arg_types import SEED
 
 
 def add_parser(bench_sub: argparse._SubParsersAction,  # type: ignore[type-arg]
@@ -29,11 +29,11 @@ def add_parser(bench_sub: argparse._SubParsersAction,  # type: ignore[type-arg]
     safety.add_argument("--worlds", nargs="+", default=["lab", "campus"], metavar="WORLD",
                         help="worlds of the people runs [default: lab campus]")
     safety.add_argument("--seed", type=SEED, default=1, help="first seed [default: 1]")
-    safety.add_argument("--seeds", type=POSITIVE_COUNT, default=20, metavar="N",
+    safety.add_argument("--seeds", type=int, default=20, metavar="N",
                         help="seeds per world of the people runs [default: 20]")
-    safety.add_argument("--people", type=COUNT, default=5, metavar="N",
+    safety.add_argument("--people", type=int, default=5, metavar="N",
                         help="people walking in the people runs [default: 5]")
-    safety.add_argument("--estops", type=POSITIVE_COUNT, default=20, metavar="N",
+    safety.add_argument("--estops", type=int, default=20, metavar="N",
                         help="emergency stops timed [default: 20]")
     safety.add_argument("--parts", nargs="+", default=["scenarios", "people", "e_stop",
                                                         "governor"],

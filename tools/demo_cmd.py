@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
-from tools.arg_types import KEY_IMAGE, POSITIVE
+from tools.harness.arg_types import KEY_IMAGE, POSITIVE
 from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.harness.scene_args import (
     add_change_arguments,

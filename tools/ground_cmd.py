@@ -34,7 +34,7 @@ from tools import (
     ground_stop_cmd,
     ground_teach_cmd,
 )
-from tools.arg_types import KEY_IMAGE, POSITIVE, SYSTEM_ID
+from tools.harness.arg_types import KEY_IMAGE, POSITIVE, SYSTEM_ID
 
 if TYPE_CHECKING:
     from ground.station import GroundStation

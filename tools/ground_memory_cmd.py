@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tools.arg_types import KEY_IMAGE
+from tools.harness.arg_types import KEY_IMAGE
 
 if TYPE_CHECKING:
     from ground.station import GroundStation

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from tools.arg_types import FINITE
+from tools.harness.arg_types import FINITE
 
 if TYPE_CHECKING:
     from ground.station import GroundStation

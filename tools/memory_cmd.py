@@ -14,7 +14,7 @@ import json
 from pathlib import Path
 
 from tools import memory_localize_cmd
-from tools.arg_types import KEY_IMAGE
+from tools.harness.arg_types import KEY_IMAGE
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -17,7 +17,7 @@ import math
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError, TransportError
-from tools.arg_types import FINITE, POSITIVE, POSITIVE_COUNT
+from tools.harness.arg_types import FINITE, POSITIVE, POSITIVE_COUNT
 
 if TYPE_CHECKING:
     from robot.pioneer.driver import PioneerDriver

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError, VmnavError
-from tools.arg_types import NON_NEGATIVE
+from tools.harness.arg_types import NON_NEGATIVE
 
 if TYPE_CHECKING:
     from robot.replay import ReplayReport

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 from shared.errors import InputError, TransportError
-from tools.arg_types import POSITIVE, SYSTEM_ID
+from tools.harness.arg_types import POSITIVE, SYSTEM_ID
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

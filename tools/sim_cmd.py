@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from tools import sim_serve_cmd
-from tools.arg_types import FINITE
+from tools.harness.arg_types import FINITE
 from tools.harness.scene_args import add_change_arguments, scene_change_from_args
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from shared.errors import InputError
-from tools.arg_types import JPEG_QUALITY, POSITIVE
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
 
 DEFAULT_ARIA = "tcp:8101"
@@ -114,12 +113,12 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
         f"{DEFAULT_CONTROL_PORT} unless given) [default: none]",
     )
     serve.add_argument(
-        "--jpeg-quality", type=JPEG_QUALITY, metavar="Q",
+        "--jpeg-quality", type=int, metavar="Q",
         help="JPEG quality of the --video frames, 1-100 [default: [sim.sensor] jpeg_quality, "
         "80]",
     )
     serve.add_argument(
-        "--duration", type=POSITIVE, metavar="S", help="stop after S seconds [default: never]"
+        "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
     )
     serve.set_defaults(run=run_serve)
 

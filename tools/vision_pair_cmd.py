@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from tools.arg_types import SEED
+from tools.harness.arg_types import SEED
 
 
 def add_parser(vision_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -22,7 +22,6 @@ import logging
 from typing import TYPE_CHECKING
 
 from shared.errors import InputError
-from tools.arg_types import FRACTION
 
 if TYPE_CHECKING:
     from sim.config import SimConfig
@@ -49,7 +48,7 @@ def add_change_arguments(parser: argparse.ArgumentParser) -> None:
         "at 12), step=F@T (times F from T s into the repeat on); e.g. "
         "lamps-off=0.5,hour=17,step=0.6@30")
     group.add_argument(
-        "--moved", type=FRACTION, default=0.0, metavar="F",
+        "--moved", type=float, default=0.0, metavar="F",
         help="fraction of the movable objects moved (displaced up to 1 m and turned up to "
         "45 degrees in free space, never near a route) [default: 0]")
     group.add_argument(

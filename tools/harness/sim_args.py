@@ -9,7 +9,7 @@ from robot.config import load_config
 from shared.calibration import load_camera
 from shared.camera_model import CameraModel
 from sim.config import SimConfig, load_sim_config
-from tools.arg_types import COUNT, SEED
+from tools.harness.arg_types import COUNT, SEED
 
 
 def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
