@@ -45,10 +45,10 @@ each is verified geometrically:
    beside than along is the answer (the nearest along the path), and the second, the
    first key image ahead of the query, is where a route from it starts
    (``Localization.ahead_id``: a route started at a key image the robot is level with
-   begins with a target the follower cannot see ahead). Forward views of a far scene give nearly
-   equal inliers over several key images, which put the most inliers 2-3 key images
-   ahead of the nearest in 5 of 200 ``campus`` views; the sign of the translation does
-   not fade with distance as the inlier counts' differences do.
+   begins with a target the follower cannot see ahead). Forward views of a far scene
+   give nearly equal inliers over several key images, which put the most inliers 2-3
+   key images ahead of the nearest in 5 of 200 ``campus`` views; the sign of the
+   translation does not fade with distance as the inlier counts' differences do.
 
 :meth:`Localizer.localize_exhaustive` applies the paper's rule (most matches) to
 every key image and verifies its winner, the baseline the benchmark compares speed

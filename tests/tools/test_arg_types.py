@@ -7,7 +7,9 @@ from pathlib import Path
 import pytest
 
 from tools.cli import main
-from tools.harness.arg_types import COUNT, FRACTION, POSITIVE, SEED, SYSTEM_ID, integer, number
+from tools.harness.arg_types import COUNT, POSITIVE, SEED, SYSTEM_ID, integer, number
+
+FRACTION = number(0.0, 1.0)
 
 
 class TestInteger:

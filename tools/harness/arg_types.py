@@ -67,13 +67,9 @@ KEY_IMAGE = integer(0, 2**31 - 1)
 """A key image id (MAVLink carries them in int32 fields)."""
 SYSTEM_ID = integer(1, 255)
 """A MAVLink system id (0 is the broadcast address)."""
-JPEG_QUALITY = integer(1, 100)
-"""A JPEG quality (OpenCV's IMWRITE_JPEG_QUALITY)."""
 FINITE = number()
 """Any finite number (a coordinate on the floor plan, an angle ...)."""
 POSITIVE = number(0.0, above=True)
 """A finite number > 0 (a duration, a speed bound ...)."""
 NON_NEGATIVE = number(0.0)
 """A finite number >= 0 (a tolerance ...)."""
-FRACTION = number(0.0, 1.0)
-"""A fraction in [0, 1]."""
