@@ -28,13 +28,11 @@ def manual_clock() -> ManualClock:
 @pytest.fixture(scope="session")
 def east_a(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """(world file, memory folder): the lab's 2.5 m ``east_a`` route taught once per test
-    process in lock-step (seed 1; tools/harness/short_routes.py), with the demo's control
-    law (teaching does not use it). Read only: copy the memory before changing it."""
+    process in lock-step (seed 1; tools/harness/short_routes.py), with the default config.
+    Read only: copy the memory before changing it."""
     from robot.config import VmnavConfig
-    from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
     from tools.harness.short_routes import teach_east_a
 
     folder = tmp_path_factory.mktemp("east_a")
-    world_file, _ = teach_east_a(folder, follow_config(VmnavConfig(), DEMO_LAW,
-                                                       DEMO_MAX_OMEGA_DEG))
+    world_file, _ = teach_east_a(folder, VmnavConfig())
     return world_file, folder / "memory"

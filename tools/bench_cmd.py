@@ -63,7 +63,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     follow.add_argument("--laws", nargs="+", default=["paper", "paper+ff"], metavar="LAW",
                         help="control laws to compare [default: paper paper+ff]")
     follow.add_argument("--max-omega-deg", type=POSITIVE, default=None, metavar="DEG",
-                        help="turn-rate bound, deg/s [default: the demo's]")
+                        help="turn-rate bound, deg/s [default: the config's, 25]")
     follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
     follow.add_argument("--goal", type=KEY_IMAGE, metavar="ID", help="goal [default: the demo's]")
     add_change_arguments(follow)

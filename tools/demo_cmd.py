@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -18,7 +19,6 @@ from typing import TYPE_CHECKING
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.harness.arg_types import KEY_IMAGE, POSITIVE
-from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG
 from tools.harness.scene_args import (
     add_change_arguments,
     check_change_fits,
@@ -59,12 +59,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="routes to teach, in order [default: all the world's, in its order]")
     demo.add_argument("--goal", type=KEY_IMAGE, default=None, metavar="ID",
                       help="goal key image [default: the middle of the second route]")
-    demo.add_argument("--max-omega-deg", type=POSITIVE, default=DEMO_MAX_OMEGA_DEG, metavar="DEG",
-                      help="bound on the turn rate, deg/s [default: %(default)s; the paper's "
-                      "10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
-    demo.add_argument("--law", choices=CONTROL_LAWS, default=DEMO_LAW,
+    demo.add_argument("--max-omega-deg", type=POSITIVE, default=None, metavar="DEG",
+                      help="bound on the turn rate, deg/s [default: the config's, 25; the "
+                      "paper's 10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
+    demo.add_argument("--law", choices=CONTROL_LAWS, default=None,
                       help="control law: the paper's eq. (2), or with the teach path's "
-                      "curvature fed forward [default: %(default)s]")
+                      "curvature fed forward [default: the config's, paper+ff]")
     add_change_arguments(demo)
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
     demo.add_argument("--no-log", action="store_true",
@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     report["teach_wall_time_s"] = round(teach_s, 2)
     report["memory_reused"] = taught.reused
     report["people"] = sim_config.people.count
-    report["max_omega_deg"] = args.max_omega_deg
+    report["max_omega_deg"] = round(math.degrees(config.control.max_omega_rad_s), 3)
     report["control_law"] = config.control.law
     report["dispatch"] = {"transport": "MAVLink over loopback UDP",
                           "mission_upload_ms": (None if repeat.dispatch.upload_ms is None

@@ -93,7 +93,7 @@ class TestSteer:
         config = ControlConfig()
         assert steer(2.0, 0.0, config).omega_rad_s == -config.max_omega_rad_s
         assert steer(-2.0, 0.0, config).omega_rad_s == config.max_omega_rad_s
-        assert config.max_omega_rad_s == pytest.approx(math.radians(10))
+        assert config.max_omega_rad_s == pytest.approx(math.radians(25))
 
     @given(y=st.floats(-5, 5), theta=st.floats(-math.pi, math.pi),
            c=st.floats(-3, 3), law=st.sampled_from(["paper", "paper+ff"]))
@@ -116,7 +116,7 @@ class TestSteer:
         assert twist.omega_rad_s == pytest.approx(0.2 * 0.5)
 
     def test_paper_law_ignores_the_curvature(self) -> None:
-        assert steer(0.0, 0.0, ControlConfig(), curvature_ff_1_m=0.5).omega_rad_s == 0.0
+        assert steer(0.0, 0.0, ControlConfig(law="paper"), curvature_ff_1_m=0.5).omega_rad_s == 0.0
 
     def test_degenerate_beyond_the_arc_centre(self) -> None:
         with pytest.raises(DegenerateGeometryError, match="centre of the reference arc"):

@@ -45,10 +45,9 @@ from sim.world import load_world
 from tests.robot.config.test_config import old_layout
 from tests.tools.short_routes import teach_east_a
 from tools.cli import main
-from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
-CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
+CONFIG = VmnavConfig()
 GOALS = (2, 4)
 
 

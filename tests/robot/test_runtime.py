@@ -33,13 +33,12 @@ from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world
 from tools.bench.hostile_images import bogus_chunk_png
-from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
 #: Every test here drives the simulator in lock-step on the taught route: seconds each.
 pytestmark = pytest.mark.slow
 
-CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
+CONFIG = VmnavConfig()
 
 
 @pytest.fixture

@@ -18,11 +18,9 @@ from shared.memory import read_memory
 from tests.robot.vehicle.mavproxy_console import MavproxyConsole
 from tests.tools.processes import start, wait_for
 from tests.tools.short_routes import teach_east_a
-from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
 
 pytest.importorskip("MAVProxy", reason="stock MAVProxy is not installed")
 
-CONFIG = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
 
 
 def free_udp_port() -> int:
@@ -33,10 +31,8 @@ def free_udp_port() -> int:
 
 @pytest.mark.slow
 def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(tmp_path) -> None:
-    world, _ = teach_east_a(tmp_path, CONFIG)
+    world, _ = teach_east_a(tmp_path, VmnavConfig())
     goal = read_memory(tmp_path / "memory").paths[0].keyframe_ids[-1]
-    (tmp_path / "robot.toml").write_text(
-        f'[control]\nlaw = "{DEMO_LAW}"\nmax_omega_rad_s = {CONFIG.control.max_omega_rad_s!r}\n')
     sim_log, robot_log = tmp_path / "sim.out", tmp_path / "robot.out"
     sim = start(["sim", "serve", "--world", str(world), "--aria", "tcp:0", "--video", "http:0",
                  "--control", "http:0"], sim_log)
@@ -52,7 +48,7 @@ def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(tmp_path) -> None:
         robot = start(["robot", "--aria", f"socket://{aria}", "--camera", camera,
                        "--mavlink", f"udpin:127.0.0.1:{port}", "--memory",
                        str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
-                       "--no-log", "--config", str(tmp_path / "robot.toml")], robot_log)
+                       "--no-log"], robot_log)
         processes.append(robot)
         wait_for(r"vmnav robot: ", robot_log, robot)
         mavproxy = MavproxyConsole(f"udpout:127.0.0.1:{port}", home)

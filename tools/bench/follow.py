@@ -44,7 +44,7 @@ class FollowBenchPlan:
     Attributes:
         seeds: the simulation seeds.
         laws: control laws to compare (``robot.config.CONTROL_LAWS``).
-        max_omega_deg: the turn-rate bound, deg/s.
+        max_omega_deg: the turn-rate bound, deg/s (None: the config's).
         routes: routes taught per seed (None: all the world's, see
             :func:`tools.harness.demo.taught_memory`).
         goal_id: the goal key image (None: :func:`tools.harness.demo.default_goal`).
@@ -54,7 +54,7 @@ class FollowBenchPlan:
 
     seeds: tuple[int, ...]
     laws: tuple[str, ...]
-    max_omega_deg: float
+    max_omega_deg: float | None
     routes: tuple[str, ...] | None = None
     goal_id: int | None = None
     change: SceneChange | None = None
@@ -115,7 +115,6 @@ def run(args: argparse.Namespace) -> int:
     """Print the route-following benchmark's JSON (``vmnav bench follow``)."""
     from robot.config import CONTROL_LAWS, load_config
     from shared.errors import InputError
-    from tools.harness.demo import DEMO_MAX_OMEGA_DEG
     from tools.harness.scene_args import check_change_fits, scene_change_from_args
     from tools.harness.sim_args import sim_config_from_args
 
@@ -130,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     plan = FollowBenchPlan(
         seeds=tuple(range(sim_config.seed, sim_config.seed + args.seeds)), laws=tuple(args.laws),
-        max_omega_deg=DEMO_MAX_OMEGA_DEG if args.max_omega_deg is None else args.max_omega_deg,
+        max_omega_deg=args.max_omega_deg,
         routes=tuple(args.routes) if args.routes else None, goal_id=args.goal,
         change=change)
     result = bench_follow(plan, args.out, config, sim_config, camera)

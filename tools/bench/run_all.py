@@ -38,14 +38,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.bench.targets import Check, check, targets_of
-from tools.harness.demo import DEMO_LAW
+from tools.bench.targets import DEFAULT_LAW, Check, check, targets_of
 
 #: Reduced sizes of ``--quick``, per benchmark.
 QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "sim": ("--frames", "30"),
     "vision": ("--quick",),
-    "follow": ("--seeds", "1", "--laws", DEMO_LAW),
+    "follow": ("--seeds", "1", "--laws", DEFAULT_LAW),
     "log": ("--seconds", "2"),
     "link": ("--window-s", "2", "--dispatches", "50"),
     "faults": ("--repeat", "1"),

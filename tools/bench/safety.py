@@ -48,11 +48,10 @@ BLIND_BRAKING_M = 0.05
 def scenarios_part(out: Path) -> list[dict[str, Any]]:
     """Each scenario once on ``east_a`` taught into ``out/taught`` (seed 1)."""
     from robot.config import VmnavConfig
-    from tools.harness.demo import DEMO_LAW, DEMO_MAX_OMEGA_DEG, follow_config
     from tools.harness.safety_scenarios import run_scenario, scenarios
     from tools.harness.short_routes import teach_east_a
 
-    config = follow_config(VmnavConfig(), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
+    config = VmnavConfig()
     folder = out / "taught"
     folder.mkdir(parents=True, exist_ok=True)
     world_file, _ = teach_east_a(folder, config)
@@ -90,17 +89,14 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
     from sim.scene_change import SceneChange
     from tools.figures.demo_report import build_report
     from tools.harness.demo import (
-        DEMO_LAW,
-        DEMO_MAX_OMEGA_DEG,
         default_goal,
-        follow_config,
         repeat_in_sim,
         taught_memory,
     )
     from tools.harness.safety_scenarios import SafetyTruth
     from tools.harness.sim_args import sim_config_from_args
 
-    config = follow_config(load_config(args.config), DEMO_LAW, DEMO_MAX_OMEGA_DEG)
+    config = load_config(args.config)
     result: dict[str, Any] = {}
     for world in worlds:
         base_sim, camera = sim_config_from_args(argparse.Namespace(

@@ -11,7 +11,7 @@ prints them) and are read from there, not copied.
 A figure is a dotted path into the benchmark's JSON (``aggregate.paper+ff.lateral_rms_m_max``).
 A bound is a number, or the dotted path of another figure of the same JSON (goals
 reached against runs). Route-following targets are for the lab world with default
-noise and apply to the demo's control law (:data:`tools.harness.demo.DEMO_LAW`); the paper's
+noise and apply to the robot's default control law (:data:`DEFAULT_LAW`); the paper's
 law alone is the baseline it is compared with, not held to them.
 """
 
@@ -23,6 +23,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from robot.config import ControlConfig
 from tools.bench.faults import CASES as FAULT_CASES
 from tools.bench.fuzz import TARGET_NAMES as FUZZ_TARGETS
 from tools.bench.hostile import PARTS as HOSTILE_PARTS
@@ -35,8 +36,9 @@ from tools.bench.real import TARGETS as REAL_TARGETS
 from tools.bench.safety import TARGETS as SAFETY_TARGETS
 from tools.bench.sim import CORNER_ERROR_TARGET_PX, RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
-from tools.harness.demo import DEMO_LAW
 
+#: The law the route-following targets apply to: the robot's default.
+DEFAULT_LAW = ControlConfig().law
 #: comparison -> operator.
 COMPARISONS: dict[str, Callable[[float, float], bool]] = {
     ">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt,
@@ -69,7 +71,7 @@ class Target:
 
 
 def _follow(figure: str, comparison: str, bound: float | str) -> Target:
-    path = f"aggregate.{DEMO_LAW}."
+    path = f"aggregate.{DEFAULT_LAW}."
     bound = path + bound if isinstance(bound, str) else bound
     return Target("follow", path + figure, comparison, bound, "issue 4 (lab, default noise)")
 

@@ -55,14 +55,6 @@ START_OFFSET_M = 0.3
 START_OFFSET_DEG = 10.0
 #: The start is this key image of the first route (ahead of it the path is straight).
 START_KEY_INDEX = 2
-#: The demo's bound on |omega|, deg/s. The paper's 10 deg/s at V = 0.2 m/s allows turns of
-#: 1.15 m radius at the least; the lab's routes turn on 0.8 m arcs (14.3 deg/s at 0.2 m/s),
-#: and the law needs a margin above that to correct errors in a turn.
-DEMO_MAX_OMEGA_DEG = 25.0
-#: The demo's control law: eq. (2) regulates towards the straight line through the next key
-#: image and so cuts the lab's turns (measured, seed 1: lateral RMS 7.8 cm, max 22.6 cm);
-#: with the curvature feed-forward it follows the taught arcs (1.8 cm, 5.5 cm).
-DEMO_LAW = "paper+ff"
 #: Mixed with the seed for the repeat's random draws (RANSAC, the Pioneer's noise).
 _REPEAT_STREAM = 0x52455045
 #: Mixed with the seed for the scene change's draws (which objects move, and where), so
@@ -133,16 +125,22 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
                         join=True, folder=out)
 
 
-def follow_config(config: VmnavConfig, law: str, max_omega_deg: float) -> VmnavConfig:
-    """``config`` with the demo's control law and turn-rate bound (deg/s).
+def follow_config(config: VmnavConfig, law: str | None = None,
+                  max_omega_deg: float | None = None) -> VmnavConfig:
+    """``config`` with another control law and turn-rate bound (deg/s); None keeps the
+    config's (the robot's defaults, ``robot.config.ControlConfig``).
 
     Raises:
         InputError: ``max_omega_deg`` is not > 0.
         ConfigError: an unknown law.
     """
-    if not max_omega_deg > 0:
-        raise InputError("--max-omega-deg", f"must be > 0, got {max_omega_deg}")
-    control = replace(config.control, law=law, max_omega_rad_s=math.radians(max_omega_deg))
+    control = config.control
+    if law is not None:
+        control = replace(control, law=law)
+    if max_omega_deg is not None:
+        if not max_omega_deg > 0:
+            raise InputError("--max-omega-deg", f"must be > 0, got {max_omega_deg}")
+        control = replace(control, max_omega_rad_s=math.radians(max_omega_deg))
     return replace(config, control=control)
 
 

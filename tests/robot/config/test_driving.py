@@ -12,11 +12,11 @@ from shared.config import from_mapping
 from shared.errors import ConfigError
 
 
-def test_defaults_follow_the_paper() -> None:
+def test_defaults_follow_the_paper_but_for_the_law_and_the_turn_rate() -> None:
     config = VmnavConfig()
     assert config.control == ControlConfig()
-    assert (config.control.law, config.control.speed_m_s) == ("paper", 0.2)
-    assert config.control.max_omega_rad_s == pytest.approx(math.radians(10))
+    assert (config.control.law, config.control.speed_m_s) == ("paper+ff", 0.2)
+    assert config.control.max_omega_rad_s == pytest.approx(math.radians(25))
     assert config.control.double_pole == 0.3
     assert config.switching.err_image_max_px == 20.0
     assert config.estimator == EstimatorConfig() and config.mission == MissionConfig()
