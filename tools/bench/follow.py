@@ -1,5 +1,7 @@
 """``vmnav bench follow``: seeded demos without video, per seed and aggregated, laws side by side.
 
+Each run's figures are also printed on stderr as it ends (one line per seed and law).
+
 Each seed teaches its own memory (cached in ``OUT/seed<N>``, see
 :func:`tools.harness.demo.taught_memory`) and repeats the demo's mission once per control
 law on it, so the laws are compared on the same memories, start and goal.
@@ -9,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -83,8 +86,23 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
                                   time.perf_counter() - started)
             rows.append({"seed": seed, "law": law, "goal_key_image": goal,
                          **{key: report[key] for key in SEED_KEYS}})
+            print(f"vmnav bench follow: seed {seed} {law}: {_seed_line(rows[-1])}",
+                  file=sys.stderr, flush=True)
     return {"seeds": rows, "aggregate": {law: aggregate([r for r in rows if r["law"] == law])
                                          for law in plan.laws}}
+
+
+def _seed_line(row: dict[str, object]) -> str:
+    """One seed's figures in a line, e.g. ``reached, lateral RMS 1.4 cm, max 4.2 cm, ...``."""
+
+    def cm(key: str) -> str:
+        value = row[key]
+        return "-" if not isinstance(value, int | float) else f"{100 * value:.1f} cm"
+
+    outcome = "reached" if row["reached_goal"] else f"not reached ({row['reason']})"
+    return (f"{outcome}, lateral RMS {cm('lateral_rms_m')}, max {cm('lateral_max_m')}, "
+            f"final error {cm('final_position_error_m')}, {row['lost_events']} LOST, "
+            f"{row['wall_time_s']} s")
 
 
 def aggregate(rows: list[dict[str, object]]) -> dict[str, object]:

@@ -24,8 +24,10 @@ def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
     _, out, _ = short_demo
     code = main(["bench", "follow", "--seeds", "1", *demo_mission(out),
                  "--laws", "paper+ff", "--out", str(out.parent)])
-    result = json.loads(capsys.readouterr().out)
+    captured = capsys.readouterr()
+    result = json.loads(captured.out)
     assert code == 0 and result["benchmark"] == "follow"
+    assert "vmnav bench follow: seed 1 paper+ff: reached, lateral RMS" in captured.err
     (row,) = result["seeds"]
     assert row["seed"] == 1 and row["law"] == "paper+ff" and row["reached_goal"]
     assert result["aggregate"]["paper+ff"]["reached_goal"] == 1
