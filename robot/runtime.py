@@ -43,6 +43,8 @@ failsafes, photo goals) in one table; what they rest on here:
 5. A photo goal is read and localized in the memory by the worker
    (:func:`robot.worker.find_photo`): found, the robot goes there in GUIDED; not found
    (or an unreadable photo, or one of another size than the camera's) is a notice.
+   Either way, and when the loop refuses the photo or its goal, the outcome is kept
+   for :meth:`next_photo_outcome` (the command's final answer on the link).
 6. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
    mission run carries on with the next frame.
 7. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
@@ -91,6 +93,7 @@ from robot.mode_events import (
     GotoPhoto,
     PathStored,
     PhotoFound,
+    PhotoNotFound,
     RunEnded,
     SetMode,
     StartGoals,
@@ -102,7 +105,7 @@ from robot.modes import Action, Activity, Decision, Drive, TopState, decide, dri
 from robot.runtime_log import RuntimeLog
 from robot.safe_base import SafeBase
 from robot.teach import KeyImageSelector, SelectedKeyImage
-from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
+from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, PhotoOutcome, VehicleTelemetry
 from robot.worker import Worker, find_photo, store_path
 from shared.clock import Clock
 from shared.errors import VmnavError
@@ -159,6 +162,7 @@ class RobotRuntime:
         self._worker = Worker(lockstep)
         self._requests: deque[Event] = deque()
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)
+        self._photo_outcomes: deque[PhotoOutcome] = deque(maxlen=_MAX_NOTICES)
         self._manual: tuple[float, float, int] | None = None  # (x, r, arrival ns)
         self._top = TopState()
         self._goals = GoalRuns(self._base, rng, log, stopwatch)
@@ -325,6 +329,12 @@ class RobotRuntime:
         except IndexError:
             return None
 
+    def next_photo_outcome(self) -> PhotoOutcome | None:
+        try:
+            return self._photo_outcomes.popleft()
+        except IndexError:
+            return None
+
     # -- events -------------------------------------------------------------------------
 
     def _take_news(self, t_ns: int, base: BaseState) -> None:
@@ -350,6 +360,8 @@ class RobotRuntime:
             self._base.release()  # rule 9: the operator acted
         for action in decision.actions:
             self._act(action, t_ns, event, decision)
+        if isinstance(event, GotoPhoto | PhotoFound | PhotoNotFound):
+            self._photo_outcome(event, decision)  # after its notice (rule 5)
 
     def _act(self, action: Action, t_ns: int, event: Event, decision: Decision) -> None:
         match action:
@@ -452,6 +464,16 @@ class RobotRuntime:
                             tuple(k.record for k in key_images), self._config)
 
     # -- output -------------------------------------------------------------------------
+
+    def _photo_outcome(self, event: GotoPhoto | PhotoFound | PhotoNotFound,
+                       decision: Decision) -> None:
+        """Where a photo goal ended up (rule 5), for the command's final answer."""
+        if decision.refused:
+            self._photo_outcomes.append(PhotoOutcome(None, decision.say))
+        elif isinstance(event, PhotoFound):
+            self._photo_outcomes.append(PhotoOutcome(event.goal_key, event.text))
+        elif isinstance(event, PhotoNotFound):
+            self._photo_outcomes.append(PhotoOutcome(None, event.text))
 
     def _say(self, t_ns: int, level: int, text: str) -> None:
         self._notices.append((level, text))

@@ -170,9 +170,10 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
         except OSError as e:
             raise InputError(args.image, f"cannot read the goal photo: {e.strerror}") from None
         check_image(data, args.image)  # refused here in one line rather than by the robot
-        photo_id = station.goto_photo(data, args.image.suffix)
-        print(f"vehicle {vehicle.system_id}: going to photo {args.image.name} "
-              f"(uploaded as photo {photo_id})")
+        found = station.goto_photo(data, args.image.suffix)
+        print(f"vehicle {vehicle.system_id}: photo {args.image.name} (uploaded as photo "
+              f"{found.photo_id}) found at key image {found.keyframe_id}; going there"
+              + (f"\n  the robot: {found.said}" if found.said else ""))
     else:
         try:
             goal = Goal(args.goal_key)

@@ -39,6 +39,21 @@ _ODOM_ORIGIN = Pose2(0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True, slots=True)
+class PhotoOutcome:
+    """How a photo goal (:meth:`VehicleApp.goto_image`) ended up.
+
+    Attributes:
+        keyframe_id: the key image the photo was found at, now the goal; None when it was
+            not found, could not be read, or the run could not start.
+        text: one line for the operator, e.g. ``photo 3.jpg: key image 68 (52 inliers of
+            61 matches), going there``.
+    """
+
+    keyframe_id: int | None
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
 class ServoTelemetry:
     """The route follower's state (Courbon et al. 2008), for VISUAL_SERVO_STATUS.
 
@@ -138,7 +153,12 @@ class VehicleApp(Protocol):
         ...
 
     def goto_image(self, path: Path) -> bool:
-        """Localize the photo at ``path`` (uploaded over FTP) in the memory and go there."""
+        """Localize the photo at ``path`` (uploaded over FTP) in the memory and go there;
+        the outcome comes later from :meth:`next_photo_outcome`."""
+        ...
+
+    def next_photo_outcome(self) -> PhotoOutcome | None:
+        """How the photo goal asked for last ended up, once (None: not yet, or none asked)."""
         ...
 
     def params_changed(self, config: VmnavConfig) -> None:

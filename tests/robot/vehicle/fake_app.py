@@ -15,7 +15,7 @@ from typing import Any
 
 from robot.config import VmnavConfig
 from robot.mission import MissionState
-from robot.vehicle.app_port import GcsLostAction, VehicleTelemetry
+from robot.vehicle.app_port import GcsLostAction, PhotoOutcome, VehicleTelemetry
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
@@ -39,6 +39,7 @@ class FakeApp:
         self.configs: list[VmnavConfig] = []
         self.accept = True  # what requests return
         self.notices: list[tuple[int, str]] = []  # what next_notice hands out, oldest first
+        self.photo_outcomes: list[PhotoOutcome] = []  # what next_photo_outcome hands out
 
     def update(self, **changes: Any) -> None:
         """Change the telemetry snapshot."""
@@ -111,3 +112,6 @@ class FakeApp:
 
     def next_notice(self) -> tuple[int, str] | None:
         return self.notices.pop(0) if self.notices else None
+
+    def next_photo_outcome(self) -> PhotoOutcome | None:
+        return self.photo_outcomes.pop(0) if self.photo_outcomes else None
