@@ -126,6 +126,20 @@ class PhotoGoal:
     said: str
 
 
+@dataclass(frozen=True, slots=True)
+class StoredPath:
+    """A taught path the robot stored.
+
+    Attributes:
+        path_id: its id in the memory.
+        said: the robot's line about it (key images, junctions); "" if that STATUSTEXT
+            was lost.
+    """
+
+    path_id: int
+    said: str
+
+
 def _command_name(command: int) -> str:
     if command in USER_COMMANDS:
         return USER_COMMANDS[command]
@@ -544,13 +558,22 @@ class GroundStation:
             raise InputError("NAME", str(e)) from None
         self.command(TEACH_START, *params)
 
-    def teach_stop(self) -> None:
-        """Stop recording; the path joins the robot's memory.
+    def teach_stop(self) -> StoredPath:
+        """Stop recording and wait while the robot joins the path to its memory and writes
+        it (a long-running command: ``robot.vehicle.user_commands``).
+
+        Returns:
+            The id of the path stored and the robot's words about it.
 
         Raises:
-            GroundError: refused (not teaching) or unanswered.
+            GroundError: refused (not teaching), unanswered, or nothing stored (too short a
+                drive, the memory not writable: with the robot's reason).
         """
-        self.command(TEACH_STOP)
+        vehicle = self._target("teach_stop")
+        before = len(vehicle.notices)
+        done = self.command(TEACH_STOP)
+        said = [n for n in vehicle.notices[before:] if n.startswith(f"path {done.result_param2} ")]
+        return StoredPath(done.result_param2, said[0] if said else "")
 
     @property
     def mission_outcome(self) -> bool | None:

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from robot.mission import MissionState
-from robot.vehicle.app_port import PhotoOutcome
+from robot.vehicle.app_port import JobOutcome
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import WallClock
 from shared.key_file import read_key_file
@@ -145,7 +145,7 @@ class PhotoApp(FakeApp):
             text = (f"photo {path.name}: not in the memory (best key image 3: 12 matches, "
                     "4 verified inliers (rejected))")
         self.notices.append((logging.INFO, text))
-        self.photo_outcomes.append(PhotoOutcome(12 if self.found else None, text))
+        self.job_outcomes.append(JobOutcome("photo", 12 if self.found else None, text))
         return True
 
 
@@ -204,8 +204,17 @@ def test_goto_needs_exactly_one_goal(vehicle: UdpVehicle, capsys: Capsys) -> Non
 def test_teach_start_and_stop_reach_the_app(vehicle: UdpVehicle, app: FakeApp,
                                             capsys: Capsys) -> None:
     assert run_ground(vehicle, "teach", "start", "corridor 2") == 0
+    capsys.readouterr()
     assert run_ground(vehicle, "teach", "stop") == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "vehicle 1: teaching stopped, path 1 stored",
+        "  the robot: path 1 'corridor': 12 key images, 0 junction(s)"]
     assert app.called("teach_start") == [("corridor 2",)] and app.called("teach_stop") == [()]
+    app.stored_path = None
+    assert run_ground(vehicle, "teach", "stop") == 1
+    assert one_line_error(capsys) == (
+        "vmnav ground: error: vehicle 1 answered TEACH_STOP with MAV_RESULT_FAILED (teach "
+        "'corridor': 0.12 m driven, a path needs 1.00 m: nothing stored)\n")
     app.accept = False
     capsys.readouterr()
     assert run_ground(vehicle, "teach", "stop") == 1

@@ -40,7 +40,7 @@ from robot.mission import (
 from robot.vehicle.app_port import (
     ACTIVE_STATES,
     GcsLostAction,
-    PhotoOutcome,
+    JobOutcome,
     ServoTelemetry,
     VehicleApp,
     VehicleTelemetry,
@@ -203,7 +203,7 @@ class LinkLoadApp:
         """None: everything it does shows in the telemetry."""
         return None
 
-    def next_photo_outcome(self) -> PhotoOutcome | None:
+    def next_job_outcome(self) -> JobOutcome | None:
         """None: it takes no photo goal."""
         return None
 
