@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     taught = taught_memory(out, routes, config, sim_config, camera)
     teach_s = time.perf_counter() - started
     goal = default_goal(taught) if args.goal is None else args.goal
-    video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
+    video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config, goal)
     robot_log = None if args.no_log else DemoLog(
         dataclasses.replace(config.log, output_dir=str(out / "logs"), replay_frames=True),
         config.camera.mount,

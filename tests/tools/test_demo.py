@@ -6,6 +6,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
+import shutil
+import subprocess
 import time
 from types import SimpleNamespace
 
@@ -22,6 +25,7 @@ from shared.logs.reader import log_info
 from shared.memory import read_memory
 from tests.shared.memory.builders import folder_bytes, memory_without_manifest
 from tools.cli import main
+from tools.figures.demo_plots import VIDEO_EVERY
 from tools.figures.demo_report import following_errors, plan_references, track_errors
 from tools.harness.demo import CycleSample
 
@@ -213,3 +217,24 @@ def test_the_summary_rounds_for_people() -> None:
                            "mean_matches": None})
     assert "did NOT reach the goal" in failed and "lateral RMS" not in failed
     assert "n/a matches" in failed
+
+
+@pytest.mark.slow
+def test_the_video_is_h264_with_the_target_key_image(short_demo, tmp_path) -> None:
+    """On a copy of the short demo's memory: ``demo.mp4`` in H.264 (browsers play it)."""
+    import imageio_ffmpeg
+
+    _, out, _ = short_demo
+    copy = tmp_path / "seed1"
+    copy.mkdir()
+    shutil.copytree(out / "memory", copy / "memory")
+    shutil.copy(out / "teach.json", copy / "teach.json")
+    assert main(["demo", "--world", str(out.parent / "lab_short.toml"), "--routes",
+                 "east_a,east_b", "--out", str(copy), "--no-log"]) == 0
+    video = copy / "demo.mp4"
+    probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(video)],
+                           capture_output=True, text=True, check=False).stderr
+    assert re.search(r"Video: h264 .*yuv420p.*, 1200x600", probe), probe
+    frames, _ = imageio_ffmpeg.count_frames_and_secs(str(video))
+    report = json.loads((copy / "report.json").read_text())
+    assert frames >= 0.8 * report["sim_time_s"] * 15 / VIDEO_EVERY  # minus the dispatch
