@@ -1,7 +1,7 @@
 """``vmnav log ...``: inspect and repair MCAP field logs.
 
-* ``vmnav log info FILE [--json]``: topics, schemas, message counts, duration, rates;
-  works on unfinished files too (by scanning) and says what is wrong with them.
+* ``vmnav log info FILE [--json]``: start date, topics, schemas, message counts, duration,
+  rates; works on unfinished files too (by scanning) and says what is wrong with them.
 * ``vmnav log recover FILE [-o OUT]``: rewrite an unfinished or damaged file (from a
   killed process) into a valid, indexed one; FILE is never changed.
 * ``vmnav log plot FILE [--out DIR]``: the paper-style figures of a robot log
@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -77,6 +78,8 @@ def info_text(info: LogInfo) -> str:
         f"duration  {info.duration_s:.2f} s, {info.message_count} messages"
         + (f", metadata: {', '.join(info.metadata)}" if info.metadata else ""),
     ]
+    if info.start_ns is not None:
+        lines.append(f"started   {start_text(info.start_ns, info.unix_offset_ns)}")
     if not info.topics:
         return "\n".join([*lines, "no topics"])
     width = max(len("topic"), *(len(t.topic) for t in info.topics))
@@ -86,6 +89,17 @@ def info_text(info: LogInfo) -> str:
     lines += [f"{t.topic:<{width}}  {t.schema_name:<{schema_width}}  {t.message_count:>8}  "
               f"{t.rate_hz:>8.2f}" for t in info.topics]
     return "\n".join(lines)
+
+
+def start_text(start_ns: int, unix_offset_ns: int | None) -> str:
+    """When a log starts: its UTC date and the writer's clock then, or for a log that
+    recorded no Unix offset (written before logs were in Unix time), the clock alone."""
+    if unix_offset_ns is None:
+        return f"{start_ns / 1e9:.3f} s on the writer's clock (no date recorded)"
+    seconds, ns = divmod(start_ns, 1_000_000_000)
+    date = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(seconds))
+    return (f"{date}.{ns // 1_000_000:03d} UTC (the writer's clock: "
+            f"{(start_ns - unix_offset_ns) / 1e9:.3f} s)")
 
 
 def default_output(path: Path) -> Path:
