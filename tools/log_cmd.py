@@ -6,6 +6,8 @@
   killed process) into a valid, indexed one; FILE is never changed.
 * ``vmnav log plot FILE [--out DIR]``: the paper-style figures of a robot log
   (:mod:`tools.figures.log_plot`).
+* ``vmnav log dump TLOG [OPTION ...]``: pymavlink's ``mavlogdump`` with the vmnav dialect
+  (:mod:`ground.tlog_dump`), e.g. on the ground station's ``.tlog``.
 """
 
 from __future__ import annotations
@@ -56,6 +58,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     plot.add_argument("--out", type=Path, metavar="DIR",
                       help="folder of the figures [default: FILE's folder]")
     plot.set_defaults(run=run_plot)
+    dump = log_sub.add_parser(
+        "dump",
+        help="print a MAVLink telemetry log (.tlog) with the vmnav dialect (mavlogdump)",
+        description="Run pymavlink's mavlogdump on TLOG with the vmnav dialect loaded, so "
+        "that vmnav's messages (VISUAL_SERVO_STATUS, ...) print by name instead of "
+        "UNKNOWN_24400. Options after TLOG go to mavlogdump as they are, e.g. "
+        "--types VISUAL_SERVO_STATUS, --format json, --show-types.",
+    )
+    dump.add_argument("file", type=Path, metavar="TLOG",
+                      help="a telemetry log, e.g. the ground station's ground-*.tlog")
+    dump.add_argument("options", nargs=argparse.REMAINDER, metavar="OPTION",
+                      help="mavlogdump's options (see mavlogdump.py --help)")
+    dump.set_defaults(run=run_dump)
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -124,6 +139,16 @@ def run_plot(args: argparse.Namespace) -> int:
     for path in plot_log(args.file, args.out):
         print(f"wrote {path}")
     return 0
+
+
+def run_dump(args: argparse.Namespace) -> int:
+    """Print ``args.file`` with pymavlink's mavlogdump and our dialect."""
+    from ground.tlog_dump import run_mavlogdump
+    from shared.errors import InputError
+
+    if not args.file.is_file():
+        raise InputError(args.file, "no such file" if not args.file.exists() else "not a file")
+    return run_mavlogdump([*args.options, str(args.file)])
 
 
 def recover_text(report: RecoverReport) -> str:
