@@ -13,7 +13,11 @@ Used by one thread only (the log writer's). Rules:
    process never overwrites an earlier run's files.
 4. :attr:`McapFiles.size_bytes` is what the files opened here hold on disk so far (the
    finished ones, and the open one up to its last flushed chunk): the writer's quota.
-5. Times: callers give the data's time on their clock (``t_ns``); ``log_time`` and
+5. Retention: each file opened prunes the folder of old vmnav log files beyond
+   ``LogConfig.retain_max_bytes`` and ``retain_max_age_days``, never the new file
+   (:mod:`shared.logs.retention`); file times are wall-clock times, so this reads the
+   wall clock (``time.time``), not the loop's.
+6. Times: callers give the data's time on their clock (``t_ns``); ``log_time`` and
    ``publish_time`` are ``t_ns + unix_offset_ns``, Unix time in ns, so that Foxglove and
    ``mcap info`` show the run's date. Every file opens with the metadata record
    :data:`~shared.logs.topics.CLOCK_METADATA` holding the offset, by which readers get
@@ -28,6 +32,7 @@ import json
 import logging
 import os
 import re
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import IO, Any
@@ -38,6 +43,7 @@ from mcap.writer import CompressionType, Writer
 from shared.config import LogConfig
 from shared.logs import topics
 from shared.logs.messages import encode_json
+from shared.logs.retention import prune_logs
 from shared.logs.schemas import Schema
 
 log = logging.getLogger(__name__)
@@ -57,7 +63,7 @@ class McapFiles:
     Args:
         config: folder, chunking, compression, rotation and retry policy.
         name: file name prefix, e.g. ``"robot"``.
-        unix_offset_ns: Unix time minus the callers' clock reading, ns, >= 0 (rule 5).
+        unix_offset_ns: Unix time minus the callers' clock reading, ns, >= 0 (rule 6).
     """
 
     def __init__(self, config: LogConfig, name: str, unix_offset_ns: int = 0) -> None:
@@ -124,6 +130,7 @@ class McapFiles:
             return
         self.paths.append(path)
         self._first_t_ns = None
+        prune_logs(self._dir, self._config, LIBRARY, time.time(), keep=(path,))
         if self._in_outage:
             log.warning("logging resumed in %s", path)
             self._in_outage = False
