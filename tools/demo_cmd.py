@@ -116,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
         config.camera.mount,
         {"source": "vmnav demo (simulator, lock-step)", "goal_key_image": str(goal),
          "routes": ",".join(routes) if routes else "all", "seed": str(sim_config.seed),
-         "control_law": config.control.law})
+         "control_law": config.control.law},
+        unix_offset_ns=time.time_ns())  # the repeat's simulation clock starts at 0 about now
     consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:

@@ -6,10 +6,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import re
 import shutil
 import subprocess
+import sys
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -77,6 +80,29 @@ def test_the_goal_went_through_the_ground_station_over_udp(short_demo) -> None:
     info = log_info(out / "logs" / "ground-0001.mcap")
     assert info.complete and info.message_count >= len(types)
     assert "/mavlink/in/VISUAL_SERVO_STATUS" in {t.topic for t in info.topics}
+
+
+@pytest.mark.slow
+def test_log_dump_decodes_the_vmnav_messages_of_the_ground_tlog(short_demo) -> None:
+    """The ground station's tlog of the demo, written by the real station from the real
+    robot's traffic: `vmnav log dump` (pymavlink's mavlogdump, our dialect) names every
+    message; its VISUAL_SERVO_STATUS reached the goal."""
+    _, out, _ = short_demo
+    (tlog,) = (out / "logs").glob("ground-*.tlog")
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    done = subprocess.run([sys.executable, "-m", "tools.cli", "log", "dump", str(tlog),
+                           "--format", "json"], capture_output=True, text=True, env=env,
+                          cwd=root, timeout=300)
+    assert (done.returncode, done.stderr) == (0, "")
+    types = [json.loads(line)["meta"]["type"] for line in done.stdout.splitlines()]
+    assert "VISUAL_SERVO_STATUS" in types
+    assert not [t for t in types if t.startswith("UNKNOWN")]
+    goal = json.loads((out / "report.json").read_text())["goal_key_image"]
+    last = [json.loads(line)["data"] for line in done.stdout.splitlines()
+            if '"VISUAL_SERVO_STATUS"' in line][-1]
+    assert last["goal_key"] == goal
 
 
 @pytest.mark.slow
