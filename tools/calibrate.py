@@ -28,10 +28,13 @@ from typing import TYPE_CHECKING
 
 from shared.chessboard import Chessboard
 from shared.errors import CalibrationError
+from tools.harness.arg_types import COUNT, COVERAGE, POSITIVE_COUNT
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
+
+    from robot.calibration_capture import CaptureGoal
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".jpe", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".dib",
                   ".tif", ".tiff", ".webp")
@@ -51,6 +54,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     p.add_argument("images_dir", metavar="IMAGES_DIR", type=Path, nargs="?",
                    help="folder of board images")
+    capture = p.add_argument_group(
+        "capture", "take the board views from a camera first: a frame is kept when its board "
+        "covers parts of the lens's image no kept view covered, until the image is covered")
+    capture.add_argument("--capture", metavar="SOURCE",
+                         help="cv2.VideoCapture source: device index, video file or URL")
+    capture.add_argument("--views", type=Path, metavar="DIR",
+                         help="new folder for the views kept (PNG), calibrated from after")
+    capture.add_argument("--coverage", type=COVERAGE, metavar="F",
+                         help="share of the lens's image to cover [default: 0.8]")
+    capture.add_argument("--min-views", type=COUNT, metavar="N",
+                         help="views to keep at least [default: 12]")
+    capture.add_argument("--max-views", type=COUNT, metavar="N",
+                         help="views to keep at most [default: 40]")
+    capture.add_argument("--max-frames", type=POSITIVE_COUNT, metavar="N",
+                         help="stop after reading N frames [default: until covered or the "
+                         "source ends]")
     p.add_argument("--from-equidistant", type=Path, metavar="YAML",
                    help="import this equidistant (cv2.fisheye) calibration instead")
     p.add_argument(
@@ -73,10 +92,21 @@ def run(args: argparse.Namespace) -> int:
     """Calibrate or import, print the report, write the file; returns the exit code."""
     from shared.calibration import check_replaceable
 
-    if (args.images_dir is None) == (args.from_equidistant is None):
-        raise CalibrationError("IMAGES_DIR", "give a folder of board images or "
-                                             "--from-equidistant YAML (one of the two)")
+    given = [args.images_dir is not None, args.from_equidistant is not None,
+             args.capture is not None]
+    if sum(given) != 1:
+        raise CalibrationError("IMAGES_DIR", "give a folder of board images, --capture SOURCE "
+                                             "or --from-equidistant YAML (one of the three)")
     check_replaceable(args.output, WRITER)
+    if args.capture is not None:
+        from tools.calibrate_capture_cmd import capture_views
+
+        if args.views is None:
+            raise CalibrationError("--views", "--capture needs a new folder for the views")
+        board = _board(args.pattern, args.square)
+        _fov_deg(args.fov)
+        capture_views(args.capture, args.views, board, _capture_goal(args), args.max_frames)
+        args.images_dir = args.views
     if args.from_equidistant is not None:
         from tools.calibrate_equidistant_cmd import import_equidistant
 
@@ -94,12 +124,8 @@ def _calibrate(args: argparse.Namespace) -> int:
     from robot.camera_calibration import calibrate_omnidir, find_board_corners
     from shared.calibration import write_camera
 
-    if args.pattern is None or args.square is None:
-        raise CalibrationError("--pattern/--square", "both are needed to calibrate from images")
     board = _board(args.pattern, args.square)
-    fov_deg = _number("--fov", "185" if args.fov is None else args.fov)
-    if not 0.0 < fov_deg < 360.0:
-        raise CalibrationError("--fov", f"must be in (0, 360) degrees, got {args.fov}")
+    fov_deg = _fov_deg(args.fov)
     paths = _image_paths(args.images_dir)
     images, size = _read_images(paths)
     detections = {
@@ -150,8 +176,29 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _board(pattern: str, square: str) -> Chessboard:
+def _fov_deg(text: str | None) -> float:
+    """``--fov`` in degrees (185 when not given)."""
+    fov_deg = _number("--fov", "185" if text is None else text)
+    if not 0.0 < fov_deg < 360.0:
+        raise CalibrationError("--fov", f"must be in (0, 360) degrees, got {text}")
+    return fov_deg
+
+
+def _capture_goal(args: argparse.Namespace) -> CaptureGoal:
+    """``--coverage``, ``--min-views``, ``--max-views`` over the defaults."""
+    from robot.calibration_capture import CaptureGoal
+
+    given = {"target": args.coverage, "min_views": args.min_views, "max_views": args.max_views}
+    try:
+        return CaptureGoal(**{k: v for k, v in given.items() if v is not None})
+    except ValueError as e:
+        raise CalibrationError("--coverage/--min-views/--max-views", str(e)) from None
+
+
+def _board(pattern: str | None, square: str | None) -> Chessboard:
     """The board from ``--pattern COLSxROWS`` and ``--square M``."""
+    if pattern is None or square is None:
+        raise CalibrationError("--pattern/--square", "both are needed to calibrate from images")
     match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", pattern)
     if match is None:
         raise CalibrationError(

@@ -73,3 +73,5 @@ POSITIVE = number(0.0, above=True)
 """A finite number > 0 (a duration, a speed bound ...)."""
 NON_NEGATIVE = number(0.0)
 """A finite number >= 0 (a tolerance ...)."""
+COVERAGE = number(0.0, 1.0, above=True)
+"""A share in (0, 1] (of an image covered ...)."""
