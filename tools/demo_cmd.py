@@ -25,6 +25,7 @@ from tools.harness.scene_args import (
     scene_change_from_args,
 )
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
+from tools.progress import Progress
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig
@@ -121,9 +122,12 @@ def run(args: argparse.Namespace) -> int:
     consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:
-        repeat = repeat_in_sim(taught, goal, config, sim_config, change, out,
-                               _chain(consumers), robot_log,
-                               None if args.no_log else out / "logs")
+        with Progress(f"repeat to key image {goal}") as bar:
+            if bar.shown:
+                consumers.append(lambda sim, frame, sample: bar.update(detail=_status(sample)))
+            repeat = repeat_in_sim(taught, goal, config, sim_config, change, out,
+                                   _chain(consumers), robot_log,
+                                   None if args.no_log else out / "logs")
     finally:
         if video is not None:
             video.close()
@@ -163,6 +167,16 @@ def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(hil_summary_text(report, out))
     return 0 if report["reached_goal"] else 1
+
+
+def _status(sample: CycleSample) -> str:
+    """One cycle as the progress line shows it: state, the key image headed for, time."""
+    record = sample.record
+    where = ""
+    if record.follow is not None and record.route:
+        index = min(record.follow.target_index, len(record.route) - 1)
+        where = f" to key image {record.route[index]} ({index + 1} of {len(record.route)})"
+    return f"{record.state.name.lower()}{where}, {record.t_ns / 1e9:.0f} s simulated"
 
 
 def _chain(consumers: list[OnCycle]) -> OnCycle | None:

@@ -26,6 +26,7 @@ import argparse
 import contextlib
 import dataclasses
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -47,6 +48,8 @@ DEFAULT_TIMEOUT_S = 5.0
 DEFAULT_WAIT_S = 600.0
 #: ``watch`` without ``--duration`` runs until Ctrl-C: about 31 years, ns.
 FOREVER_NS = 10**18
+#: ``goto --wait`` refreshes its status line this often, s.
+_PROGRESS_PERIOD_S = 0.5
 
 Subparsers = argparse._SubParsersAction  # type: ignore[type-arg]
 
@@ -191,12 +194,31 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
         print(f"vehicle {vehicle.system_id}: going to key image {args.goal_key}")
     if not args.wait:
         return 0
-    if station.wait_mission_done(args.wait_timeout):
+    if _wait_with_progress(station, args.wait_timeout):
         print(f"vehicle {vehicle.system_id}: goal reached")
         return 0
     why = not_reached_text(station.mission_outcome, args.wait_timeout, vehicle.notices)
     print(f"vmnav ground: goal not reached: {why}", file=sys.stderr)
     return 1
+
+
+def _wait_with_progress(station: GroundStation, timeout_s: float) -> bool:
+    """:meth:`GroundStation.wait_mission_done`, with the robot's servo state on a status
+    line while it drives (on a terminal)."""
+    from ground.telemetry_text import describe
+    from tools.progress import Progress
+
+    vehicle = station.vehicle
+    end_s = time.monotonic() + timeout_s
+    with Progress(f"vehicle {vehicle.system_id}") as bar:
+        while True:
+            step_s = max(0.0, min(_PROGRESS_PERIOD_S, end_s - time.monotonic()))
+            if station.wait_mission_done(step_s):
+                return True
+            if station.mission_outcome is not None or time.monotonic() >= end_s:
+                return False
+            servo = vehicle.telemetry.get("VISUAL_SERVO_STATUS")
+            bar.update(detail=(describe(servo) or "") if servo is not None else "")
 
 
 def run_drive(station: GroundStation, args: argparse.Namespace) -> int:

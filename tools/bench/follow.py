@@ -26,6 +26,7 @@ from tools.harness.demo import (
     repeat_in_sim,
     taught_memory,
 )
+from tools.progress import Progress
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig
@@ -74,20 +75,24 @@ def bench_follow(plan: FollowBenchPlan, out: Path, config: VmnavConfig,
 
     change = plan.change or SceneChange()
     rows: list[dict[str, object]] = []
-    for seed in plan.seeds:
-        seeded = replace(sim_config, seed=seed)
-        taught = taught_memory(out / f"seed{seed}", plan.routes, config, seeded, camera)
-        goal = default_goal(taught) if plan.goal_id is None else plan.goal_id
-        for law in plan.laws:
-            law_config = follow_config(config, law, plan.max_omega_deg)
-            started = time.perf_counter()
-            run = repeat_in_sim(taught, goal, law_config, seeded, change, out / f"seed{seed}")
-            report = build_report(run, taught, law_config.control,
-                                  time.perf_counter() - started)
-            rows.append({"seed": seed, "law": law, "goal_key_image": goal,
-                         **{key: report[key] for key in SEED_KEYS}})
-            print(f"vmnav bench follow: seed {seed} {law}: {_seed_line(rows[-1])}",
-                  file=sys.stderr, flush=True)
+    with Progress("bench follow", len(plan.seeds) * len(plan.laws)) as bar:
+        for seed in plan.seeds:
+            seeded = replace(sim_config, seed=seed)
+            bar.update(len(rows), f"seed {seed}: teaching")
+            taught = taught_memory(out / f"seed{seed}", plan.routes, config, seeded, camera)
+            goal = default_goal(taught) if plan.goal_id is None else plan.goal_id
+            for law in plan.laws:
+                bar.update(len(rows), f"seed {seed}: repeating with {law}")
+                law_config = follow_config(config, law, plan.max_omega_deg)
+                started = time.perf_counter()
+                run = repeat_in_sim(taught, goal, law_config, seeded, change,
+                                    out / f"seed{seed}")
+                report = build_report(run, taught, law_config.control,
+                                      time.perf_counter() - started)
+                rows.append({"seed": seed, "law": law, "goal_key_image": goal,
+                             **{key: report[key] for key in SEED_KEYS}})
+                print(f"vmnav bench follow: seed {seed} {law}: {_seed_line(rows[-1])}",
+                      file=sys.stderr, flush=True)
     return {"seeds": rows, "aggregate": {law: aggregate([r for r in rows if r["law"] == law])
                                          for law in plan.laws}}
 
