@@ -8,6 +8,7 @@ its ChromeDriver, headless, with a fresh profile and nothing that reaches the ne
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shutil
 import threading
@@ -79,7 +80,9 @@ class Page:
         from websockets.sync.client import connect
 
         headers = {"Origin": origin} if origin is not None else None
-        self.ws = connect(url, additional_headers=headers, open_timeout=WAIT_S)
+        self._opened = contextlib.ExitStack()
+        self.ws = self._opened.enter_context(
+            connect(url, additional_headers=headers, open_timeout=WAIT_S))
         self.hello = self.receive()
         assert self.hello["type"] == "hello"
         self.updates: list[dict[str, Any]] = []
@@ -111,7 +114,7 @@ class Page:
                 return message
 
     def close(self) -> None:
-        self.ws.close()
+        self._opened.close()
 
 
 @pytest.fixture
