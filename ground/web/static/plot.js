@@ -5,7 +5,7 @@ export { DEG };
 
 // A value against time over the last `windowS` seconds; null values leave a gap.
 export class ScrollingPlot {
-  constructor(canvas, { windowS = 60, color = "#1565c0", digits = 2 } = {}) {
+  constructor(canvas, { windowS = 30, color = "#1565c0", digits = 2 } = {}) {
     this.canvas = canvas;
     this.ctx = canvas.getContext("2d");
     this.windowS = windowS;
