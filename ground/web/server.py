@@ -78,6 +78,9 @@ class WebServer:
         self._socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             self._socket.bind((config.host, config.port))
+            # Listening from here on: a page opened as soon as the URL is printed waits in
+            # the backlog until uvicorn accepts, instead of being refused.
+            self._socket.listen(128)
         except OSError as e:
             self._socket.close()
             raise TransportError(f"--http {config.host}:{config.port}",

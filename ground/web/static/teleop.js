@@ -39,7 +39,9 @@ export class Teleop {
     this.held.clear();
     const reply = await this.app.command("teleop", { on });
     this.pending = false;
-    if (!reply.ok) $("teleop").checked = false;
+    // Updates sent before the reply still name the old driver; the reply is the news.
+    if (reply.ok) this.app.teleopOwner = on ? this.app.client : null;
+    else $("teleop").checked = false;
     this.render();
   }
 

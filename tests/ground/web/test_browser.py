@@ -61,3 +61,52 @@ def test_fleet_buttons_and_a_goal_clicked_in_the_memory(
     chromium.find_element("id", "estop").click()
     wait_for(lambda: (False, True) in app.called("arm"), "the forced disarm at the vehicle")
     assert console_errors(chromium) == []
+
+
+def manual_controls(app: FakeApp) -> list[tuple[float, float]]:
+    return [(x, r) for x, _, _, r, _, _ in app.called("manual_control")]
+
+
+@pytest.mark.slow
+def test_teach_a_path_driving_with_keys_and_a_gamepad(
+        vehicle: UdpVehicle, app: FakeApp, web: RunningWeb, chromium) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    chromium.get(web.url)
+    wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"), "vehicle 1")
+    chromium.find_element("id", "teach-name").send_keys("hall")
+    chromium.find_element("id", "teach-start").click()
+    wait_for(lambda: app.called("teach_start") == [("hall",)], "TEACH_START at the vehicle")
+
+    chromium.find_element("id", "teleop").click()
+    wait_for(lambda: (Mode.MANUAL,) in app.called("set_mode"), "MANUAL at the vehicle")
+    wait_for(lambda: text_of(chromium, "drive-state").startswith("driving"), "driving")
+    keys = ActionChains(chromium)
+    keys.key_down("w").key_down("d").perform()
+    wait_for(lambda: (0.6, 0.6) in manual_controls(app), "forward and right at the vehicle")
+    keys.key_up("d").perform()
+    wait_for(lambda: manual_controls(app)[-1] == (0.6, 0.0), "forward only")
+    keys.key_up("w").perform()  # released: the robot stops
+    wait_for(lambda: manual_controls(app)[-1] == (0.0, 0.0), "stopped on release")
+
+    # A gamepad (the Gamepad API, stood in for: headless Chromium has none): the left stick
+    # forward and to the right, then back to the centre.
+    chromium.execute_script(
+        "window.stick = [0.5, -1.0];"
+        "navigator.getGamepads = () => [{axes: window.stick, buttons: []}];")
+    wait_for(lambda: (1.0, 0.5) in manual_controls(app), "the stick at the vehicle")
+    chromium.execute_script("window.stick = [0.05, 0.0];")  # inside the dead zone
+    wait_for(lambda: manual_controls(app)[-1] == (0.0, 0.0), "stopped at the centre")
+
+    chromium.execute_script("window.stick = [0.0, -0.8];")
+    wait_for(lambda: manual_controls(app)[-1] == (0.8, 0.0), "driving again")
+    chromium.get("about:blank")  # the page goes away while the stick is held
+    wait_for(lambda: manual_controls(app)[-1] == (0.0, 0.0), "stopped when the page went")
+
+    chromium.get(web.url)
+    wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"), "vehicle 1")
+    assert not chromium.find_element("id", "teleop").is_selected()
+    chromium.find_element("id", "teach-stop").click()
+    wait_for(lambda: app.called("teach_stop") == [()], "TEACH_STOP at the vehicle")
+    wait_for(lambda: text_of(chromium, "message") == "vehicle 1: teaching stopped", "the reply")
+    assert console_errors(chromium) == []
