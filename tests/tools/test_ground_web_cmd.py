@@ -10,7 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from tests.ground.web.conftest import wait_for
+from shared.clock import WallClock
+from tests.ground.web.conftest import Page, wait_for
+from tests.robot.vehicle.fake_app import FakeApp
+from tests.robot.vehicle.harness import make_vehicle
 from tools.cli import build_parser, main
 from tools.harness.vmnav_process import VmnavProcess
 
@@ -38,6 +41,16 @@ def test_the_defaults_serve_the_page_on_8080_and_listen_for_mavlink_on_14550(
                          web.output(), re.M), web.output()
         with urllib.request.urlopen("http://127.0.0.1:8080/", timeout=60) as response:
             assert b"<title>vmnav ground</title>" in response.read()
+        # A robot sending to the default port (`vmnav robot --mavlink udpout:127.0.0.1:14550`;
+        # here its vehicle endpoint) shows in the fleet.
+        with make_vehicle(tmp_path, FakeApp(), WallClock(), url="udpout:127.0.0.1:14550") as v:
+            v.start_thread()
+            page = Page("ws://127.0.0.1:8080/ws")
+            try:
+                page.update_where(lambda u: [x["system_id"] for x in u["vehicles"]] == [1],
+                                  "vehicle 1 in the fleet")
+            finally:
+                page.close()
     finally:
         code = web.stop()
     assert code == 143 and "Traceback" not in web.output()  # SIGTERM, as Ctrl-C: clean
