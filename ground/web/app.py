@@ -35,6 +35,7 @@ import contextlib
 import itertools
 import json
 import logging
+import math
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
@@ -138,10 +139,30 @@ async def _answer(station_loop: StationLoop, text: str, client: int) -> dict[str
     return {**reply, "ok": True, **result}
 
 
+def _finite(value: Any) -> Any:
+    """``value`` with every NaN or infinity inside it replaced by None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def encode(message: dict[str, Any]) -> str:
+    """``message`` as JSON the browser parses: NaN and infinities (which JSON lacks, and a
+    vehicle may send, e.g. as a parameter's value) become ``null``."""
+    try:
+        return json.dumps(message, allow_nan=False)
+    except ValueError:
+        return json.dumps(_finite(message), allow_nan=False)
+
+
 async def _send_all(websocket: WebSocket, queue: asyncio.Queue[dict[str, Any]]) -> None:
     while True:
         message = await queue.get()
-        await websocket.send_text(json.dumps(message, allow_nan=False))
+        await websocket.send_text(encode(message))
 
 
 async def _websocket(websocket: WebSocket) -> None:

@@ -40,7 +40,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 from ground.fleet import VehicleState
-from ground.station import GroundStation
+from ground.station import GroundError, GroundStation
 from ground.teleop import PERIOD_NS, DeadMan
 from ground.web.link_quality import LinkQuality
 from ground.web.memory_index import (
@@ -70,6 +70,7 @@ QUIET_PUBLISH_NS = NS_PER_S
 CACHE_BYTES = 64 * 2**20
 #: Stream period asked for the plotted messages of the vehicle selected, us (10 Hz).
 PLOT_INTERVAL_US = 100_000
+_ENDED = "the ground station's loop has ended (its error is in the server's log)"
 _PLOTTED = (mavlink.MAVLINK_MSG_ID_ODOMETRY, mavlink.MAVLINK_MSG_ID_VISUAL_SERVO_STATUS)
 #: The files the page may ask for (rule 5), under ``/memory``.
 MEMORY_FILES = frozenset({"thumbnails", "images"})
@@ -96,6 +97,7 @@ class StationLoop:
             collections.deque()
         self._lock = threading.Lock()
         self._stopping = threading.Event()
+        self._ended = False
         self._thread = threading.Thread(target=self._run, name="ground-web-station",
                                         daemon=True)
         self._start_ns = clock.now_ns()
@@ -136,7 +138,9 @@ class StationLoop:
         the work waiting."""
         future: concurrent.futures.Future[T] = concurrent.futures.Future()
         with self._lock:
-            if self._stopping.is_set():
+            if self._ended:
+                future.set_exception(GroundError(_ENDED))
+            elif self._stopping.is_set():
                 future.cancel()
             elif first:
                 self._work.appendleft((action, future))
@@ -161,6 +165,19 @@ class StationLoop:
     # -- the loop -------------------------------------------------------------------------
 
     def _run(self) -> None:
+        try:
+            self._serve()
+        except Exception:  # the link itself failed (closed socket...): nothing more to do
+            _log.exception("the ground station's loop ended")
+        finally:
+            with self._lock:
+                self._ended = True
+                work, self._work = list(self._work), collections.deque()
+            for _, future in work:
+                if future.set_running_or_notify_cancel():
+                    future.set_exception(GroundError(_ENDED))
+
+    def _serve(self) -> None:
         try:
             while not self._stopping.is_set():
                 self.station.run_until(self._has_work, POLL_NS)

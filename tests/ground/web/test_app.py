@@ -5,6 +5,7 @@ FakeApp behind it), through a real ground station: every request reaches the veh
 from __future__ import annotations
 
 import json
+import math
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 from websockets.exceptions import InvalidStatus
 
+from ground.web.app import encode
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
@@ -197,3 +199,16 @@ def test_memory_index_and_key_image_files_over_ftp(
     # Known to the page's memory: a goal outside it is refused before anything is sent.
     assert page.ask("goto", key=42)["error"] == \
         "key: vehicle 1's memory has no key image 42 (7 key images)"
+
+
+def test_numbers_json_lacks_become_null() -> None:
+    assert json.loads(encode({"params": {"A": math.nan, "B": 1.5}, "v": [math.inf, 2]})) == \
+        {"params": {"A": None, "B": 1.5}, "v": [None, 2]}
+
+
+def test_a_failed_link_fails_requests_in_one_line_instead_of_hanging(
+        web: RunningWeb, page: Page) -> None:
+    web.station.link.close()  # the station's socket goes: its loop ends
+    reply = page.ask("arm")
+    assert reply["error"] == \
+        "the ground station's loop has ended (its error is in the server's log)"
