@@ -163,10 +163,13 @@ def test_teleop_sends_the_held_axes_and_stops_when_the_page_goes(
     page.send(json.dumps({"cmd": "drive", "x": 0.5, "r": 0.0}))
     wait_for(lambda: manual_controls(app)[-1] == (0.5, 0.0), "driving again")
     page.close()  # the page goes away while driving
-    wait_for(lambda: manual_controls(app)[-1] == (0.0, 0.0), "the stop")
+    later = Page(web.ws_url)
+    off = later.update_where(lambda u: u["teleop_owner"] is None, "teleop off")
+    later.ask("arm")  # the vehicle handles datagrams in order: the stop came before this
+    assert manual_controls(app)[-1] == (0.0, 0.0)
     sent = len(manual_controls(app))
-    later = Page(web.ws_url)  # teleop is off: no more MANUAL_CONTROL
-    later.update_where(lambda u: u["teleop_owner"] is None, "teleop off")
+    # No more MANUAL_CONTROL: half a second of the station's time later, still none.
+    later.update_where(lambda u: u["t"] >= off["t"] + 0.5, "half a second later")
     later.ask("arm")
     assert len(manual_controls(app)) == sent
     later.close()

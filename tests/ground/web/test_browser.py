@@ -69,9 +69,11 @@ def manual_controls(app: FakeApp) -> list[tuple[float, float]]:
 
 @pytest.mark.slow
 def test_teach_a_path_driving_with_keys_and_a_gamepad(
-        vehicle: UdpVehicle, app: FakeApp, web: RunningWeb, chromium) -> None:
+        vehicle: UdpVehicle, app: FakeApp, web: RunningWeb, chromium, tmp_path: Path,
+        rng: np.random.Generator) -> None:
     from selenium.webdriver.common.action_chains import ActionChains
 
+    write_memory(tmp_path / "memory", loop_memory(rng))  # reloaded after teaching stops
     chromium.get(web.url)
     wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"), "vehicle 1")
     chromium.find_element("id", "teach-name").send_keys("hall")
