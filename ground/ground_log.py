@@ -9,9 +9,10 @@ its raw bytes, its parsed message and the station clock's reading, and goes to
 
 1. ``<dir>/ground-NNNN.mcap`` through a :class:`~shared.logs.writer.LogWriter` named
    ``ground``: the message as JSON on ``/mavlink/<in|out>/<NAME>`` and its frame on
-   ``/mavlink/raw`` (mcap-logging.md §3), ``log_time`` the station clock. The metadata
-   record ``ground`` holds ``unix_offset_ns`` (Unix time minus that clock) and the name
-   of the tlog, to line the two files up;
+   ``/mavlink/raw`` (mcap-logging.md §3), ``log_time`` in Unix time (the station clock
+   plus ``unix_offset_ns``, recorded in the ``clock`` metadata as in every log). The
+   metadata record ``ground`` also holds ``unix_offset_ns`` and the name of the tlog, to
+   line the two files up;
 2. ``<dir>/ground-<stamp>.tlog`` (:class:`Tlog`), pymavlink's telemetry log that
    ``mavlogdump.py``, MAVExplorer, MAVProxy and QGroundControl read: per packet an 8-byte
    big-endian Unix time in µs, then the packet's bytes as on the wire. ``<stamp>`` is the
@@ -170,7 +171,7 @@ class GroundLog:
         self.unix_offset_ns = unix_offset_ns
         self.tlog = Tlog(*create_tlog(Path(config.output_dir), clock.now_ns() + unix_offset_ns),
                          config.flush_period_ns, config.fsync)
-        self.writer = LogWriter(config, name=NAME)
+        self.writer = LogWriter(config, name=NAME, unix_offset_ns=unix_offset_ns)
         self.writer.add_metadata(NAME, {"unix_offset_ns": str(unix_offset_ns),
                                         "tlog": self.tlog.path.name})
 

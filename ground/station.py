@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import select
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from ground.fleet import Fleet, VehicleState
@@ -62,6 +63,7 @@ from shared.errors import IllegalEventError, InputError, VmnavError
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.commands.gcs import CommandClient, CommandDone, result_name
 from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
+from shared.mavlink.commands.user import NAMES as USER_COMMANDS
 from shared.mavlink.commands.vehicle import FORCE_ARM_MAGIC
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp.gcs import Downloaded, FtpClient, FtpFailed, Listed, Uploaded
@@ -108,7 +110,39 @@ class GroundError(VmnavError):
     :class:`~shared.errors.VmnavError`)."""
 
 
+@dataclass(frozen=True, slots=True)
+class PhotoGoal:
+    """A photo the robot found in its memory and now drives to.
+
+    Attributes:
+        photo_id: the id it was uploaded under (``/upload/<id>.<ext>``).
+        keyframe_id: the key image it was found at: the goal.
+        said: the robot's line about it (the key image's matches and verified inliers);
+            "" if that STATUSTEXT was lost.
+    """
+
+    photo_id: int
+    keyframe_id: int
+    said: str
+
+
+@dataclass(frozen=True, slots=True)
+class StoredPath:
+    """A taught path the robot stored.
+
+    Attributes:
+        path_id: its id in the memory.
+        said: the robot's line about it (key images, junctions); "" if that STATUSTEXT
+            was lost.
+    """
+
+    path_id: int
+    said: str
+
+
 def _command_name(command: int) -> str:
+    if command in USER_COMMANDS:
+        return USER_COMMANDS[command]
     entry = mavlink.enums["MAV_CMD"].get(command)
     return entry.name if entry is not None else f"command {command}"
 
@@ -364,7 +398,8 @@ class GroundStation:
     # -- commands -----------------------------------------------------------------------
 
     def command_long(self, command: int, *params: float) -> int:
-        """Send COMMAND_LONG ``command`` (params 1-7, unset ones NaN) and wait for its ACK.
+        """Send COMMAND_LONG ``command`` (params 1-7, unset ones NaN) and wait for its final
+        ACK (through any ``MAV_RESULT_IN_PROGRESS``).
 
         Returns:
             The ``MAV_RESULT``.
@@ -372,6 +407,9 @@ class GroundStation:
         Raises:
             GroundError: no ACK after the resends.
         """
+        return self._command_done(command, params).result
+
+    def _command_done(self, command: int, params: tuple[float, ...]) -> CommandDone:
         self._target("command_long")
         assert self._commands is not None
         self._send(self._commands.send(command, tuple(params), self.clock.now_ns()))
@@ -379,20 +417,24 @@ class GroundStation:
         if not isinstance(outcome, CommandDone):
             raise GroundError(f"no COMMAND_ACK to {_command_name(command)} "
                               f"after {outcome.sends} tries")
-        return int(outcome.result)
+        return outcome
 
-    def command(self, command: int, *params: float) -> None:
+    def command(self, command: int, *params: float) -> CommandDone:
         """:meth:`command_long`, and anything but ACCEPTED is an error.
+
+        Returns:
+            The final ACK's outcome (its ``result_param2`` means what the command says).
 
         Raises:
             GroundError: no ACK, or a result other than ACCEPTED (with the reason).
         """
         vehicle = self._target("command")
         before = len(vehicle.notices)
-        result = self.command_long(command, *params)
-        if result != mavlink.MAV_RESULT_ACCEPTED:
+        done = self._command_done(command, params)
+        if not done.accepted:
             raise GroundError(f"vehicle {vehicle.system_id} answered {_command_name(command)} "
-                              f"with {result_name(result)}{self._reason(before)}")
+                              f"with {result_name(done.result)}{self._reason(before)}")
+        return done
 
     def emergency_stop(self) -> None:
         """Stop the vehicle now: a forced disarm (COMPONENT_ARM_DISARM, param2 21196), the
@@ -476,26 +518,32 @@ class GroundStation:
         self._watch = MissionWatch(self._mission_count - 1 if self._mission_count else None)
         self.command(mavlink.MAV_CMD_MISSION_START, 0)
 
-    def goto_photo(self, data: bytes, suffix: str) -> int:
-        """Upload a photo of the goal as ``/upload/<id><suffix>`` (a new id) and send the
-        go-to-photo command; follow it for :meth:`wait_mission_done`.
+    def goto_photo(self, data: bytes, suffix: str) -> PhotoGoal:
+        """Upload a photo of the goal as ``/upload/<id><suffix>`` (a new id), send the
+        go-to-photo command and wait while the robot looks the photo up in its memory
+        (a long-running command: ``robot.vehicle.user_commands``); follow the run for
+        :meth:`wait_mission_done`.
 
         Args:
             data: the encoded image (JPEG, PNG...).
             suffix: its file extension with the dot, e.g. ``".jpg"``.
 
         Returns:
-            The photo id.
+            The photo's id, the key image it was found at (the goal) and the robot's words.
 
         Raises:
-            GroundError: the upload failed, or the command was refused.
+            GroundError: the upload failed, the command was refused, or the photo was not
+                found in the memory (with the robot's reason).
         """
+        vehicle = self._target("goto_photo")
         taken = [e.name.partition(".")[0] for e in self.ftp_list("/upload")]
         photo_id = 1 + max((int(stem) for stem in taken if stem.isdigit()), default=0)
         self.ftp_put(f"/upload/{photo_id}{suffix}", data)
         self._watch = MissionWatch(None)
-        self.command(GOTO_PHOTO, photo_id)
-        return photo_id
+        before = len(vehicle.notices)
+        done = self.command(GOTO_PHOTO, photo_id)
+        said = [n for n in vehicle.notices[before:] if n.startswith(f"photo {photo_id}{suffix}:")]
+        return PhotoGoal(photo_id, done.result_param2, said[0] if said else "")
 
     def teach_start(self, name: str) -> None:
         """Start recording a visual path called ``name`` ("" lets the robot name it).
@@ -510,13 +558,22 @@ class GroundStation:
             raise InputError("NAME", str(e)) from None
         self.command(TEACH_START, *params)
 
-    def teach_stop(self) -> None:
-        """Stop recording; the path joins the robot's memory.
+    def teach_stop(self) -> StoredPath:
+        """Stop recording and wait while the robot joins the path to its memory and writes
+        it (a long-running command: ``robot.vehicle.user_commands``).
+
+        Returns:
+            The id of the path stored and the robot's words about it.
 
         Raises:
-            GroundError: refused (not teaching) or unanswered.
+            GroundError: refused (not teaching), unanswered, or nothing stored (too short a
+                drive, the memory not writable: with the robot's reason).
         """
-        self.command(TEACH_STOP)
+        vehicle = self._target("teach_stop")
+        before = len(vehicle.notices)
+        done = self.command(TEACH_STOP)
+        said = [n for n in vehicle.notices[before:] if n.startswith(f"path {done.result_param2} ")]
+        return StoredPath(done.result_param2, said[0] if said else "")
 
     @property
     def mission_outcome(self) -> bool | None:

@@ -4,7 +4,8 @@ Every call queues onto a :class:`shared.logs.writer.LogWriter`, whose thread bui
 encodes and writes the messages, so the control loop only copies and queues; a log
 problem (queue full, disk full) is counted, never raised. Topics
 (:mod:`shared.logs.topics`, mcap-logging.md sec. 3), each stamped with the data's time
-on the robot's clock:
+on the robot's clock (the JSON messages' ``stamp_ns``; the MCAP ``log_time`` and the
+Foxglove timestamps add the clock's Unix offset, :mod:`shared.logs.writer`):
 
 * :data:`~shared.logs.topics.MISSION_START` (:meth:`FieldLog.mission_started`): a mission
   run's goal, its random generator's state and the whole config, what
@@ -150,13 +151,15 @@ class FieldLog:
         name: file name prefix, e.g. ``"robot"`` or ``"teach-east_a"``.
         mount: the camera's mount on the base (the static ``base_link`` -> ``camera``).
         run: key-value metadata ``run`` (robot, route, goal, git sha, ...).
+        unix_offset_ns: Unix time minus the robot's clock reading, ns
+            (:func:`shared.clock.unix_offset_ns`, measured once by the entry point).
     """
 
     def __init__(self, config: LogConfig, name: str, mount: CameraMountConfig,
-                 run: Mapping[str, str]) -> None:
+                 run: Mapping[str, str], *, unix_offset_ns: int) -> None:
         self.config = config
         self._camera = camera_transform(mount)
-        self._writer = LogWriter(config, name)
+        self._writer = LogWriter(config, name, unix_offset_ns=unix_offset_ns)
         self._writer.add_metadata(RUN_METADATA, {**run, SERIES_KEY: uuid.uuid4().hex})
 
     def mission_started(self, t_ns: int, goal_id: int, rng_state: Mapping[str, Any],

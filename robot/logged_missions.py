@@ -85,7 +85,7 @@ def read_missions(files: Sequence[Path]) -> Iterator[MissionStart | LoggedCycle]
     for file in files:
         for message in read_messages(file, REPLAY_TOPICS):
             part = _PARTS.get(message.topic)
-            if cycle is not None and (part is None or message.log_time_ns != cycle.t_ns
+            if cycle is not None and (part is None or message.clock_ns != cycle.t_ns
                                       or part in cycle.parts):
                 if (logged := cycle.logged()) is not None:
                     yield logged
@@ -94,7 +94,7 @@ def read_missions(files: Sequence[Path]) -> Iterator[MissionStart | LoggedCycle]
                 yield mission_start(file, message)
                 continue
             if cycle is None:
-                cycle = _Cycle(file, message.log_time_ns, {})
+                cycle = _Cycle(file, message.clock_ns, {})
             cycle.parts[part] = message.data
     if cycle is not None and (logged := cycle.logged()) is not None:
         yield logged
@@ -107,7 +107,7 @@ def mission_start(file: Path, message: LogMessage) -> MissionStart:
     Raises:
         InputError: a field missing or malformed (``ConfigError`` for the config).
     """
-    t_ns = message.log_time_ns
+    t_ns = message.clock_ns
     where = f"{file}: mission start at {t_ns / 1e9:.3f} s"
     data = message.data
     missing = [k for k in ("goal_key_image_id", "rng_state", "config") if k not in data]

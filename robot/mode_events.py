@@ -80,6 +80,7 @@ class PathStored:
 
     memory: VisualMemory
     localizer: Localizer
+    path_id: int
     text: str
     level: int = logging.INFO
 

@@ -43,6 +43,9 @@ failsafes, photo goals) in one table; what they rest on here:
 5. A photo goal is read and localized in the memory by the worker
    (:func:`robot.worker.find_photo`): found, the robot goes there in GUIDED; not found
    (or an unreadable photo, or one of another size than the camera's) is a notice.
+   Either way, and when the loop refuses the photo or its goal, the outcome is kept
+   for :meth:`next_job_outcome` (the command's final answer on the link), as is a
+   taught path's (rule 4: stored, not stored, or the stop refused).
 6. Frames stopping (:meth:`stall`): the base stops and nothing else changes; the
    mission run carries on with the next frame.
 7. Notices for the operator (:meth:`next_notice`) tell what the telemetry cannot:
@@ -89,8 +92,10 @@ from robot.mode_events import (
     GcsLost,
     GoalGone,
     GotoPhoto,
+    PathNotStored,
     PathStored,
     PhotoFound,
+    PhotoNotFound,
     RunEnded,
     SetMode,
     StartGoals,
@@ -102,7 +107,13 @@ from robot.modes import Action, Activity, Decision, Drive, TopState, decide, dri
 from robot.runtime_log import RuntimeLog
 from robot.safe_base import SafeBase
 from robot.teach import KeyImageSelector, SelectedKeyImage
-from robot.vehicle.app_port import ACTIVE_STATES, GcsLostAction, VehicleTelemetry
+from robot.vehicle.app_port import (
+    ACTIVE_STATES,
+    GcsLostAction,
+    Job,
+    JobOutcome,
+    VehicleTelemetry,
+)
 from robot.worker import Worker, find_photo, store_path
 from shared.clock import Clock
 from shared.errors import VmnavError
@@ -116,6 +127,8 @@ from shared.pose import Pose2
 
 #: Notices queued at most (the oldest go first when the link does not take them).
 _MAX_NOTICES = 64
+#: Events that end (or refuse) a job whose outcome the link waits for (rules 4, 5).
+_JOB_EVENTS = (GotoPhoto, PhotoFound, PhotoNotFound, TeachStop, PathStored, PathNotStored)
 
 
 @dataclass(eq=False)
@@ -159,6 +172,7 @@ class RobotRuntime:
         self._worker = Worker(lockstep)
         self._requests: deque[Event] = deque()
         self._notices: deque[tuple[int, str]] = deque(maxlen=_MAX_NOTICES)
+        self._job_outcomes: deque[JobOutcome] = deque(maxlen=_MAX_NOTICES)
         self._manual: tuple[float, float, int] | None = None  # (x, r, arrival ns)
         self._top = TopState()
         self._goals = GoalRuns(self._base, rng, log, stopwatch)
@@ -325,6 +339,12 @@ class RobotRuntime:
         except IndexError:
             return None
 
+    def next_job_outcome(self) -> JobOutcome | None:
+        try:
+            return self._job_outcomes.popleft()
+        except IndexError:
+            return None
+
     # -- events -------------------------------------------------------------------------
 
     def _take_news(self, t_ns: int, base: BaseState) -> None:
@@ -350,6 +370,8 @@ class RobotRuntime:
             self._base.release()  # rule 9: the operator acted
         for action in decision.actions:
             self._act(action, t_ns, event, decision)
+        if isinstance(event, _JOB_EVENTS):
+            self._job_outcome(event, decision)  # after its notice (rules 4, 5)
 
     def _act(self, action: Action, t_ns: int, event: Event, decision: Decision) -> None:
         match action:
@@ -452,6 +474,19 @@ class RobotRuntime:
                             tuple(k.record for k in key_images), self._config)
 
     # -- output -------------------------------------------------------------------------
+
+    def _job_outcome(self, event: Event, decision: Decision) -> None:
+        """Where a photo goal or a taught path ended up (rules 4, 5), for the command's
+        final answer."""
+        job: Job = "photo" if isinstance(event, GotoPhoto | PhotoFound | PhotoNotFound) else "path"
+        if decision.refused:
+            self._job_outcomes.append(JobOutcome(job, None, decision.say))
+        elif isinstance(event, PhotoFound):
+            self._job_outcomes.append(JobOutcome(job, event.goal_key, event.text))
+        elif isinstance(event, PathStored):
+            self._job_outcomes.append(JobOutcome(job, event.path_id, event.text))
+        elif isinstance(event, PhotoNotFound | PathNotStored):
+            self._job_outcomes.append(JobOutcome(job, None, event.text))
 
     def _say(self, t_ns: int, level: int, text: str) -> None:
         self._notices.append((level, text))

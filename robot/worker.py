@@ -143,6 +143,6 @@ def store_path(memory_dir: Path, camera: CameraModel, name: str,
     joined = sum(a.accepted for a in attempts)
     localizer = Localizer.from_memory(memory, config.camera.mount, config.features,
                                       config.localize)
-    return PathStored(memory, localizer,
+    return PathStored(memory, localizer, path.id,
                       f"path {path.id} {name!r}: {len(records)} key images, "
                       f"{joined} junction(s)")

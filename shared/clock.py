@@ -81,6 +81,17 @@ class ManualClock:
         self.advance_ns(round(seconds * NS_PER_S))
 
 
+def unix_offset_ns(clock: Clock) -> int:
+    """Unix time minus ``clock``'s reading now, ns: what turns the clock's times into Unix
+    times (logs, signing). Entry points measure it once, when they open what needs it; a
+    wall clock's offset then drifts only as NTP slews the system time.
+
+    A lock-step :class:`~sim.sim_clock.SimClock` measured at its start puts the simulated
+    clock's zero at the wall time the run started.
+    """
+    return time.time_ns() - clock.now_ns()
+
+
 def ns_from_s(seconds: float) -> int:
     """Seconds to integer nanoseconds, rounded to the nearest ns."""
     return round(seconds * NS_PER_S)

@@ -435,6 +435,15 @@ class LogConfig:
     (camera frames and their annotations, MAVLink messages and raw frames) are no longer
     written (counted in ``LogStats.over_quota``) and one WARNING says so, in the file and
     on the console; state, commands, transforms, SIPs and events go on (a few kB/s)."""
+    retain_max_bytes: int = 50_000_000_000
+    """Size limit of the log folder, bytes: when a log file opens, the oldest of the log
+    files vmnav wrote there are deleted until they hold at most this much (the files
+    being written are never deleted; other files never; ``shared.logs.retention``).
+    0: no size limit; else at least 1 MB (1000000)."""
+    retain_max_age_days: float = 90.0
+    """Age limit of the log folder, days: when a log file opens, the log files vmnav wrote
+    there that were last modified longer ago than this are deleted. 0: no age limit;
+    else at most 36500."""
     replay_frames: bool = False
     """Log every frame a mission cycle consumed losslessly (PNG, whatever ``frame_rate_hz``),
     so that ``vmnav replay`` reproduces the estimates exactly; JPEG frames replay only
@@ -450,7 +459,29 @@ class LogConfig:
                 f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
         require(self.flush_period_ns <= 1_000_000_000,
                 f"flush_period_ns must be <= 1 s (1000000000), got {self.flush_period_ns}")
+        require(self.retain_max_bytes == 0 or self.retain_max_bytes >= 1_000_000,
+                f"retain_max_bytes must be 0 (no limit) or at least 1000000 (1 MB), got "
+                f"{self.retain_max_bytes}")
+        require(math.isfinite(self.retain_max_age_days)
+                and 0 <= self.retain_max_age_days <= 36500,
+                f"retain_max_age_days must be 0 (no limit) or in (0, 36500] days, got "
+                f"{self.retain_max_age_days}")
         require(self.compression in LOG_COMPRESSIONS,
                 f"compression must be one of {', '.join(LOG_COMPRESSIONS)}, "
                 f"got {self.compression!r}")
 
+
+LOG_TABLE = "log"
+"""The config file's table of :class:`LogConfig` (the robot's ``[log]``)."""
+
+
+def load_log_config(path: str | Path | None) -> LogConfig:
+    """The ``[log]`` table of a vmnav config file (other tables are left to their parts'
+    loaders); ``None`` or no such table gives the defaults. The ground station's config.
+
+    Raises:
+        ConfigError: naming the file and the key at fault.
+    """
+    if path is None:
+        return LogConfig()
+    return from_mapping(LogConfig, load_toml(path).get(LOG_TABLE, {}), str(path), LOG_TABLE)

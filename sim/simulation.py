@@ -250,8 +250,16 @@ class Simulation:
         People standing too close to it start elsewhere.
 
         Raises:
-            ConfigError: the robot would overlap a wall or furniture.
+            ConfigError: ``pose`` is outside the world's extent or not finite, or the robot
+                would overlap a wall or furniture.
         """
+        (x0, y0), (x1, y1) = self.world.extent()
+        if not (x0 <= pose.x_m <= x1 and y0 <= pose.y_m <= y1 and math.isfinite(pose.yaw_rad)):
+            raise ConfigError(
+                "robot pose",
+                f"({pose.x_m}, {pose.y_m}, {math.degrees(pose.yaw_rad)} deg) is outside world "
+                f"'{self.world.name}' (x {x0:g} to {x1:g} m, y {y0:g} to {y1:g} m)",
+            )
         probe_body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         probe_body.position = (pose.x_m, pose.y_m)
         probe_body.angle = pose.yaw_rad

@@ -110,13 +110,14 @@ def run(args: argparse.Namespace) -> int:
     taught = taught_memory(out, routes, config, sim_config, camera)
     teach_s = time.perf_counter() - started
     goal = default_goal(taught) if args.goal is None else args.goal
-    video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config)
+    video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config, goal)
     robot_log = None if args.no_log else DemoLog(
         dataclasses.replace(config.log, output_dir=str(out / "logs"), replay_frames=True),
         config.camera.mount,
         {"source": "vmnav demo (simulator, lock-step)", "goal_key_image": str(goal),
          "routes": ",".join(routes) if routes else "all", "seed": str(sim_config.seed),
-         "control_law": config.control.law})
+         "control_law": config.control.law},
+        unix_offset_ns=time.time_ns())  # the repeat's simulation clock starts at 0 about now
     consumers = [c.add for c in (video, robot_log) if c is not None]
     repeat_started = time.perf_counter()
     try:

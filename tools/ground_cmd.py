@@ -5,7 +5,8 @@ Every subcommand connects (``--connect``, pymavlink connection strings), waits u
 heard), does its one thing and exits: 0 on success, 1 with one line on stderr when the
 vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. With
 ``--log DIR`` every MAVLink packet in and out also goes to ``DIR/ground-NNNN.mcap`` and
-``DIR/ground-<stamp>.tlog`` (``ground.ground_log``).
+``DIR/ground-<stamp>.tlog`` (``ground.ground_log``), configured by the ``[log]`` table of
+``--config FILE`` (retention limits, flushing, rotation; ``shared.config.LogConfig``).
 
 Without ``--key`` the link stays on this machine (``shared.link_security``): the
 default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -71,6 +73,9 @@ def add_parser(subparsers: Subparsers) -> None:
     ground.add_argument("--log", type=Path, metavar="DIR",
                         help="log every MAVLink packet in and out to DIR/ground-NNNN.mcap "
                              "and DIR/ground-<stamp>.tlog (default: no log)")
+    ground.add_argument("--config", type=Path, metavar="FILE",
+                        help="a vmnav config file; its [log] table configures --log "
+                             "(retention limits, flushing, rotation)")
     sub = ground.add_subparsers(dest="ground_command", metavar="SUBCOMMAND", required=True)
 
     sub.add_parser("status", help="vehicles seen, mode, battery, mission state"
@@ -107,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     from ground.ground_log import GroundLog
     from ground.station import GroundStation
     from shared.clock import WallClock
-    from shared.config import LogConfig
+    from shared.config import load_log_config
     from shared.errors import InputError
     from shared.key_file import read_key_file
     from shared.link_security import check_link
@@ -116,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")
     clock = WallClock()
     key = read_key_file(args.key) if args.key is not None else None
+    log_config = load_log_config(args.config)  # before connecting: a bad file is one line
     url, line, _ = check_link(args.connect, "--connect", key is not None, args.insecure)
     if line is not None:
         print(f"vmnav ground: {line}", file=sys.stderr)
@@ -124,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
         station = stack.enter_context(GroundStation.open(
             url, clock, system_id=args.system, key=key, unix_offset_ns=unix_offset_ns))
         if args.log is not None:
-            ground_log = GroundLog(LogConfig(output_dir=str(args.log)), clock, unix_offset_ns)
+            ground_log = GroundLog(dataclasses.replace(log_config, output_dir=str(args.log)),
+                                   clock, unix_offset_ns)
             stack.callback(lambda: print(
                 f"vmnav ground: {ground_log.summary_text(ground_log.close())}", file=sys.stderr))
             station.packet_taps.append(ground_log.record)
@@ -174,9 +181,10 @@ def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
         except OSError as e:
             raise InputError(args.image, f"cannot read the goal photo: {e.strerror}") from None
         check_image(data, args.image)  # refused here in one line rather than by the robot
-        photo_id = station.goto_photo(data, args.image.suffix)
-        print(f"vehicle {vehicle.system_id}: going to photo {args.image.name} "
-              f"(uploaded as photo {photo_id})")
+        found = station.goto_photo(data, args.image.suffix)
+        print(f"vehicle {vehicle.system_id}: photo {args.image.name} (uploaded as photo "
+              f"{found.photo_id}) found at key image {found.keyframe_id}; going there"
+              + (f"\n  the robot: {found.said}" if found.said else ""))
     else:
         try:
             goal = Goal(args.goal_key)

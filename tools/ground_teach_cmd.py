@@ -33,6 +33,7 @@ def run_start(station: GroundStation, args: argparse.Namespace) -> int:
 
 def run_stop(station: GroundStation, args: argparse.Namespace) -> int:
     """Stop recording."""
-    station.teach_stop()
-    print(f"vehicle {station.vehicle.system_id}: teaching stopped")
+    stored = station.teach_stop()
+    print(f"vehicle {station.vehicle.system_id}: teaching stopped, path {stored.path_id} stored"
+          + (f"\n  the robot: {stored.said}" if stored.said else ""))
     return 0

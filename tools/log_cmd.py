@@ -1,17 +1,20 @@
 """``vmnav log ...``: inspect and repair MCAP field logs.
 
-* ``vmnav log info FILE [--json]``: topics, schemas, message counts, duration, rates;
-  works on unfinished files too (by scanning) and says what is wrong with them.
+* ``vmnav log info FILE [--json]``: start date, topics, schemas, message counts, duration,
+  rates; works on unfinished files too (by scanning) and says what is wrong with them.
 * ``vmnav log recover FILE [-o OUT]``: rewrite an unfinished or damaged file (from a
   killed process) into a valid, indexed one; FILE is never changed.
 * ``vmnav log plot FILE [--out DIR]``: the paper-style figures of a robot log
   (:mod:`tools.figures.log_plot`).
+* ``vmnav log dump TLOG [OPTION ...]``: pymavlink's ``mavlogdump`` with the vmnav dialect
+  (:mod:`ground.tlog_dump`), e.g. on the ground station's ``.tlog``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -55,6 +58,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     plot.add_argument("--out", type=Path, metavar="DIR",
                       help="folder of the figures [default: FILE's folder]")
     plot.set_defaults(run=run_plot)
+    dump = log_sub.add_parser(
+        "dump",
+        help="print a MAVLink telemetry log (.tlog) with the vmnav dialect (mavlogdump)",
+        description="Run pymavlink's mavlogdump on TLOG with the vmnav dialect loaded, so "
+        "that vmnav's messages (VISUAL_SERVO_STATUS, ...) print by name instead of "
+        "UNKNOWN_24400. Options after TLOG go to mavlogdump as they are, e.g. "
+        "--types VISUAL_SERVO_STATUS, --format json, --show-types.",
+    )
+    dump.add_argument("file", type=Path, metavar="TLOG",
+                      help="a telemetry log, e.g. the ground station's ground-*.tlog")
+    dump.add_argument("options", nargs=argparse.REMAINDER, metavar="OPTION",
+                      help="mavlogdump's options (see mavlogdump.py --help)")
+    dump.set_defaults(run=run_dump)
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -77,6 +93,8 @@ def info_text(info: LogInfo) -> str:
         f"duration  {info.duration_s:.2f} s, {info.message_count} messages"
         + (f", metadata: {', '.join(info.metadata)}" if info.metadata else ""),
     ]
+    if info.start_ns is not None:
+        lines.append(f"started   {start_text(info.start_ns, info.unix_offset_ns)}")
     if not info.topics:
         return "\n".join([*lines, "no topics"])
     width = max(len("topic"), *(len(t.topic) for t in info.topics))
@@ -86,6 +104,17 @@ def info_text(info: LogInfo) -> str:
     lines += [f"{t.topic:<{width}}  {t.schema_name:<{schema_width}}  {t.message_count:>8}  "
               f"{t.rate_hz:>8.2f}" for t in info.topics]
     return "\n".join(lines)
+
+
+def start_text(start_ns: int, unix_offset_ns: int | None) -> str:
+    """When a log starts: its UTC date and the writer's clock then, or for a log that
+    recorded no Unix offset (written before logs were in Unix time), the clock alone."""
+    if unix_offset_ns is None:
+        return f"{start_ns / 1e9:.3f} s on the writer's clock (no date recorded)"
+    seconds, ns = divmod(start_ns, 1_000_000_000)
+    date = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(seconds))
+    return (f"{date}.{ns // 1_000_000:03d} UTC (the writer's clock: "
+            f"{(start_ns - unix_offset_ns) / 1e9:.3f} s)")
 
 
 def default_output(path: Path) -> Path:
@@ -110,6 +139,16 @@ def run_plot(args: argparse.Namespace) -> int:
     for path in plot_log(args.file, args.out):
         print(f"wrote {path}")
     return 0
+
+
+def run_dump(args: argparse.Namespace) -> int:
+    """Print ``args.file`` with pymavlink's mavlogdump and our dialect."""
+    from ground.tlog_dump import run_mavlogdump
+    from shared.errors import InputError
+
+    if not args.file.is_file():
+        raise InputError(args.file, "no such file" if not args.file.exists() else "not a file")
+    return run_mavlogdump([*args.options, str(args.file)])
 
 
 def recover_text(report: RecoverReport) -> str:

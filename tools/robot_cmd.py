@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import time
 from pathlib import Path
 
 from shared.errors import InputError, TransportError
@@ -93,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
     from shared.calibration import read_camera
-    from shared.clock import WallClock
+    from shared.clock import WallClock, unix_offset_ns
     from shared.key_file import read_key_file
     from shared.link_security import INSECURE_NOTICE, check_link
     from shared.memory import open_or_create
@@ -116,8 +115,9 @@ def run(args: argparse.Namespace) -> int:
                             else read_camera(args.calibration))
     signing = None
     clock = WallClock()
+    unix_offset = unix_offset_ns(clock)  # for signing and the log's Unix times
     if key is not None:
-        signing = SigningSetup(key, time.time_ns() - clock.now_ns(),
+        signing = SigningSetup(key, unix_offset,
                                timestamp_file=args.state / "signing-timestamps.json")
     # The process closes what `owned` holds after the runtime stopped the base, then has
     # the field log record how the Pioneer link ended, and finishes the log last
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
                           else dataclasses.replace(config.log, output_dir=str(args.log)))
             log = FieldLog(log_config, "robot", config.camera.mount,
                            {"source": "vmnav robot", "aria": config.pioneer.url,
-                            "camera": config.camera.source})
+                            "camera": config.camera.source}, unix_offset_ns=unix_offset)
             driver.sip_observers.append(log.sip)
 
         def pioneer_closed(log: FieldLog) -> None:

@@ -48,7 +48,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run_snapshot(args: argparse.Namespace) -> int:
     """Write the snapshot files and print a one-paragraph summary."""
-    from shared.errors import InputError
+    from shared.errors import ConfigError, InputError
     from shared.pose import Pose2
     from sim.snapshot import take_snapshot
     from sim.world import load_world
@@ -65,7 +65,12 @@ def run_snapshot(args: argparse.Namespace) -> int:
     if not change.is_none:  # as a repeat would see it, nothing moved onto the robot
         at = world.start if pose is None else pose
         world = changed_world(world, change, config.seed, (at.x_m, at.y_m)).world
-    snap = take_snapshot(config, camera, args.out, pose, world)
+    try:
+        snap = take_snapshot(config, camera, args.out, pose, world)
+    except ConfigError as error:
+        if error.where != "robot pose":
+            raise
+        raise InputError("--x/--y/--yaw", error.problem) from None
     s = snap.summary
     p = s["pose_w"]
     print(

@@ -79,7 +79,8 @@ def run(args: argparse.Namespace) -> int:
         dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",
         config.camera.mount,
         {"source": "vmnav teach --sim (lock-step)", "world": world.name, "route": route.name,
-         "seed": str(sim_config.seed)})
+         "seed": str(sim_config.seed)},
+        unix_offset_ns=time.time_ns())  # the simulation clock's zero: the run's start
     try:
         taught = teach_in_sim(world, route, config, sim_config, camera,
                               None if teach_log is None else teach_log.teach_frame)

@@ -139,12 +139,12 @@ def read_odometry(files: Sequence[Path]) -> Odometry:
                     continue
                 try:
                     p, q = tf["translation"], tf["rotation"]
-                    poses[message.log_time_ns] = Pose2(
+                    poses[message.clock_ns] = Pose2(
                         float(p["x"]), float(p["y"]),
                         yaw_from_quaternion(float(q["w"]), float(q["x"]), float(q["y"]),
                                             float(q["z"])))
                 except (KeyError, TypeError, ValueError) as e:
-                    raise InputError(file, f"{topics.TF} at {message.log_time_ns} ns: malformed "
+                    raise InputError(file, f"{topics.TF} at {message.clock_ns} ns: malformed "
                                      f"transform ({e!r})") from None
     if not poses:
         raise InputError(series_name(files), f"no odometry: no {topics.FRAME_ODOM} -> "
@@ -178,7 +178,7 @@ class LogFrames:
 
         for file in self._files:
             for message in read_messages(file, [topics.CAMERA_IMAGE]):
-                t_ns = message.log_time_ns
+                t_ns = message.clock_ns
                 pose = self._odometry.pose_at(t_ns)
                 if pose is None:
                     self.without_odometry += 1

@@ -38,6 +38,30 @@ ACTIVE_STATES = frozenset({MissionState.LOCALIZING, MissionState.FOLLOWING, Miss
 _ODOM_ORIGIN = Pose2(0.0, 0.0, 0.0)
 
 
+#: The application's jobs that take a while and end with an outcome: finding a goal
+#: photo in the memory (:meth:`VehicleApp.goto_image`), storing a taught path
+#: (:meth:`VehicleApp.teach_stop`).
+Job = Literal["photo", "path"]
+
+
+@dataclass(frozen=True, slots=True)
+class JobOutcome:
+    """How a job (:data:`Job`) ended up.
+
+    Attributes:
+        job: which.
+        value: what it made: the key image a photo was found at (now the goal), or the
+            id of the path stored; None when it failed (a photo not found or unreadable,
+            a path too short or not written) or was refused.
+        text: one line for the operator, e.g. ``photo 3.jpg: key image 68: 61 matches, 52
+            verified inliers (accepted), going there``.
+    """
+
+    job: Job
+    value: int | None
+    text: str
+
+
 @dataclass(frozen=True, slots=True)
 class ServoTelemetry:
     """The route follower's state (Courbon et al. 2008), for VISUAL_SERVO_STATUS.
@@ -138,7 +162,12 @@ class VehicleApp(Protocol):
         ...
 
     def goto_image(self, path: Path) -> bool:
-        """Localize the photo at ``path`` (uploaded over FTP) in the memory and go there."""
+        """Localize the photo at ``path`` (uploaded over FTP) in the memory and go there;
+        the outcome comes later from :meth:`next_job_outcome`."""
+        ...
+
+    def next_job_outcome(self) -> JobOutcome | None:
+        """The oldest outcome of a job (:data:`Job`) not taken yet; None when none."""
         ...
 
     def params_changed(self, config: VmnavConfig) -> None:
@@ -158,7 +187,8 @@ class VehicleApp(Protocol):
         ...
 
     def teach_stop(self) -> bool:
-        """Stop recording; the path joins the memory."""
+        """Stop recording; the path joins the memory (the outcome comes later from
+        :meth:`next_job_outcome`)."""
         ...
 
     def gcs_lost(self, action: GcsLostAction) -> None:

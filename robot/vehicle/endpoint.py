@@ -95,7 +95,7 @@ from robot.vehicle.telemetry import (
     sys_status_message,
     system_status,
 )
-from robot.vehicle.user_commands import user_handlers
+from robot.vehicle.user_commands import JobCommands, user_handlers
 from shared.clock import NS_PER_S
 from shared.config import FtpConfig
 from shared.errors import InputError
@@ -242,12 +242,14 @@ class VehicleEndpoint:
         providers = {msg_id: (lambda build=build: build(self._app.telemetry(), self._time_usec()))
                      for msg_id, build in builders.items()}
         providers[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION] = lambda: autopilot_version_message(uid)
+        self._jobs = JobCommands()
         self._commands = CommandDispatcher(self.address, {
             **vehicle_handlers(set_mode=self._set_mode, start_mission=self._start_mission,
                                set_mission_current=self._set_mission_current,
                                arm=self._arm, messages=providers, intervals=self._intervals),
             **user_handlers(app, self._fs,
-                            lambda text: self._notice(mavlink.MAV_SEVERITY_WARNING, text)),
+                            lambda text: self._notice(mavlink.MAV_SEVERITY_WARNING, text),
+                            self._jobs, lambda: self._now_ns),
         })
         self._policy: UnsignedPolicy | None = None
         self._signing_clock: SigningClock | None = None
@@ -312,6 +314,9 @@ class VehicleEndpoint:
         out += self._progress.update(t, self._time_usec())
         while (notice := self._app.next_notice()) is not None:
             out += self._notice(_SEVERITIES.get(notice[0], mavlink.MAV_SEVERITY_INFO), notice[1])
+        while (outcome := self._app.next_job_outcome()) is not None:
+            out += self._jobs.finish(outcome)
+        out += self._jobs.progress(now_ns)
         out += self._check_gcs(t, now_ns)
         out += self._streams.due(t, now_ns, self._time_usec())
         for core in (self._mission, self._params):
@@ -326,7 +331,7 @@ class VehicleEndpoint:
         if self._outbox:
             return self._now_ns
         timers = [self._streams.get_timer(), self._watchdog.get_timer(),
-                  self._mission.get_timer(), self._params.get_timer()]
+                  self._mission.get_timer(), self._params.get_timer(), self._jobs.get_timer()]
         if self._signing_clock is not None:
             timers.append(self._signing_clock.get_timer() or 0)
         return min((t for t in timers if t is not None), default=None)

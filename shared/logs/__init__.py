@@ -6,7 +6,9 @@ Modules:
   ones, MAVLink per message type); ``topics``: topic and frame names;
   ``messages``: pure builders of the messages.
 * ``writer``: :class:`~shared.logs.writer.LogWriter`, a bounded queue and a writer
-  thread (``_mcap_files`` owns the files: rotation, flushing, error handling).
+  thread (``_mcap_files`` owns the files: rotation, flushing, error handling);
+  ``retention``: the log folder's size and age limits, applied as files open. Stamps
+  are Unix time; each file records its clock's offset (``topics.CLOCK_METADATA``).
 * ``reader``: ``log_info``, ``read_messages``, ``read_metadata`` and ``recover`` for
   finished, unfinished and damaged files (``_scan`` walks records robustly);
   ``series``: the files of a rotated log in order (``log_series``).

@@ -13,6 +13,16 @@ Used by one thread only (the log writer's). Rules:
    process never overwrites an earlier run's files.
 4. :attr:`McapFiles.size_bytes` is what the files opened here hold on disk so far (the
    finished ones, and the open one up to its last flushed chunk): the writer's quota.
+5. Retention: each file opened prunes the folder of old vmnav log files beyond
+   ``LogConfig.retain_max_bytes`` and ``retain_max_age_days``, never the new file
+   (:mod:`shared.logs.retention`); file times are wall-clock times, so this reads the
+   wall clock (``time.time``), not the loop's.
+6. Times: callers give the data's time on their clock (``t_ns``); ``log_time`` and
+   ``publish_time`` are ``t_ns + unix_offset_ns``, Unix time in ns, so that Foxglove and
+   ``mcap info`` show the run's date. Every file opens with the metadata record
+   :data:`~shared.logs.topics.CLOCK_METADATA` holding the offset, by which readers get
+   the clock's time back (:attr:`shared.logs.reader.LogMessage.clock_ns`). Rotation
+   compares clock times.
 """
 
 from __future__ import annotations
@@ -22,6 +32,7 @@ import json
 import logging
 import os
 import re
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import IO, Any
@@ -30,7 +41,9 @@ from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 
 from shared.config import LogConfig
+from shared.logs import topics
 from shared.logs.messages import encode_json
+from shared.logs.retention import prune_logs
 from shared.logs.schemas import Schema
 
 log = logging.getLogger(__name__)
@@ -50,11 +63,13 @@ class McapFiles:
     Args:
         config: folder, chunking, compression, rotation and retry policy.
         name: file name prefix, e.g. ``"robot"``.
+        unix_offset_ns: Unix time minus the callers' clock reading, ns, >= 0 (rule 6).
     """
 
-    def __init__(self, config: LogConfig, name: str) -> None:
+    def __init__(self, config: LogConfig, name: str, unix_offset_ns: int = 0) -> None:
         self._config = config
         self._name = name
+        self.unix_offset_ns = unix_offset_ns
         self._dir = Path(config.output_dir)
         self._file: IO[bytes] | None = None
         self._writer: Writer | None = None
@@ -102,6 +117,8 @@ class McapFiles:
             self._writer = Writer(self._file, chunk_size=self._config.chunk_size_bytes,
                                   compression=_COMPRESSION[self._config.compression])
             self._writer.start(profile="", library=LIBRARY)
+            self._writer.add_metadata(topics.CLOCK_METADATA,
+                                      {topics.UNIX_OFFSET_KEY: str(self.unix_offset_ns)})
             for name, data in self._metadata.items():
                 self._writer.add_metadata(name, data)
         except OSError as e:
@@ -113,16 +130,18 @@ class McapFiles:
             return
         self.paths.append(path)
         self._first_t_ns = None
+        prune_logs(self._dir, self._config, LIBRARY, time.time(), keep=(path,))
         if self._in_outage:
             log.warning("logging resumed in %s", path)
             self._in_outage = False
         self._retry_at_ns = None
 
     def write(self, t_ns: int, records: Iterable[Record], now_ns: int) -> None:
-        """Write ``records`` with ``log_time = publish_time = t_ns``; rotate when due.
+        """Write ``records`` with ``log_time = publish_time = t_ns + unix_offset_ns``;
+        rotate when due.
 
         Args:
-            t_ns: log time, ns.
+            t_ns: the data's time on the callers' clock, ns.
             records: the messages (one call's worth, e.g. a MAVLink message and its frame).
             now_ns: the writer thread's wall clock, ns.
         """
@@ -136,12 +155,13 @@ class McapFiles:
         if self._first_t_ns is None:
             self._first_t_ns = t_ns
         done = 0
+        unix_ns = t_ns + self.unix_offset_ns
         try:
             for topic, schema, message in records:
                 sequence = self._sequence.get(topic, 0) + 1
                 self._sequence[topic] = sequence
-                self._writer.add_message(self._channel(topic, schema), log_time=t_ns,
-                                         data=encode_json(message), publish_time=t_ns,
+                self._writer.add_message(self._channel(topic, schema), log_time=unix_ns,
+                                         data=encode_json(message), publish_time=unix_ns,
                                          sequence=sequence)
                 done += 1
         except OSError as e:

@@ -2,9 +2,11 @@
 (and :func:`image_from_compressed`, the way back for images).
 
 Pure functions (no clock, no I/O); the log writer's thread calls them, so the
-control loop never pays for building or encoding a message. ``t_ns`` is the data's
-capture time from the loop's clock, integer ns, >= 0; it becomes the Foxglove
-``timestamp`` ({sec, nsec}) and the MCAP ``log_time``.
+control loop never pays for building or encoding a message. Times are integer ns, >= 0:
+the Foxglove builders (``timestamp``, {sec, nsec}) are given Unix time, the data's time
+plus the log's epoch offset (:mod:`shared.logs.writer`); our own messages
+(``sip_fields``, ``base_state_fields``: ``stamp_ns``) keep the loop's clock, which is
+what control and replay read.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ Rgba = tuple[float, float, float, float]
 
 
 def time_from_ns(t_ns: int) -> dict[str, int]:
-    """Foxglove ``time`` ({sec, nsec}) of ``t_ns`` (>= 0, ns)."""
+    """Foxglove ``time`` ({sec, nsec}) of ``t_ns`` (>= 0, ns; Unix time in our logs)."""
     if t_ns < 0:
         raise ValueError(f"t_ns must be >= 0 for a Foxglove timestamp, got {t_ns}")
     sec, nsec = divmod(int(t_ns), NS_PER_S)

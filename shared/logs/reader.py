@@ -2,10 +2,16 @@
 
 * :func:`log_info`: topics, counts, schema names, duration and rates; from the
   summary of a finished file, by scanning an unfinished or damaged one.
-* :func:`read_messages`: the decoded JSON messages of a finished file, in log time order;
+* :func:`read_messages`: the decoded JSON messages of a finished file, in log time order,
+  each with its time on the writer's clock (:attr:`LogMessage.clock_ns`);
   :func:`read_metadata`: its metadata records.
 * :func:`recover`: rewrite an unfinished, truncated or damaged file into a valid,
   indexed one, keeping every message of every intact chunk; the source is only read.
+
+Times: a log's ``log_time`` is Unix time, ns; its metadata record
+:data:`~shared.logs.topics.CLOCK_METADATA` holds the offset from the writer's clock (time
+since boot, or simulated time), which readers subtract to get that clock back. Logs
+written before the record existed have their clock's time in ``log_time``: offset 0.
 
 Bad files raise :class:`~shared.errors.InputError` with one line naming the file. Crafted
 ones cannot make a reader allocate more than the file's size plus one chunk of at most
@@ -18,9 +24,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from collections import Counter
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -33,6 +40,7 @@ from mcap.writer import CompressionType, Writer
 
 from shared.errors import InputError
 from shared.json_file import parse_json
+from shared.logs import topics as _topics
 from shared.logs._chunks import ClampedFile, check_summary, messages_in_time_order
 from shared.logs._scan import MAGIC, READ_ERRORS, RecordScan, check_magic
 
@@ -72,9 +80,12 @@ class LogInfo:
         complete: the file is finished (summary and index); False for a killed writer's file.
         problem: why it is not complete, one line (None when complete).
         message_count: messages read (all of them when complete).
-        start_ns, end_ns: first and last ``log_time``, ns (None without messages).
+        start_ns, end_ns: first and last ``log_time``, ns (None without messages): Unix
+            time when ``unix_offset_ns`` is recorded.
         topics: per topic, sorted by name.
-        metadata: names of the metadata records (e.g. ``run``).
+        metadata: names of the metadata records (e.g. ``clock``, ``run``).
+        unix_offset_ns: Unix time minus the writer's clock, ns, as recorded in the file;
+            None for a log written before it was recorded (its times are the clock's).
     """
 
     path: Path
@@ -87,6 +98,7 @@ class LogInfo:
     end_ns: int | None
     topics: tuple[TopicInfo, ...]
     metadata: tuple[str, ...]
+    unix_offset_ns: int | None = None
 
     @property
     def duration_s(self) -> float:
@@ -109,9 +121,13 @@ class LogMessage:
 
     Attributes:
         topic, schema_name: where it was logged and its schema.
-        log_time_ns, publish_time_ns: its MCAP times, ns.
+        log_time_ns, publish_time_ns: its MCAP times, ns (Unix time in logs that record
+            their clock's offset).
         sequence: per-topic counter from the writer (1, 2, ...).
         data: the decoded JSON object.
+        clock_ns: its time on the writer's clock, ns: ``log_time_ns`` minus the file's
+            recorded offset (time since boot, or simulated time; what control, replay and
+            teach drives use).
     """
 
     topic: str
@@ -120,6 +136,7 @@ class LogMessage:
     publish_time_ns: int
     sequence: int
     data: dict[str, Any]
+    clock_ns: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,6 +180,33 @@ def _open_mcap(path: Path) -> Iterator[tuple[ClampedFile, int]]:
         yield ClampedFile(f, size), size
 
 
+_DECIMAL = re.compile(r"[0-9]{1,19}\Z")
+
+
+def unix_offset_from(metadata: Mapping[str, Mapping[str, str]], where: str | Path) -> int | None:
+    """The offset recorded in a log's ``metadata`` records (by name), ns; None if none is.
+
+    Raises:
+        InputError: at ``where``: the value is not a decimal integer in [0, 2^63).
+    """
+    record = metadata.get(_topics.CLOCK_METADATA)
+    if record is None or _topics.UNIX_OFFSET_KEY not in record:
+        return None
+    value = record[_topics.UNIX_OFFSET_KEY]
+    if not _DECIMAL.match(value) or int(value) >= 2**63:
+        raise InputError(where, f"metadata {_topics.CLOCK_METADATA}.{_topics.UNIX_OFFSET_KEY}: "
+                                f"expected an integer number of ns >= 0, got {value[:40]!r}")
+    return int(value)
+
+
+def _recorded_offset(f: ClampedFile, size: int, path: Path) -> int | None:
+    """The offset recorded in the finished file ``f`` (its summary was checked)."""
+    f.seek(0)
+    clock = {m.name: m.metadata for m in SeekingReader(f, record_size_limit=size).iter_metadata()
+             if m.name == _topics.CLOCK_METADATA}
+    return unix_offset_from(clock, path)
+
+
 def log_info(path: str | Path) -> LogInfo:
     """Summarise the MCAP file at ``path``: from its summary if finished, else by scanning.
 
@@ -177,11 +221,15 @@ def log_info(path: str | Path) -> LogInfo:
         header, summary = found
         if summary.statistics is None:
             return _info_from_scan(f, path, size)
-        return _info_from_summary(path, size, header, summary, summary.statistics)
+        try:
+            offset = _recorded_offset(f, size, path)
+        except READ_ERRORS as e:
+            return _info_from_scan(f, path, size, f"damaged metadata: {e}")
+        return _info_from_summary(path, size, header, summary, summary.statistics, offset)
 
 
 def _info_from_summary(path: Path, size: int, header: Header, summary: Summary,
-                       stats: Statistics) -> LogInfo:
+                       stats: Statistics, offset: int | None) -> LogInfo:
     """The info of a finished file from its checked summary and its statistics."""
     counts = stats.channel_message_counts
     has_messages = stats.message_count > 0
@@ -189,7 +237,7 @@ def _info_from_summary(path: Path, size: int, header: Header, summary: Summary,
                      summary.channels.values(), counts,
                      stats.message_start_time if has_messages else None,
                      stats.message_end_time if has_messages else None,
-                     [m.name for m in summary.metadata_indexes])
+                     [m.name for m in summary.metadata_indexes], offset)
 
 
 def _checked_summary(f: ClampedFile, size: int) -> tuple[Header, Summary] | str:
@@ -226,6 +274,7 @@ def _info_from_scan(f: ClampedFile, path: Path, size: int,
     counts: Counter[int] = Counter()
     times: list[int] = []
     metadata: list[str] = []
+    offset: int | None = None
     for record in scan.records():
         if isinstance(record, Header):
             library = record.library
@@ -238,16 +287,19 @@ def _info_from_scan(f: ClampedFile, path: Path, size: int,
             times.append(record.log_time)
         elif isinstance(record, Metadata):
             metadata.append(record.name)
+            if record.name == _topics.CLOCK_METADATA:
+                offset = unix_offset_from({record.name: record.metadata}, path)
     problem = scan.problem or (summary_problem if scan.complete else None)
     if scan.skipped_chunks:
         problem = f"{problem}; {scan.skipped_chunks} damaged chunk(s) skipped"
     return _log_info(path, size, library, False, problem, schemas, channels.values(), counts,
-                     min(times, default=None), max(times, default=None), metadata)
+                     min(times, default=None), max(times, default=None), metadata, offset)
 
 
 def _log_info(path: Path, size: int, library: str, complete: bool, problem: str | None,
               schemas: dict[int, Schema], channels: Iterable[Channel], counts: dict[int, int],
-              start_ns: int | None, end_ns: int | None, metadata: list[str]) -> LogInfo:
+              start_ns: int | None, end_ns: int | None, metadata: list[str],
+              offset: int | None) -> LogInfo:
     duration_s = 0.0 if start_ns is None or end_ns is None else (end_ns - start_ns) / 1e9
     topics = sorted((TopicInfo(
         topic=c.topic,
@@ -258,11 +310,13 @@ def _log_info(path: Path, size: int, library: str, complete: bool, problem: str 
     ) for c in channels), key=lambda t: t.topic)
     return LogInfo(path=path, size_bytes=size, library=library, complete=complete,
                    problem=problem, message_count=sum(counts.values()), start_ns=start_ns,
-                   end_ns=end_ns, topics=tuple(topics), metadata=tuple(metadata))
+                   end_ns=end_ns, topics=tuple(topics), metadata=tuple(metadata),
+                   unix_offset_ns=offset)
 
 
 def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iterator[LogMessage]:
-    """The JSON messages of the finished MCAP file at ``path``, in log time order.
+    """The JSON messages of the finished MCAP file at ``path``, in log time order, each
+    with its time on the writer's clock (the module docstring's "Times").
 
     Args:
         path: the file.
@@ -285,6 +339,7 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
                              + RECOVER_HINT.format(path=path))
         selected = None if topics is None else set(topics)
         try:
+            offset = _recorded_offset(f, size, path) or 0
             for schema, channel, message in messages_in_time_order(f, summary, selected):
                 if channel.message_encoding != MessageEncoding.JSON:
                     raise InputError(path, f"{channel.topic}: message encoding "
@@ -294,7 +349,8 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
                 if not isinstance(data, dict):
                     raise InputError(where, f"expected a JSON object, got {type(data).__name__}")
                 yield LogMessage(channel.topic, schema.name if schema else "", message.log_time,
-                                 message.publish_time, message.sequence, data)
+                                 message.publish_time, message.sequence, data,
+                                 message.log_time - offset)
         except READ_ERRORS as e:
             raise InputError(path, f"damaged: {e}; " + RECOVER_HINT.format(path=path)) from None
 

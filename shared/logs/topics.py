@@ -1,4 +1,4 @@
-"""Topic names of the field logs (ROS-style, REP-105 frames; mcap-logging.md §3).
+"""Topic and metadata names of the field logs (ROS-style, REP-105 frames; mcap-logging.md §3).
 
 One place for them, so the robot, the sim, the ground station and the log tools
 (info, replay, plots) agree.
@@ -34,6 +34,13 @@ FRAME_BASE = "base_link"
 FRAME_CAMERA = "camera"
 
 MAVLINK_DIRECTIONS = ("in", "out")
+
+CLOCK_METADATA = "clock"
+"""Name of the metadata record, in every file, that ties the writer's clock to Unix time."""
+UNIX_OFFSET_KEY = "unix_offset_ns"
+"""Key of :data:`CLOCK_METADATA`: Unix time minus the writer's clock reading, integer ns, in
+decimal. A message's ``log_time`` minus it is the data's time on that clock (time since
+boot, or simulated time); a file without it (written before it existed) has 0."""
 
 
 def mavlink_topic(direction: str, message_name: str) -> str:

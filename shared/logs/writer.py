@@ -17,9 +17,14 @@ writing the bulky topics (camera frames, annotations, MAVLink) and says so once,
 WARNING on the console and a ``foxglove.Log`` line in the file; the loop's calls for
 them are then refused at once (``False``, counted in ``over_quota``). The rest goes on.
 
-Time: ``t_ns`` is the data's time from the loop's clock, integer ns >= 0; it is the
-MCAP ``log_time`` and ``publish_time`` and the Foxglove ``timestamp``. Only the flush
-and retry periods use the wall clock, in the writer thread.
+Time: ``t_ns`` is the data's time from the loop's clock (time since boot, or simulated
+time), integer ns >= 0; it stays as it is in our JSON messages (``stamp_ns``), which is
+what control and replay read. The MCAP ``log_time`` and ``publish_time`` and the Foxglove
+``timestamp`` fields are Unix time, ``t_ns + unix_offset_ns``: the entry point measures
+the offset once when it opens the log (:func:`shared.clock.unix_offset_ns`); a lock-step
+simulation puts its clock's zero at the wall time the run started. The offset is in
+every file's metadata (``_mcap_files`` rule 5). Only the flush and retry periods use the
+wall clock, in the writer thread.
 """
 
 from __future__ import annotations
@@ -113,11 +118,20 @@ class LogWriter:
     Args:
         config: folder, frame rate, JPEG quality, flushing, rotation, queue size.
         name: file name prefix, e.g. ``"robot"`` or ``"ground"``.
+        unix_offset_ns: Unix time minus the reading of the clock ``t_ns`` comes from, ns,
+            >= 0 (module docstring); 0 for a clock that reads Unix time (and tests).
+
+    Raises:
+        ValueError: ``unix_offset_ns`` is negative or not an integer.
     """
 
-    def __init__(self, config: LogConfig | None = None, name: str = "robot") -> None:
+    def __init__(self, config: LogConfig | None = None, name: str = "robot", *,
+                 unix_offset_ns: int = 0) -> None:
+        if not isinstance(unix_offset_ns, int) or unix_offset_ns < 0:
+            raise ValueError(f"unix_offset_ns must be an integer >= 0, got {unix_offset_ns!r}")
         self.config = config or LogConfig()
-        self._files = McapFiles(self.config, name)
+        self.unix_offset_ns = unix_offset_ns
+        self._files = McapFiles(self.config, name, unix_offset_ns)
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=self.config.queue_messages)
         self._lock = threading.Lock()
         self._queued = self._dropped = self._skipped = self._job_errors = self._job_lost = 0
@@ -149,13 +163,14 @@ class LogWriter:
         check_shape("image", np.shape(image), (None, None))
         if np.asarray(image).dtype != np.uint8:
             raise ValueError(f"image: expected uint8 grey, got {np.asarray(image).dtype}")
+        stamp_ns = t_ns + self.unix_offset_ns
         if lossless:
-            return self._put(_Job(t_ns, _image_records, (t_ns, topic, frame_id, np.array(image),
-                                                          "png", []), bulky=True))
+            return self._put(_Job(t_ns, _image_records, (stamp_ns, topic, frame_id,
+                                                          np.array(image), "png", []), bulky=True))
         if not self._frame_due(t_ns, topic):
             return False
         return self._put(_Job(t_ns, _image_records, (
-            t_ns, topic, frame_id, np.array(image), "jpeg",
+            stamp_ns, topic, frame_id, np.array(image), "jpeg",
             [cv2.IMWRITE_JPEG_QUALITY, self.config.jpeg_quality]), bulky=True))
 
     def log_points(self, t_ns: int, topic: str, pixels_xy: npt.ArrayLike, *,
@@ -175,7 +190,8 @@ class LogWriter:
         pixels = np.array(pixels_xy, np.float64)
         check_shape("pixels_xy", pixels.shape, (None, 2))
         return self._put(_Job(t_ns, _one, (topic, IMAGE_ANNOTATIONS, messages.image_points,
-                                           t_ns, pixels, color, thickness_px, label), bulky=True))
+                                           t_ns + self.unix_offset_ns, pixels, color,
+                                           thickness_px, label), bulky=True))
 
     def log_json(self, t_ns: int, topic: str, schema_name: str,
                  message: Mapping[str, Any]) -> bool:
@@ -198,7 +214,7 @@ class LogWriter:
                       topic: str = topics.TF) -> bool:
         """Log ``foxglove.FrameTransforms``, every transform stamped ``t_ns``."""
         return self._put(_Job(t_ns, _one, (topic, FRAME_TRANSFORMS, messages.frame_transforms,
-                                           t_ns, tuple(transforms))))
+                                           t_ns + self.unix_offset_ns, tuple(transforms))))
 
     def log_text(self, t_ns: int, level: str, message: str, name: str,
                  topic: str = topics.LOG) -> bool:
@@ -209,8 +225,8 @@ class LogWriter:
         """
         if level not in LOG_LEVELS:
             raise ValueError(f"unknown log level {level!r} (known: {', '.join(LOG_LEVELS)})")
-        return self._put(_Job(t_ns, _one, (topic, LOG, messages.log_entry, t_ns, level, message,
-                                           name)))
+        return self._put(_Job(t_ns, _one, (topic, LOG, messages.log_entry,
+                                           t_ns + self.unix_offset_ns, level, message, name)))
 
     def log_mavlink(self, t_ns: int, msg: Any, direction: str) -> bool:
         """Log a pymavlink message on ``/mavlink/<direction>/<NAME>`` and its packet on
@@ -367,8 +383,8 @@ class LogWriter:
         text = (f"log quota of {limit} bytes reached: camera frames and MAVLink are no longer "
                 f"logged (LogConfig.max_bytes)")
         log.warning("%s in %s", text, self.config.output_dir)
-        self._files.write(t_ns, [(topics.LOG, LOG, messages.log_entry(t_ns, "WARNING", text,
-                                                                      __name__))], now_ns)
+        entry = messages.log_entry(t_ns + self.unix_offset_ns, "WARNING", text, __name__)
+        self._files.write(t_ns, [(topics.LOG, LOG, entry)], now_ns)
         return True
 
 
@@ -377,13 +393,13 @@ def _one(topic: str, schema: Schema, build: Callable[..., Mapping[str, Any]],
     return [(topic, schema, build(*args))]
 
 
-def _image_records(t_ns: int, topic: str, frame_id: str, image: npt.NDArray[np.uint8],
+def _image_records(stamp_ns: int, topic: str, frame_id: str, image: npt.NDArray[np.uint8],
                    fmt: str, params: list[int]) -> list[Record]:
     ok, data = cv2.imencode(f".{fmt}", image, params)
     if not ok:
         raise ValueError(f"cv2.imencode failed on a {image.shape} image")
-    return [(topic, COMPRESSED_IMAGE, messages.compressed_image(t_ns, frame_id, data.tobytes(),
-                                                                fmt))]
+    return [(topic, COMPRESSED_IMAGE, messages.compressed_image(stamp_ns, frame_id,
+                                                                data.tobytes(), fmt))]
 
 
 def _packet_records(direction: str, packet: bytes) -> list[Record]:

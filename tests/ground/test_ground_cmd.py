@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import logging
 import re
 import stat
 import time
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 
 from robot.mission import MissionState
+from robot.vehicle.app_port import JobOutcome
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import WallClock
 from shared.key_file import read_key_file
@@ -128,16 +130,59 @@ def test_goto_wait_not_reached(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys
         "(last notice: mission localizing: localizing the start)\n")
 
 
-def test_goto_image_uploads_the_photo_and_sends_the_command(
-        vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
+class PhotoApp(FakeApp):
+    """Looks a photo up as the robot does: a notice, then the outcome (key image 12, or
+    not found when ``found`` is False)."""
+
+    found = True
+
+    def goto_image(self, path: Path) -> bool:
+        super().goto_image(path)
+        if self.found:
+            text = (f"photo {path.name}: key image 12: 40 matches, 31 verified inliers "
+                    "(accepted), going there")
+        else:
+            text = (f"photo {path.name}: not in the memory (best key image 3: 12 matches, "
+                    "4 verified inliers (rejected))")
+        self.notices.append((logging.INFO, text))
+        self.job_outcomes.append(JobOutcome("photo", 12 if self.found else None, text))
+        return True
+
+
+def goal_photo(tmp_path: Path) -> Path:
     photo = tmp_path / "goal.jpg"
     photo.write_bytes(cv2.imencode(".jpg", np.full((60, 80), 128, np.uint8))[1].tobytes())
+    return photo
+
+
+@pytest.mark.parametrize("app", [PhotoApp()], ids=["photo"])
+def test_goto_image_uploads_the_photo_and_says_where_it_was_found(
+        vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
+    photo = goal_photo(tmp_path)
     assert run_ground(vehicle, "goto", "--image", str(photo)) == 0
     assert run_ground(vehicle, "goto", "--image", str(photo)) == 0  # a second one, new id
     assert [(path.name, data) for path, data in app.called("goto_image")] == [
         ("1.jpg", photo.read_bytes()), ("2.jpg", photo.read_bytes())]
-    assert capsys.readouterr().out.splitlines()[-1] == \
-        "vehicle 1: going to photo goal.jpg (uploaded as photo 2)"
+    assert capsys.readouterr().out.splitlines()[-2:] == [
+        "vehicle 1: photo goal.jpg (uploaded as photo 2) found at key image 12; going there",
+        "  the robot: photo 2.jpg: key image 12: 40 matches, 31 verified inliers (accepted), "
+        "going there"]
+
+
+class LostPhotoApp(PhotoApp):
+    found = False
+
+
+@pytest.mark.parametrize("app", [LostPhotoApp()], ids=["lost-photo"])
+def test_goto_image_not_in_the_memory_fails_at_once(
+        vehicle: UdpVehicle, app: FakeApp, tmp_path: Path, capsys: Capsys) -> None:
+    started = time.monotonic()
+    assert run_ground(vehicle, "goto", "--image", str(goal_photo(tmp_path)), "--wait") == 1
+    assert time.monotonic() - started < 60  # not --wait-timeout's 600 s
+    assert one_line_error(capsys) == (
+        "vmnav ground: error: vehicle 1 answered GOTO_PHOTO with MAV_RESULT_FAILED "
+        "(photo 1.jpg: not in the memory (best key image 3: 12 matches, 4 verified inliers "
+        "(rejected)))\n")
 
 
 def test_goto_image_refuses_a_bomb_before_uploading_it(
@@ -159,12 +204,21 @@ def test_goto_needs_exactly_one_goal(vehicle: UdpVehicle, capsys: Capsys) -> Non
 def test_teach_start_and_stop_reach_the_app(vehicle: UdpVehicle, app: FakeApp,
                                             capsys: Capsys) -> None:
     assert run_ground(vehicle, "teach", "start", "corridor 2") == 0
+    capsys.readouterr()
     assert run_ground(vehicle, "teach", "stop") == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "vehicle 1: teaching stopped, path 1 stored",
+        "  the robot: path 1 'corridor': 12 key images, 0 junction(s)"]
     assert app.called("teach_start") == [("corridor 2",)] and app.called("teach_stop") == [()]
+    app.stored_path = None
+    assert run_ground(vehicle, "teach", "stop") == 1
+    assert one_line_error(capsys) == (
+        "vmnav ground: error: vehicle 1 answered TEACH_STOP with MAV_RESULT_FAILED (teach "
+        "'corridor': 0.12 m driven, a path needs 1.00 m: nothing stored)\n")
     app.accept = False
     capsys.readouterr()
     assert run_ground(vehicle, "teach", "stop") == 1
-    assert one_line_error(capsys) == ("vmnav ground: error: vehicle 1 answered MAV_CMD_USER_3 "
+    assert one_line_error(capsys) == ("vmnav ground: error: vehicle 1 answered TEACH_STOP "
                                       "with MAV_RESULT_DENIED (teach stop: not teaching)\n")
 
 

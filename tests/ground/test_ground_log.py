@@ -13,6 +13,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
 
 from ground.ground_log import GroundLog, Tlog, create_tlog, tlog_record
 from robot.vehicle.udp_vehicle import UdpVehicle
@@ -20,7 +21,7 @@ from shared.clock import ManualClock
 from shared.config import LogConfig
 from shared.errors import InputError
 from shared.logs import topics
-from shared.logs.reader import log_info, read_messages
+from shared.logs.reader import log_info, read_messages, read_metadata
 from shared.mavlink.dialect import make_codec, mavlink
 from tests.ground.conftest import run_ground
 
@@ -77,8 +78,20 @@ def test_ground_log_holds_every_packet_in_both_files(vehicle: UdpVehicle, tmp_pa
     # The same frames, byte for byte, in both files.
     assert Counter(base64.b64decode(r["frame"]) for r in raw) == \
         Counter(frame for _, _, _, frame in records)
-    [metadata] = info.metadata
-    assert metadata == "ground"
+    assert info.metadata == ("clock", "ground")
+    # Unix times, as `mcap info` and Foxglove read them: the run's date, not 1970.
+    with open(mcap, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.statistics is not None
+    first_ns, last_ns = summary.statistics.message_start_time, summary.statistics.message_end_time
+    assert start_s - 0.1 <= first_ns / 1e9 <= last_ns / 1e9 <= end_s + 0.1
+    assert abs(first_ns / 1e9 - time.time()) < 60
+    # The station's clock comes back by subtracting the recorded offset.
+    offset = int(read_metadata(mcap)["clock"]["unix_offset_ns"])
+    assert offset == int(read_metadata(mcap)["ground"]["unix_offset_ns"])
+    monotonic_ns = time.monotonic_ns()  # the station's clock (WallClock)
+    assert all(m.clock_ns == m.log_time_ns - offset and 0 < monotonic_ns - m.clock_ns < 60 * S
+               for m in read_messages(mcap, [topics.MAVLINK_RAW]))
 
 
 def test_without_log_writes_nothing(vehicle: UdpVehicle, tmp_path: Path,

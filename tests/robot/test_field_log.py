@@ -38,6 +38,8 @@ from tests.shared.logs.test_schemas import conforms
 
 MS = 1_000_000
 PERIOD_NS = 66 * MS
+#: Unix time at the robot clock's zero (2025-11-14 16:00:00 UTC), ns.
+EPOCH_NS = 1_763_136_000_000_000_000
 MOUNT = CameraMountConfig(x_m=0.2, y_m=0.01, height_m=0.3)
 
 
@@ -76,7 +78,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory):
     heartbeat = vehicle.pack(mavlink.MAVLink_heartbeat_message(10, 8, 0, 0, 4, 3))
     records = [record(0, False), record(1, True), record(2, True)]
     with FieldLog(LogConfig(output_dir=str(folder)), "robot", MOUNT,
-                  {"robot": "p3at"}) as log:
+                  {"robot": "p3at"}, unix_offset_ns=EPOCH_NS) as log:
         for r in records:
             log.cycle(r, frame(rng), targets=(4, 6))
         log.event(AppEvent(records[1].t_ns, "lost", "no_estimate", "no estimate for 2 s"))
@@ -113,7 +115,8 @@ class TestTopics:
         stamps = [r.t_ns for r in records]
         for topic in (topics.CAMERA_IMAGE, topics.CAMERA_ANNOTATIONS, topics.SERVO_STATE,
                       topics.BASE_STATE, topics.TF):
-            assert [m.log_time_ns for m in messages[topic]] == stamps, topic
+            assert [m.clock_ns for m in messages[topic]] == stamps, topic
+            assert [m.log_time_ns for m in messages[topic]] == [EPOCH_NS + t for t in stamps]
         servo = [m.data for m in messages[topics.SERVO_STATE]]
         assert [s["mission_state"] for s in servo] == ["localizing", "following", "following"]
         assert [s["key_image_id"] for s in servo] == [None, 6, 6]  # target 1 of (4, 6)
@@ -122,7 +125,8 @@ class TestTopics:
         base = messages[topics.BASE_STATE][2].data
         assert ((base["x_m"], base["y_m"], base["yaw_rad"]), base["odom_distance_m"],
                 base["battery_v"]) == (records[2].base.odom_pose, 0.2, 12.7)
-        commands = [(m.log_time_ns, m.data["angular_z_rad_s"]) for m in messages[topics.CMD_VEL]]
+        commands = [(m.clock_ns, m.data["angular_z_rad_s"]) for m in messages[topics.CMD_VEL]]
+        assert [m.data["stamp_ns"] for m in messages[topics.SERVO_STATE]] == stamps
         assert commands == [(r.t_ns, r.follow.twist.omega_rad_s) for r in records[1:]]
         transforms = messages[topics.TF][2].data["transforms"]
         odom, camera = transforms
@@ -160,7 +164,8 @@ def test_every_servo_state_field_is_in_the_schema_the_file_declares(tmp_path: Pa
     switched = dataclasses.replace(switched, follow=dataclasses.replace(
         switched.follow, vision=vision, switch=switch))
     rng = np.random.default_rng(3)
-    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
+    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {},
+                  unix_offset_ns=0) as log:
         for r in (record(0, False), record(1, True), switched):
             log.cycle(r, frame(rng), targets=(4, 6))
     (file,) = log.close().files
@@ -182,7 +187,7 @@ def test_replay_frames_are_lossless_every_cycle_and_teach_frames_jpeg(tmp_path: 
     rng = np.random.default_rng(2)
     config = LogConfig(output_dir=str(tmp_path), frame_rate_hz=1.0, replay_frames=True)
     images = [frame(rng) for _ in range(3)]
-    with FieldLog(config, "robot", MOUNT, {}) as log:
+    with FieldLog(config, "robot", MOUNT, {}, unix_offset_ns=0) as log:
         for i, image in enumerate(images):
             log.cycle(record(i, True), image)
         for i, image in enumerate(images):
@@ -199,7 +204,8 @@ def test_a_mission_start_gives_back_its_config_and_generator(tmp_path: Path) -> 
         log=LogConfig(output_dir="elsewhere", replay_frames=True))
     rng = np.random.default_rng(11)
     rng.random(5)  # a state past the seed
-    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
+    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {},
+                  unix_offset_ns=EPOCH_NS) as log:
         log.mission_started(5 * MS, 7, rng.bit_generator.state, config)
     (file,) = log.close().files
     (message,) = read_messages(file, [topics.MISSION_START])
@@ -211,7 +217,8 @@ def test_a_mission_start_gives_back_its_config_and_generator(tmp_path: Path) -> 
 def test_how_the_pioneer_link_ended_is_one_log_line(tmp_path: Path) -> None:
     status = dataclasses.replace(PioneerClient(PioneerDriverConfig()).status,
                                  link=LinkState.CLOSED)
-    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {}) as log:
+    with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {},
+                  unix_offset_ns=0) as log:
         log.pioneer_closed(5 * MS, status, LinkCounters())
         log.pioneer_closed(9 * MS, dataclasses.replace(status, last_sip_ns=9 * MS - 12_345_678),
                            LinkCounters(sips=57, link_losses=1, dropped_commands=3,

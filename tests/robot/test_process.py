@@ -33,6 +33,8 @@ from shared.memory import VisualMemory
 from shared.pose import Pose2
 
 MS = 1_000_000
+#: Unix time at the loop clock's zero (2025-11-14 16:00:00 UTC), ns.
+EPOCH_NS = 1_763_136_000_000_000_000
 CAMERA = CameraModel.default()
 
 
@@ -78,7 +80,7 @@ class OrderedLog(FieldLog):
 
     def __init__(self, folder: Path, calls: list[str]) -> None:
         super().__init__(LogConfig(output_dir=str(folder)), "robot", CameraMountConfig(),
-                         {"source": "test"})
+                         {"source": "test"}, unix_offset_ns=0)
         self._calls = calls
 
     def close(self) -> LogStats:
@@ -164,7 +166,7 @@ class TestHoldingTheClock:
         clock, calls, stamps = ManualClock(5000 * MS), [], []
         frames = ScriptedCamera(clock, [5000 * MS, 5070 * MS])
         log = FieldLog(LogConfig(output_dir=str(tmp_path / "logs")), "robot",
-                       CameraMountConfig(), {"source": "test"})
+                       CameraMountConfig(), {"source": "test"}, unix_offset_ns=EPOCH_NS)
         wall = WallClock()
         with process(tmp_path, clock, frames, calls, log=log, lockstep=True) as robot:
             port = robot.vehicle.link.local_port
@@ -190,7 +192,7 @@ class TestHoldingTheClock:
         assert len(stamps) > 1 and set(stamps) == {5000 * MS}  # the same frame, time held
         # The link's traffic is stamped on the loop's clock, which stood still.
         traffic = list(read_messages(log.stats().files[0], None))
-        stamped = {m.log_time_ns for m in traffic if m.topic.startswith("/mavlink/")}
+        stamped = {m.clock_ns for m in traffic if m.topic.startswith("/mavlink/")}
         assert stamped == {5000 * MS}
         assert any(m.topic == "/mavlink/in/COMMAND_LONG" for m in traffic)
 
@@ -200,7 +202,7 @@ class TestHoldingTheClock:
 
         clock = ManualClock(7000 * MS)
         log = FieldLog(LogConfig(output_dir=str(tmp_path / "logs")), "robot",
-                       CameraMountConfig(), {"source": "test"})
+                       CameraMountConfig(), {"source": "test"}, unix_offset_ns=EPOCH_NS)
         wall = WallClock()
         with process(tmp_path, clock, ScriptedCamera(clock, []), [], log=log) as robot:
             # A well-framed packet of an id the dialect lacks: it decodes, unverified.
@@ -217,7 +219,8 @@ class TestHoldingTheClock:
         messages = list(read_messages(log.stats().files[0], None))
         assert not any(m.topic.startswith("/mavlink/in/") for m in messages)
         [line] = [m for m in messages if m.topic == "/log" and m.data["name"] == "robot.vehicle"]
-        assert line.log_time_ns == 7000 * MS  # on the loop's clock
+        assert line.clock_ns == 7000 * MS  # on the loop's clock
+        assert line.log_time_ns == EPOCH_NS + 7000 * MS  # in Unix time
         assert line.data["message"] == ("mavlink in: 3 datagrams rejected in 10.0 s (3 without "
                                         "a verified message, 0 shed unparsed)")
 

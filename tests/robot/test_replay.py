@@ -29,6 +29,7 @@ from robot.field_log import FieldLog
 from robot.logged_missions import read_missions
 from robot.mission_run import CycleRecord, MissionRun
 from robot.replay import LoggedCycle, MissionStart, ReplayBase, differs, replay
+from shared.clock import unix_offset_ns
 from shared.config import LogConfig
 from shared.errors import InputError
 from shared.interfaces import BaseState, MobileBase
@@ -86,9 +87,13 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, CONFIG.pioneer, np.random.default_rng(7))
     frames = RememberingFrames(SimFrameSource(sim, camera, clock))
+    # The PNG log in Unix time as the entry points write it, the JPEG one with offset 0 (as
+    # logs written before the offset was recorded): replay reads the clock back from both.
     logs = [FieldLog(LogConfig(output_dir=str(folder / "png"), replay_frames=True,
-                               rotate_period_ns=1_000_000_000), "robot", CONFIG.camera.mount, {}),
-            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.camera.mount, {})]
+                               rotate_period_ns=1_000_000_000), "robot", CONFIG.camera.mount, {},
+                     unix_offset_ns=unix_offset_ns(clock)),
+            FieldLog(LogConfig(output_dir=str(folder / "jpeg")), "robot", CONFIG.camera.mount, {},
+                     unix_offset_ns=0)]
     rng = np.random.default_rng(3)
     records: list[CycleRecord] = []
     for goal in GOALS:
@@ -196,7 +201,7 @@ class TestBadInput:
     @pytest.mark.slow
     def test_a_log_without_missions(self, logged: Logged, tmp_path: Path) -> None:
         with FieldLog(LogConfig(output_dir=str(tmp_path)), "teach", CONFIG.camera.mount,
-                      {}) as log:
+                      {}, unix_offset_ns=0) as log:
             log.teach_frame(0, np.zeros((600, 800), np.uint8), (0.0, 0.0, 0.0))
         self.check(*run_cli(str(tmp_path / "teach-0001.mcap"), "--memory", str(logged.memory)),
                    "teach-0001.mcap: no mission start (no messages on /mission/start)")

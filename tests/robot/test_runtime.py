@@ -22,6 +22,7 @@ import pytest
 from robot.config import VmnavConfig
 from robot.mission import MissionState
 from robot.runtime import RobotRuntime
+from robot.vehicle.app_port import JobOutcome
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
@@ -269,6 +270,10 @@ class TestPhotoGoal:
         cv2.imwrite(str(photo), memory.keyframe(goal).image)
         assert robot.runtime.goto_image(photo)
         robot.run(60.0, until=lambda t: t.mode is Mode.HOLD and t.goal_key is not None)
+        outcome = robot.runtime.next_job_outcome()
+        assert outcome is not None and outcome == JobOutcome("photo", goal, outcome.text)
+        assert outcome.text.startswith(f"photo 1.png: key image {goal}: ")
+        assert robot.runtime.next_job_outcome() is None  # once
         t = robot.runtime.telemetry()
         assert t.goal_key == goal and t.mission_state is MissionState.ARRIVED
         assert t.mission_seq is None and t.reached_seqs == ()
@@ -294,6 +299,12 @@ class TestPhotoGoal:
                 "20 69)") in texts
         assert any(t.startswith("photo 4.png: corrupt PNG: chunk tEXt at byte 33 declares")
                    for t in texts)
+        outcomes = []
+        while (outcome := robot.runtime.next_job_outcome()) is not None:
+            outcomes.append(outcome)
+        assert [(o.job, o.value) for o in outcomes] == [("photo", None)] * 4
+        assert [o.text.partition(":")[0] for o in outcomes] == [
+            "photo 1.png", "photo 2.png", "photo 3.jpg", "photo 4.png"]
         assert robot.runtime.telemetry().mode is Mode.HOLD
 
 

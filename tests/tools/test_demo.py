@@ -6,7 +6,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
+import re
+import shutil
+import subprocess
+import sys
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -22,6 +28,7 @@ from shared.logs.reader import log_info
 from shared.memory import read_memory
 from tests.shared.memory.builders import folder_bytes, memory_without_manifest
 from tools.cli import main
+from tools.figures.demo_plots import VIDEO_EVERY
 from tools.figures.demo_report import following_errors, plan_references, track_errors
 from tools.harness.demo import CycleSample
 
@@ -73,6 +80,29 @@ def test_the_goal_went_through_the_ground_station_over_udp(short_demo) -> None:
     info = log_info(out / "logs" / "ground-0001.mcap")
     assert info.complete and info.message_count >= len(types)
     assert "/mavlink/in/VISUAL_SERVO_STATUS" in {t.topic for t in info.topics}
+
+
+@pytest.mark.slow
+def test_log_dump_decodes_the_vmnav_messages_of_the_ground_tlog(short_demo) -> None:
+    """The ground station's tlog of the demo, written by the real station from the real
+    robot's traffic: `vmnav log dump` (pymavlink's mavlogdump, our dialect) names every
+    message; its VISUAL_SERVO_STATUS reached the goal."""
+    _, out, _ = short_demo
+    (tlog,) = (out / "logs").glob("ground-*.tlog")
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    done = subprocess.run([sys.executable, "-m", "tools.cli", "log", "dump", str(tlog),
+                           "--format", "json"], capture_output=True, text=True, env=env,
+                          cwd=root, timeout=300)
+    assert (done.returncode, done.stderr) == (0, "")
+    types = [json.loads(line)["meta"]["type"] for line in done.stdout.splitlines()]
+    assert "VISUAL_SERVO_STATUS" in types
+    assert not [t for t in types if t.startswith("UNKNOWN")]
+    goal = json.loads((out / "report.json").read_text())["goal_key_image"]
+    last = [json.loads(line)["data"] for line in done.stdout.splitlines()
+            if '"VISUAL_SERVO_STATUS"' in line][-1]
+    assert last["goal_key"] == goal
 
 
 @pytest.mark.slow
@@ -213,3 +243,24 @@ def test_the_summary_rounds_for_people() -> None:
                            "mean_matches": None})
     assert "did NOT reach the goal" in failed and "lateral RMS" not in failed
     assert "n/a matches" in failed
+
+
+@pytest.mark.slow
+def test_the_video_is_h264_with_the_target_key_image(short_demo, tmp_path) -> None:
+    """On a copy of the short demo's memory: ``demo.mp4`` in H.264 (browsers play it)."""
+    import imageio_ffmpeg
+
+    _, out, _ = short_demo
+    copy = tmp_path / "seed1"
+    copy.mkdir()
+    shutil.copytree(out / "memory", copy / "memory")
+    shutil.copy(out / "teach.json", copy / "teach.json")
+    assert main(["demo", "--world", str(out.parent / "lab_short.toml"), "--routes",
+                 "east_a,east_b", "--out", str(copy), "--no-log"]) == 0
+    video = copy / "demo.mp4"
+    probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(video)],
+                           capture_output=True, text=True, check=False).stderr
+    assert re.search(r"Video: h264 .*yuv420p.*, 1200x600", probe), probe
+    frames, _ = imageio_ffmpeg.count_frames_and_secs(str(video))
+    report = json.loads((copy / "report.json").read_text())
+    assert frames >= 0.8 * report["sim_time_s"] * 15 / VIDEO_EVERY  # minus the dispatch

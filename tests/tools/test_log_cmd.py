@@ -14,6 +14,8 @@ from shared.logs.writer import LogWriter
 from tools.cli import main
 
 MS = 1_000_000
+#: Unix time at the writer clock's zero (2025-11-14 16:00:00 UTC), ns.
+EPOCH_NS = 1_763_136_000_000_000_000
 
 
 @pytest.fixture
@@ -22,10 +24,10 @@ def log_file(tmp_path: Path) -> Path:
     config = LogConfig(output_dir=str(tmp_path / "logs"), chunk_size_bytes=4096,
                        queue_messages=1000)
     image = np.random.default_rng(0).integers(0, 255, (40, 60), dtype=np.uint8)
-    with LogWriter(config, "robot") as writer:
+    with LogWriter(config, "robot", unix_offset_ns=EPOCH_NS) as writer:
         writer.add_metadata("run", {"route": "corridor"})
         for i in range(101):
-            t_ns = i * 20 * MS
+            t_ns = 1500 * MS + i * 20 * MS
             writer.log_json(t_ns, topics.SERVO_STATE, "vmnav.ServoState", {"stamp_ns": t_ns})
             writer.log_image(t_ns, topics.CAMERA_IMAGE, image)
     (path,) = writer.stats().files
@@ -37,9 +39,10 @@ def test_info_prints_a_table(log_file: Path, capsys: pytest.CaptureFixture[str])
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith(f"file      {log_file} (")
     assert lines[1] == "status    complete (summary and index)"
-    assert lines[2].startswith("duration  2.00 s, ") and "metadata: run" in lines[2]
-    assert lines[3].split() == ["topic", "schema", "messages", "rate", "Hz"]
-    rows = {line.split()[0]: line.split()[1:] for line in lines[4:]}
+    assert lines[2].startswith("duration  2.00 s, ") and "metadata: clock, run" in lines[2]
+    assert lines[3] == "started   2025-11-14 16:00:01.500 UTC (the writer's clock: 1.500 s)"
+    assert lines[4].split() == ["topic", "schema", "messages", "rate", "Hz"]
+    rows = {line.split()[0]: line.split()[1:] for line in lines[5:]}
     assert rows[topics.SERVO_STATE] == ["vmnav.ServoState", "101", "50.50"]
     assert rows[topics.CAMERA_IMAGE][0] == "foxglove.CompressedImage"
     assert 30 <= int(rows[topics.CAMERA_IMAGE][1]) <= 31  # 15 frames/s of the 50 Hz stream
@@ -48,7 +51,9 @@ def test_info_prints_a_table(log_file: Path, capsys: pytest.CaptureFixture[str])
 def test_info_json(log_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["log", "info", str(log_file), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert (info["complete"], info["duration_s"], info["metadata"]) == (True, 2.0, ["run"])
+    assert (info["complete"], info["duration_s"], info["metadata"]) == (True, 2.0,
+                                                                         ["clock", "run"])
+    assert (info["start_ns"], info["unix_offset_ns"]) == (EPOCH_NS + 1500 * MS, EPOCH_NS)
     assert {t["topic"]: t["schema_name"] for t in info["topics"]} == {
         topics.CAMERA_IMAGE: "foxglove.CompressedImage", topics.SERVO_STATE: "vmnav.ServoState"}
 

@@ -151,6 +151,12 @@ class TestServe:
             (["--duration", "0"], "--duration: must be > 0"),
             (["--video", "udp:5000"], "--video: 'udp:5000' is not http:PORT"),
             (["--video", "http:0", "--jpeg-quality", "101"], "--jpeg-quality: must be 1-100"),
+            (["--aria", "tcp:0", "--start", "1e9,0,0"],
+             "--start: (1000000000.0, 0.0, 0.0 deg) is outside world 'lab' (x 0 to 30 m"),
+            (["--aria", "tcp:0", "--start", "0,0,0"],
+             "--start: (0.0, 0.0, 0.0 deg) overlaps a wall"),
+            (["--aria", "tcp:0", "--route-start", "attic"],
+             "--route-start: world 'lab' has no route 'attic' (routes: corridor, office_loop"),
         ],
     )
     def test_bad_arguments(
@@ -159,6 +165,23 @@ class TestServe:
         code, out, err = run(["sim", "serve", *args], capsys)
         assert code == 1 and out == ""
         assert err.count("\n") == 1 and fragment in err
+
+    @pytest.mark.parametrize(("args", "where"), [
+        ([], "at x 2.00 m, y 10.00 m, yaw 0.0 deg"),
+        (["--start", "4.5,10,-90"], "at x 4.50 m, y 10.00 m, yaw -90.0 deg"),
+        (["--route-start", "office_loop"], "at x 12.50 m, y 10.00 m, yaw 0.0 deg"),
+    ])
+    def test_start_pose(self, args: list[str], where: str,
+                        capsys: pytest.CaptureFixture[str]) -> None:
+        code, out, _ = run(["sim", "serve", "--duration", "0.1", "--aria", "tcp:0", *args], capsys)
+        assert code == 0 and where in out.splitlines()[0]
+
+    @pytest.mark.parametrize("text", ["1,2", "1,2,x", "nan,0,0", "1,2,3,4"])
+    def test_bad_start_is_a_usage_error(self, text: str,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+        with pytest.raises(SystemExit) as exited:
+            main(["sim", "serve", "--start", text])
+        assert exited.value.code == 2 and "argument --start" in capsys.readouterr().err
 
     def test_port_in_use(self, capsys: pytest.CaptureFixture[str]) -> None:
         with socket.socket() as taken:

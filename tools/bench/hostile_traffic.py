@@ -170,18 +170,18 @@ def _rejected_log_bytes(files: list[Path]) -> int:
         if (m.topic == topics.MAVLINK_RAW and m.data["direction"] == "in"
                 and m.data["sysid"] == FLOODER_SYSTEM):
             rejected += len(encode_json(m.data))
-            flooded.add((m.log_time_ns, m.data["name"]))
+            flooded.add((m.clock_ns, m.data["name"]))
         elif m.topic == topics.LOG and m.data["name"] == "robot.vehicle":
             rejected += len(encode_json(m.data))
     return rejected + sum(len(encode_json(m.data)) for m in messages
                           if m.topic.startswith("/mavlink/in/")
-                          and (m.log_time_ns, m.topic.rsplit("/", 1)[1]) in flooded)
+                          and (m.clock_ns, m.topic.rsplit("/", 1)[1]) in flooded)
 
 
 def _heartbeats_in(files: list[Path], t0_ns: int, t1_ns: int) -> int:
     return sum(1 for path in files for m in read_messages(path, [topics.MAVLINK_RAW])
                if m.data["direction"] == "in" and m.data["name"] == "HEARTBEAT"
-               and m.data["sysid"] == 255 and t0_ns <= m.log_time_ns <= t1_ns)
+               and m.data["sysid"] == 255 and t0_ns <= m.clock_ns <= t1_ns)
 
 
 def measure_flood(seed: int, seconds: float, flooders: int) -> dict[str, float | bool]:

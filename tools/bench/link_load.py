@@ -40,6 +40,7 @@ from robot.mission import (
 from robot.vehicle.app_port import (
     ACTIVE_STATES,
     GcsLostAction,
+    JobOutcome,
     ServoTelemetry,
     VehicleApp,
     VehicleTelemetry,
@@ -200,6 +201,10 @@ class LinkLoadApp:
 
     def next_notice(self) -> tuple[int, str] | None:
         """None: everything it does shows in the telemetry."""
+        return None
+
+    def next_job_outcome(self) -> JobOutcome | None:
+        """None: it takes no photo goal."""
         return None
 
     # -- motion -------------------------------------------------------------------------

@@ -79,7 +79,9 @@ def bench_log(seconds: float = 8.0, frame_rate_hz: float = 15.0, telemetry_hz: f
         enqueue_ns: list[int] = []
         totals = {"written": 0, "dropped": 0, "lost": 0, "files": 0, "bytes": 0}
         for logging_on in (False, True, False, True):
-            writer = LogWriter(log_config, "bench") if logging_on else None
+            # The phase's times count from its start, about now.
+            writer = (LogWriter(log_config, "bench", unix_offset_ns=time.time_ns())
+                      if logging_on else None)
             _run_phase(seconds / 4, frames, frame_rate_hz, telemetry_hz, writer,
                        phases[logging_on], enqueue_ns)
             if writer is not None:

@@ -1,23 +1,27 @@
 """The figures and the video of ``vmnav demo`` (matplotlib with the Agg backend, OpenCV).
 
-* ``topdown.png``: the taught paths, the route's reference and the repeated trajectory,
-  and the objects moved since the teach (:mod:`sim.scene_change`);
+* ``topdown.png``: the floor plan (walls, furniture), the taught paths, the route's
+  reference and the repeated trajectory, and the objects moved since the teach
+  (:mod:`sim.scene_change`);
 * ``errors_vs_distance.png``: y and theta against the distance driven, true and
   estimated (as Fig. 8 of Courbon et al. 2008);
 * ``image_errors.png``: errImageMax and errPoints against time (as their Fig. 6);
 * ``matches.png``: matches with the next key image per frame;
 * ``demo.mp4`` (:class:`VideoWriter`): the fisheye view with its corners and the
-  servo state, beside the top-down map with the trajectory so far.
+  servo state, beside the target key image and the top-down map with the trajectory so
+  far.
 """
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import cv2
 import matplotlib
 import numpy as np
+import numpy.typing as npt
 
 from sim.config import SimConfig
 from tools.figures.demo_report import following_errors, plan_references
@@ -50,6 +54,7 @@ def write_plots(out: Path, run: RepeatRun, taught: TaughtMemory) -> None:
 
 def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     fig, ax = plt.subplots(figsize=(10, 7))
+    _plot_floor_plan(ax, run)
     for path_id in taught.path_ids:
         ids = taught.memory.paths[path_id].keyframe_ids
         xy = np.array([taught.true_poses[k][:2] for k in ids])
@@ -68,6 +73,17 @@ def _plot_topdown(path: Path, run: RepeatRun, taught: TaughtMemory) -> None:
     ax.legend(loc="best")
     ax.set_title("Taught paths and the repeated trajectory (ground truth)")
     save_figure(fig, path)
+
+
+def _plot_floor_plan(ax: Axes, run: RepeatRun) -> None:
+    """The repeat's world: walls (black) and furniture (grey)."""
+    world = run.changed.world
+    for k, wall in enumerate(world.walls):
+        (x0, y0), (x1, y1) = wall.start, wall.end
+        ax.plot([x0, x1], [y0, y1], color="k", lw=1.5, label=None if k else "walls")
+    for k, corners in enumerate(world.furniture_corners()):
+        ax.add_patch(Polygon(corners, closed=True, fc="0.85", ec="0.6",
+                             label=None if k else "furniture"))
 
 
 def _plot_moved_objects(ax: Axes, run: RepeatRun) -> None:
@@ -123,46 +139,71 @@ def _value(v: float | None) -> float:
 
 
 class VideoWriter:
-    """``demo.mp4``: the fisheye view beside the top-down map, every ``VIDEO_EVERY`` cycles.
+    """``demo.mp4``: the fisheye view with its corners and the servo state, beside the
+    target key image (above) and the top-down map with the trajectory so far (below),
+    every ``VIDEO_EVERY`` cycles. H.264 (yuv420p, the index at the front of the file), which
+    browsers play, by the FFmpeg that ``imageio-ffmpeg`` ships.
 
     Args:
         path: the MP4 file.
-        taught: the memory's truth (the taught paths are drawn on the map).
+        taught: the memory's truth (the taught paths are drawn on the map) and its key
+            images.
         sim_config: the frame period sets the video's frame rate.
+        goal_id: the mission's goal key image, named in the overlay.
     """
 
-    def __init__(self, path: Path, taught: TaughtMemory, sim_config: SimConfig) -> None:
+    def __init__(self, path: Path, taught: TaughtMemory, sim_config: SimConfig,
+                 goal_id: int) -> None:
         self._path = path
         self._taught = taught
+        self._goal_id = goal_id
         self._fps = 1e9 / sim_config.frame_period_ns / VIDEO_EVERY
-        self._writer: cv2.VideoWriter | None = None
+        self._writer: Generator[None, bytes, None] | None = None
+        self._size: tuple[int, int] | None = None
         self._trail: list[tuple[float, float]] = []
+        self._key_images: dict[int, npt.NDArray[np.uint8]] = {}
         self._count = 0
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
         """Draw one cycle (called by :func:`tools.harness.demo.repeat_in_sim`)."""
-        from sim.topdown import MapCanvas, draw_topdown
-
         self._trail.append(sample.pose_w[:2])
         self._count += 1
         if (self._count - 1) % VIDEO_EVERY:
             return
+        view = self._live_view(frame, sample)
+        height, width = view.shape[:2]
+        side = (width // 2) & ~1, (height // 2) & ~1  # the right column: half size, even
+        target = _target_key(sample)
+        panel = np.zeros((side[1], side[0], 3), np.uint8)
+        if target is not None:
+            panel = cv2.cvtColor(cv2.resize(self._key_image(target), side), cv2.COLOR_GRAY2BGR)
+            _label(panel, [f"target: key image {target}"], 0.6)
+        image = np.hstack([view[: 2 * side[1]], np.vstack([panel, self._map(sim, frame, side)])])
+        self._write(image)
+
+    def _live_view(self, frame: RenderedFrame, sample: CycleSample) -> npt.NDArray[np.uint8]:
         view = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
         record = sample.record
         follow = record.follow
+        lines = [f"t {record.t_ns / 1e9:6.1f} s  {record.state.name}  goal {self._goal_id}"]
         if follow is not None:
             for x, y in follow.corners_xy.astype(int):
                 cv2.circle(view, (int(x), int(y)), 3, (0, 200, 0), 1, cv2.LINE_AA)
-        lines = [f"t {record.t_ns / 1e9:6.1f} s  {record.state.name}"]
-        if follow is not None:
             matches = follow.vision.matches if follow.vision is not None else 0
-            lines.append(f"target {follow.target_index + 1}  matches {matches}")
+            target = _target_key(sample)
+            lines.append(f"key image {target} ({follow.target_index + 1} of "
+                         f"{len(record.route)})  matches {matches}")
             if follow.y_m is not None and follow.theta_rad is not None:
                 lines.append(f"y {100 * follow.y_m:+5.1f} cm  "
                              f"theta {np.degrees(follow.theta_rad):+5.1f} deg")
-        for i, text in enumerate(lines):
-            cv2.putText(view, text, (10, 25 + 25 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.7,
-                        (0, 255, 255), 2, cv2.LINE_AA)
+        _label(view, lines, 0.7)
+        return view
+
+    def _map(self, sim: Simulation, frame: RenderedFrame,
+             size: tuple[int, int]) -> npt.NDArray[np.uint8]:
+        """The top-down map with the taught paths and the trail, fitted into ``size``."""
+        from sim.topdown import MapCanvas, draw_topdown
+
         top = draw_topdown(sim, frame, self._taught.memory.camera.fov_deg, _MAP_PX_PER_M)
         canvas = MapCanvas(sim, _MAP_PX_PER_M)
         for path_id in self._taught.path_ids:
@@ -171,16 +212,47 @@ class VideoWriter:
             cv2.polylines(top, [pts], False, (160, 160, 160), 1, cv2.LINE_AA)
         if len(self._trail) > 1:
             cv2.polylines(top, [canvas.px(self._trail)], False, (0, 0, 230), 2, cv2.LINE_AA)
-        height = view.shape[0]
-        top = cv2.resize(top, (round(top.shape[1] * height / top.shape[0]), height))
-        image = np.hstack([view, top])
+        scale = min(size[0] / top.shape[1], size[1] / top.shape[0])
+        fitted = cv2.resize(top, (max(1, round(top.shape[1] * scale)),
+                                  max(1, round(top.shape[0] * scale))))
+        out = np.full((size[1], size[0], 3), 255, np.uint8)
+        out[: fitted.shape[0], : fitted.shape[1]] = fitted
+        return out
+
+    def _key_image(self, keyframe_id: int) -> npt.NDArray[np.uint8]:
+        if keyframe_id not in self._key_images:
+            self._key_images[keyframe_id] = self._taught.memory.keyframe(keyframe_id).image
+        return self._key_images[keyframe_id]
+
+    def _write(self, image: npt.NDArray[np.uint8]) -> None:
+        import imageio_ffmpeg
+
         if self._writer is None:
-            fourcc = cv2.VideoWriter.fourcc(*"mp4v")
-            self._writer = cv2.VideoWriter(str(self._path), fourcc, self._fps,
-                                           (image.shape[1], image.shape[0]))
-        self._writer.write(image)
+            self._size = (image.shape[1], image.shape[0])
+            self._writer = imageio_ffmpeg.write_frames(
+                str(self._path), self._size, pix_fmt_in="bgr24", fps=self._fps,
+                codec="libx264", macro_block_size=2, ffmpeg_log_level="error",
+                output_params=["-movflags", "+faststart"])
+            self._writer.send(None)
+        self._writer.send(np.ascontiguousarray(image).tobytes())
 
     def close(self) -> None:
         """Finish the file."""
         if self._writer is not None:
-            self._writer.release()
+            self._writer.close()
+            self._writer = None
+
+
+def _target_key(sample: CycleSample) -> int | None:
+    """The key image the follower heads for in ``sample`` (None when not following)."""
+    follow, route = sample.record.follow, sample.record.route
+    if follow is None or not route:
+        return None
+    return route[min(follow.target_index, len(route) - 1)]
+
+
+def _label(image: npt.NDArray[np.uint8], lines: list[str], scale: float) -> None:
+    """Yellow text lines at the top left of ``image`` (in place)."""
+    for i, text in enumerate(lines):
+        cv2.putText(image, text, (10, round(25 + 32 * scale * i + 8 * scale)),
+                    cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 255, 255), 2, cv2.LINE_AA)

@@ -82,9 +82,9 @@ def servo_series(path: Path) -> ServoSeries:
         for tf in message.data.get("transforms", ()):
             if (tf.get("parent_frame_id"), tf.get("child_frame_id")) == (topics.FRAME_ODOM,
                                                                          topics.FRAME_BASE):
-                odom_t.append(message.log_time_ns)
+                odom_t.append(message.clock_ns)
                 odom_xy.append((tf["translation"]["x"], tf["translation"]["y"]))
-    t_ns = np.array([m.log_time_ns for m in states], np.int64)
+    t_ns = np.array([m.clock_ns for m in states], np.int64)
 
     def column(name: str) -> FloatArray:
         return np.array([_number(m.data.get(name)) for m in states], np.float64)

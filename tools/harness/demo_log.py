@@ -41,11 +41,13 @@ class DemoLog(FieldLog):
         config: the folder (``OUT/logs``), frame rate, ``replay_frames``, flushing.
         mount: the simulated camera's mount (the ``base_link`` -> ``camera`` transform).
         run: key-value metadata ``"run"`` (goal, routes, seed, ...).
+        unix_offset_ns: Unix time at the simulation clock's zero, ns: the wall time the
+            run started (so the log shows the run's date and stays deterministic given it).
     """
 
     def __init__(self, config: LogConfig, mount: CameraMountConfig,
-                 run: Mapping[str, str]) -> None:
-        super().__init__(config, NAME, mount, run)
+                 run: Mapping[str, str], *, unix_offset_ns: int) -> None:
+        super().__init__(config, NAME, mount, run, unix_offset_ns=unix_offset_ns)
         self._world_odom: Pose2 | None = None
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:

@@ -43,6 +43,7 @@ class CommandDone:
 
     command: int  #: the MAV_CMD
     result: int  #: the MAV_RESULT
+    result_param2: int = 0  #: the ACK's ``result_param2`` (the command's own meaning)
 
     @property
     def accepted(self) -> bool:
@@ -126,7 +127,8 @@ class CommandClient:
             self._deadline_ns = now_ns + self.timeout_ns
             self._in_progress = True
             return []
-        self._events.append(CommandDone(self._command, ack.result))
+        self._events.append(CommandDone(self._command, ack.result,
+                                        getattr(ack, "result_param2", 0)))
         self._command, self._deadline_ns = None, None
         return []
 

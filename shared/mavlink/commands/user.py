@@ -17,7 +17,10 @@ station can send them by number (MAVProxy ``long 31010 7``, MAVSDK
 
 Results: ACCEPTED when the robot took the request, DENIED when it cannot now or a
 parameter is malformed (a STATUSTEXT after the ACK says why). Progress shows in the
-telemetry (HEARTBEAT mode, MISSION_CURRENT, VISUAL_SERVO_STATUS, STATUSTEXT).
+telemetry (HEARTBEAT mode, MISSION_CURRENT, VISUAL_SERVO_STATUS, STATUSTEXT). Go to a
+photo is long-running: IN_PROGRESS while the robot looks the photo up, then ACCEPTED
+with ``result_param2`` the key image it was found at, or FAILED
+(``robot.vehicle.user_commands``).
 
 Name encoding: up to :data:`NAME_BYTES` printable ASCII bytes, 3 per parameter in
 order, each parameter the big-endian integer of its 3 bytes (0..2^24-1, exact in a
@@ -34,6 +37,8 @@ from shared.mavlink.dialect import mavlink
 GOTO_PHOTO = mavlink.MAV_CMD_USER_1
 TEACH_START = mavlink.MAV_CMD_USER_2
 TEACH_STOP = mavlink.MAV_CMD_USER_3
+#: Their names, for messages.
+NAMES = {GOTO_PHOTO: "GOTO_PHOTO", TEACH_START: "TEACH_START", TEACH_STOP: "TEACH_STOP"}
 
 #: Longest path name a TEACH_START carries, bytes.
 NAME_BYTES = 21

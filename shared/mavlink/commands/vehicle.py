@@ -72,6 +72,7 @@ class CommandReply:
 
     result: int  #: a MAV_RESULT
     messages: tuple[Message, ...] = ()
+    progress: int = 0  #: the ACK's ``progress`` (0-100, 255 unknown) for IN_PROGRESS
 
 
 Handler = Callable[[CommandRequest], CommandReply]
@@ -130,7 +131,8 @@ class CommandDispatcher:
                 reply = handler(request)
             self._last = (key, reply)
         ack = mavlink.MAVLink_command_ack_message(
-            request.command, reply.result, target_system=request.source.system_id,
+            request.command, reply.result, reply.progress,
+            target_system=request.source.system_id,
             target_component=request.source.component_id)
         return [ack, *reply.messages]
 

@@ -9,13 +9,14 @@ reported; a mission started is AUTO and localizing).
 from __future__ import annotations
 
 import dataclasses
+import logging
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 from robot.config import VmnavConfig
 from robot.mission import MissionState
-from robot.vehicle.app_port import GcsLostAction, VehicleTelemetry
+from robot.vehicle.app_port import GcsLostAction, JobOutcome, VehicleTelemetry
 from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
@@ -39,6 +40,8 @@ class FakeApp:
         self.configs: list[VmnavConfig] = []
         self.accept = True  # what requests return
         self.notices: list[tuple[int, str]] = []  # what next_notice hands out, oldest first
+        self.job_outcomes: list[JobOutcome] = []  # what next_job_outcome hands out
+        self.stored_path: int | None = 1  # the path teach_stop stores (None: not stored)
 
     def update(self, **changes: Any) -> None:
         """Change the telemetry snapshot."""
@@ -98,7 +101,15 @@ class FakeApp:
         return self.accept
 
     def teach_stop(self) -> bool:
+        """Accepted: stores path ``stored_path`` at once (None: too short), as the robot's
+        worker would, with its notice."""
         self.calls.append(("teach_stop",))
+        if self.accept:
+            text = (f"path {self.stored_path} 'corridor': 12 key images, 0 junction(s)"
+                    if self.stored_path is not None else
+                    "teach 'corridor': 0.12 m driven, a path needs 1.00 m: nothing stored")
+            self.notices.append((logging.INFO, text))
+            self.job_outcomes.append(JobOutcome("path", self.stored_path, text))
         return self.accept
 
     def gcs_lost(self, action: GcsLostAction) -> None:
@@ -111,3 +122,6 @@ class FakeApp:
 
     def next_notice(self) -> tuple[int, str] | None:
         return self.notices.pop(0) if self.notices else None
+
+    def next_job_outcome(self) -> JobOutcome | None:
+        return self.job_outcomes.pop(0) if self.job_outcomes else None

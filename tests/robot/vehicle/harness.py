@@ -227,13 +227,15 @@ class Net:
                                           + [stop_ns or limit_ns, limit_ns]))
         raise AssertionError(f"not done after {MAX_ROUNDS} rounds")
 
-    def command(self, command: int, *params: float) -> Any:
-        """Send COMMAND_LONG from the ground and run until its COMMAND_ACK; return the ACK."""
+    def command(self, command: int, *params: float, final: bool = True) -> Any:
+        """Send COMMAND_LONG from the ground and run until its COMMAND_ACK (with ``final``,
+        the first that is not IN_PROGRESS); return the ACK."""
         ground, start = self.ground, len(self.ground.received)
 
         def acks() -> list[Any]:
             return [m for _, m in ground.received[start:]
-                    if m.get_type() == "COMMAND_ACK" and m.command == command]
+                    if m.get_type() == "COMMAND_ACK" and m.command == command
+                    and not (final and m.result == mavlink.MAV_RESULT_IN_PROGRESS)]
 
         ground.command(command, *params)
         self.run(lambda: bool(acks()))

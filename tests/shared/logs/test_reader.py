@@ -149,3 +149,19 @@ def test_kill_9_loses_at_most_the_last_second(tmp_path: Path) -> None:
     assert counters[-1].log_time_ns >= kill_ns - 1_000_000_000
     assert len(counters) >= 100  # the run was longer than a second
     assert log_info(report.dst).complete
+
+
+@pytest.mark.parametrize("value", ["-5", "12.5", "1e9", " 7", "99999999999999999999", ""])
+def test_a_malformed_clock_offset_is_refused_in_one_line(tmp_path: Path, value: str) -> None:
+    from mcap.writer import Writer
+
+    path = tmp_path / "bad-clock.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start(profile="", library="test")
+        writer.add_metadata(topics.CLOCK_METADATA, {topics.UNIX_OFFSET_KEY: value})
+        writer.finish()
+    for action in (log_info, lambda p: list(read_messages(p))):
+        with pytest.raises(InputError, match="expected an integer number of ns >= 0") as error:
+            action(path)
+        one_line(error, path)

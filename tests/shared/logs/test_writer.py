@@ -15,16 +15,19 @@ import cv2
 import numpy as np
 import pytest
 from mcap.reader import make_reader
+from mcap.writer import Writer as McapWriter
 
 from shared.config import LogConfig
 from shared.logs import topics
 from shared.logs.messages import FrameTransform
-from shared.logs.reader import log_info, read_messages, recover
+from shared.logs.reader import log_info, read_messages, read_metadata, recover
 from shared.logs.writer import LogWriter
 from shared.mavlink.dialect import make_codec, mavlink
 
 ROOT = Path(__file__).resolve().parents[3]
 MS = 1_000_000
+#: Unix time at the clock's zero: 2025-11-14 16:00:00 UTC, ns.
+EPOCH_NS = 1_763_136_000_000_000_000
 
 
 def read_all(path: Path) -> list[tuple[str, str, str, int, int, dict]]:
@@ -46,7 +49,8 @@ def test_round_trip_with_the_mcap_reader(tmp_path: Path, rng: np.random.Generato
     heartbeat = mavlink.MAVLink_heartbeat_message(10, 8, 0, 0, 4, 3)
     frame = vehicle.pack(heartbeat)
     t_ns = 1_500_000_123
-    with LogWriter(LogConfig(output_dir=str(tmp_path)), "robot") as writer:
+    with LogWriter(LogConfig(output_dir=str(tmp_path)), "robot",
+                   unix_offset_ns=EPOCH_NS) as writer:
         writer.add_metadata("run", {"route": "corridor", "mode": "repeat"})
         assert writer.log_image(t_ns, topics.CAMERA_IMAGE, image)
         assert writer.log_points(t_ns, topics.CAMERA_ANNOTATIONS, [[10.5, 20.5], [30.0, 40.0]],
@@ -70,10 +74,11 @@ def test_round_trip_with_the_mcap_reader(tmp_path: Path, rng: np.random.Generato
         "/mavlink/out/HEARTBEAT": ("mavlink.HEARTBEAT", "jsonschema"),
         "/mavlink/raw": ("mavlink.Raw", "jsonschema"),
     }
-    assert all(row[3] == row[4] == t_ns for row in rows.values())
+    # MCAP times and Foxglove timestamps in Unix time; our stamp_ns on the loop's clock.
+    assert all(row[3] == row[4] == EPOCH_NS + t_ns for row in rows.values())
     picture = rows["/camera/image/compressed"][5]
     assert (picture["timestamp"], picture["frame_id"], picture["format"]) == (
-        {"sec": 1, "nsec": 500_000_123}, "camera", "jpeg")
+        {"sec": 1_763_136_001, "nsec": 500_000_123}, "camera", "jpeg")
     decoded = cv2.imdecode(np.frombuffer(base64.b64decode(picture["data"]), np.uint8),
                            cv2.IMREAD_GRAYSCALE)
     assert decoded.shape == image.shape
@@ -83,12 +88,41 @@ def test_round_trip_with_the_mcap_reader(tmp_path: Path, rng: np.random.Generato
     assert points["points"] == [{"x": 10.5, "y": 20.5}, {"x": 30.0, "y": 40.0}]
     assert rows["/servo/state"][5] == {"stamp_ns": t_ns, "lateral_error_m": None}
     assert rows["/log"][5]["level"] == 4
+    assert rows["/log"][5]["timestamp"] == picture["timestamp"]
+    assert {tf["timestamp"]["sec"] for tf in rows["/tf"][5]["transforms"]} == {1_763_136_001}
     assert rows["/mavlink/out/HEARTBEAT"][5]["type"] == 10
     raw = rows["/mavlink/raw"][5]
     parsed = make_codec(255, 190).parse(base64.b64decode(raw["frame"]))
     assert [m.get_type() for m in parsed] == ["HEARTBEAT"]
     assert base64.b64decode(raw["frame"]) == frame
-    assert log_info(stats.files[0]).metadata == ("run",)
+    info = log_info(stats.files[0])
+    assert (info.metadata, info.unix_offset_ns, info.start_ns) == (
+        ("clock", "run"), EPOCH_NS, EPOCH_NS + t_ns)
+    assert read_metadata(stats.files[0])["clock"] == {"unix_offset_ns": str(EPOCH_NS)}
+    assert {(m.log_time_ns, m.clock_ns) for m in read_messages(stats.files[0])} == {
+        (EPOCH_NS + t_ns, t_ns)}
+
+
+def test_a_log_without_the_clock_record_reads_with_offset_0(tmp_path: Path) -> None:
+    """Logs written before the clock record existed: their log_time is the clock's."""
+    path = tmp_path / "old.mcap"
+    with open(path, "wb") as f:
+        old = McapWriter(f)
+        old.start(profile="", library="vmnav shared.logs (mcap-python)")
+        channel = old.register_channel("/cmd_vel", "json", old.register_schema(
+            "vmnav.Command", "jsonschema", b'{"title": "vmnav.Command"}'))
+        old.add_message(channel, log_time=5 * MS, data=b'{"stamp_ns": 5000000}',
+                        publish_time=5 * MS)
+        old.finish()
+    info = log_info(path)
+    assert (info.complete, info.unix_offset_ns, info.start_ns) == (True, None, 5 * MS)
+    [message] = read_messages(path)
+    assert (message.log_time_ns, message.clock_ns) == (5 * MS, 5 * MS)
+
+
+def test_a_negative_offset_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="unix_offset_ns must be an integer >= 0, got -1"):
+        LogWriter(LogConfig(output_dir=str(tmp_path)), unix_offset_ns=-1)
 
 
 def test_frames_over_the_rate_are_skipped(tmp_path: Path, rng: np.random.Generator) -> None:
@@ -145,7 +179,7 @@ def test_rotation_by_size_gives_several_valid_files(tmp_path: Path) -> None:
     assert len(files) >= 3
     assert [p.name for p in files] == [f"robot-{n:04d}.mcap" for n in range(1, len(files) + 1)]
     infos = [log_info(p) for p in files]
-    assert all(info.complete and info.metadata == ("run",) for info in infos)
+    assert all(info.complete and info.metadata == ("clock", "run") for info in infos)
     assert sum(info.message_count for info in infos) == 400
     sequences = [m.sequence for p in files for m in read_messages(p)]
     assert sequences == list(range(1, 401))  # per-topic counter continues across files

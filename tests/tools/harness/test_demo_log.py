@@ -7,6 +7,7 @@ import contextlib
 import io
 import json
 import math
+import time
 from collections import defaultdict
 from pathlib import Path
 from types import SimpleNamespace
@@ -23,6 +24,9 @@ from shared.logs.reader import LogMessage, log_info, read_messages
 from shared.logs.schemas import SERVO_STATE
 from tools.cli import main
 from tools.harness.demo_log import FRAME_BASE_TRUTH, FRAME_WORLD, TRUTH_TF, DemoLog
+
+#: Unix time at the simulation clock's zero (2025-11-14 16:00:00 UTC), ns.
+EPOCH_NS = 1_763_136_000_000_000_000
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +52,10 @@ def messages(demo_log: Path) -> dict[str, list[LogMessage]]:
 
 def test_the_log_is_complete_with_foxglove_schemas(demo_log: Path) -> None:
     info = log_info(demo_log)
-    assert info.complete and info.metadata == ("run",)
+    assert info.complete and info.metadata == ("clock", "run")
+    # In Unix time, the simulation clock's zero at the wall time the repeat started.
+    assert info.start_ns is not None and info.unix_offset_ns is not None
+    assert abs(info.start_ns / 1e9 - time.time()) < 3600
     schemas = {t.topic: t.schema_name for t in info.topics}
     assert {
         topics.CAMERA_IMAGE: "foxglove.CompressedImage",
@@ -77,7 +84,7 @@ def test_the_demo_log_replays_exactly(short_demo, demo_log: Path) -> None:
 def test_one_servo_state_per_cycle_with_the_schema_fields(
         messages: dict[str, list[LogMessage]], short_demo) -> None:
     states = messages[topics.SERVO_STATE]
-    stamps = np.array([m.log_time_ns for m in states])
+    stamps = np.array([m.clock_ns for m in states])
     assert [m.data["stamp_ns"] for m in states] == stamps.tolist()
     steps = np.unique(np.diff(stamps))
     assert len(steps) == 1 and 60e6 < steps[0] < 80e6  # no cycle missing or doubled
@@ -139,7 +146,7 @@ def test_the_truth_places_the_odometry_in_the_world(tmp_path: Path) -> None:
     truth = [(1.0, 2.0, 0.5), (1.1, 2.05, 0.52), (1.2, 2.1, 0.55)]
     odometry = [(0.3, -0.1, 0.2), (0.4, -0.09, 0.221), (0.5, -0.07, 0.249)]
     with DemoLog(LogConfig(output_dir=str(tmp_path)), CameraMountConfig(),
-                 {"seed": "1"}) as log:
+                 {"seed": "1"}, unix_offset_ns=EPOCH_NS) as log:
         for i, (pose_w, odom) in enumerate(zip(truth, odometry, strict=True)):
             record = CycleRecord(t_ns=i * 66_000_000, state=MissionState.LOCALIZING,
                                  base=BaseState(odom, 0.1 * i, False, False, 12.0, True),
@@ -149,7 +156,9 @@ def test_the_truth_places_the_odometry_in_the_world(tmp_path: Path) -> None:
     (file,) = log.close().files
     assert file.name == "robot-0001.mcap"
     logged = list(read_messages(file, [TRUTH_TF]))
-    assert [m.log_time_ns for m in logged] == [0, 66_000_000, 132_000_000]
+    assert [m.clock_ns for m in logged] == [0, 66_000_000, 132_000_000]
+    assert [m.log_time_ns for m in logged] == [EPOCH_NS, EPOCH_NS + 66_000_000,
+                                                EPOCH_NS + 132_000_000]
     frames = [{(t["parent_frame_id"], t["child_frame_id"]): _planar(t)
                for t in m.data["transforms"]} for m in logged]
     np.testing.assert_allclose([f[FRAME_WORLD, FRAME_BASE_TRUTH] for f in frames], truth,
