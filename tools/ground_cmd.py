@@ -12,13 +12,10 @@ Without ``--key`` the link stays on this machine (``shared.link_security``): the
 default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
 open to the network is refused unless ``--insecure`` (a warning on stderr).
 
-The subcommands with actions of their own are modules of their own, registered here:
-``memory`` (:mod:`tools.ground_memory_cmd`), ``teach`` (:mod:`tools.ground_teach_cmd`),
-``params`` (:mod:`tools.ground_params_cmd`), ``stop`` and ``arm``
-(:mod:`tools.ground_stop_cmd`), ``web`` (:mod:`tools.ground_web_cmd`, which does not
-wait for a vehicle), ``keygen`` (:mod:`tools.ground_keygen_cmd`, which connects to
-nothing). Every other action is ``(station, args) -> exit code``,
-called by :func:`run` once the vehicle is heard.
+The subcommands with actions of their own are modules registered here: ``memory``,
+``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a vehicle), ``keygen``
+(connects to nothing), each ``tools.ground_<name>_cmd``. Every other action is ``(station,
+args) -> exit code``, called by :func:`run` once the vehicle is heard.
 """
 
 from __future__ import annotations
