@@ -6,16 +6,32 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= out/demo
+# The web app's browser tests (tests/ground/web/) drive Debian's headless Chromium through
+# its ChromeDriver; `browser` installs both with apt-get when either is missing.
+CHROMIUM     ?= /usr/bin/chromium
+CHROMEDRIVER ?= /usr/bin/chromedriver
+APT_GET      ?= apt-get
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench clean browser
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml | browser
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "vmnav needs Python >= 3.11, found " + sys.version.split()[0])'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	$(BIN)/python -c 'from sim.renderer import compile_kernels; compile_kernels()'
 	@touch $(STAMP)
+
+browser:
+	@if [ -x $(CHROMIUM) ] && [ -x $(CHROMEDRIVER) ]; then exit 0; fi; \
+	sudo=""; [ "$$(id -u)" = 0 ] || sudo="sudo"; \
+	echo "make: installing Debian's chromium and chromium-driver for the browser tests"; \
+	{ $$sudo $(APT_GET) update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$sudo $(APT_GET) install -y -qq chromium chromium-driver \
+	  && [ -x $(CHROMIUM) ] && [ -x $(CHROMEDRIVER) ]; } || { \
+	  echo "make: the browser tests need $(CHROMIUM) and $(CHROMEDRIVER), and installing" \
+	       "them failed: run 'apt-get install chromium chromium-driver' as root (or install" \
+	       "Chromium and ChromeDriver there), then make again" >&2; exit 1; }
 
 demo: $(STAMP)
 	$(BIN)/vmnav demo --out $(OUT)

@@ -65,6 +65,13 @@ def _yaw_flu_deg(q_wxyz: list[float]) -> float:
     return -math.degrees(2 * math.atan2(z, w))
 
 
+def odometry_flu(msg: Any) -> tuple[float, float, float, float, float]:
+    """ODOMETRY in the robot's frame: ``(x_m, y_m, yaw_rad, v_m_s, omega_rad_s)``, x forward,
+    y left, yaw and omega counter-clockwise."""
+    return (float(msg.x), -float(msg.y), math.radians(_yaw_flu_deg(msg.q)), float(msg.vx),
+            -float(msg.yawspeed))
+
+
 def describe(msg: Any) -> str | None:
     """A line for one telemetry message; None for types not shown (STATUSTEXT included:
     notices are shown joined, from :attr:`VehicleState.notices`)."""

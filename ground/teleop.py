@@ -13,6 +13,10 @@ space       stop: both axes 0
 The robot stops by itself when MANUAL_CONTROL stops coming (its dead-man timer), so
 the loop sends the held command every period, changed or not.
 
+A remote operator (the web app's keyboard and gamepad, ``ground.web``) holds a stick
+instead: :class:`DeadMan` keeps the axes it last sent and lapses to zero when they are
+not refreshed within :data:`DEADMAN_NS` (a released key or stick, a page gone away).
+
 :func:`drive_in_terminal` reads the keys from a terminal, put in cbreak mode (each key
 as typed, no Enter needed) for the drive and restored after it.
 """
@@ -34,6 +38,9 @@ from shared.clock import Clock
 STEP = 0.2
 #: MANUAL_CONTROL period, ns (10 Hz).
 PERIOD_NS = 100_000_000
+#: A remote stick command not refreshed for this long counts as released, ns (the web
+#: app refreshes it at 10 Hz; a busy browser may skip a few).
+DEADMAN_NS = 500_000_000
 #: The keys, for people.
 KEYS_HELP = "w/s speed, a/d turn, space stop, q quit"
 _QUIT = frozenset("q\x1b")
@@ -62,6 +69,43 @@ class KeyboardTeleop:
             self.x = round(min(1.0, max(-1.0, self.x + dx)), 6)
             self.r = round(min(1.0, max(-1.0, self.r + dr)), 6)
         return True
+
+
+class DeadMan:
+    """A remote operator's held stick, which lapses to zero unless refreshed (pure; module
+    docstring).
+
+    Args:
+        timeout_ns: how long a command holds without a refresh, ns.
+    """
+
+    def __init__(self, timeout_ns: int = DEADMAN_NS) -> None:
+        self.timeout_ns = timeout_ns
+        self._x = 0.0
+        self._r = 0.0
+        self._held_ns: int | None = None
+
+    def hold(self, x: float, r: float, now_ns: int) -> None:
+        """Hold ``x`` forward and ``r`` yaw (clockwise), each -1..1, from ``now_ns``.
+
+        Raises:
+            ValueError: an axis that is not a number in -1..1.
+        """
+        for name, value in (("x", x), ("r", r)):
+            if not -1.0 <= value <= 1.0:  # False for NaN too
+                raise ValueError(f"{name} {value!r} is not in -1..1")
+        self._x, self._r, self._held_ns = float(x), float(r), now_ns
+
+    def release(self) -> None:
+        """Both axes 0 now."""
+        self._x = self._r = 0.0
+        self._held_ns = None
+
+    def command(self, now_ns: int) -> tuple[float, float]:
+        """``(x, r)`` to send at ``now_ns``: the held command, or zeros once it lapsed."""
+        if self._held_ns is None or now_ns - self._held_ns > self.timeout_ns:
+            return 0.0, 0.0
+        return self._x, self._r
 
 
 def drive(station: GroundStation, read_keys: Callable[[], str], clock: Clock,

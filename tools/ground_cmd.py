@@ -12,12 +12,10 @@ Without ``--key`` the link stays on this machine (``shared.link_security``): the
 default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
 open to the network is refused unless ``--insecure`` (a warning on stderr).
 
-The subcommands with actions of their own are modules of their own, registered here:
-``memory`` (:mod:`tools.ground_memory_cmd`), ``teach`` (:mod:`tools.ground_teach_cmd`),
-``params`` (:mod:`tools.ground_params_cmd`), ``stop`` and ``arm``
-(:mod:`tools.ground_stop_cmd`), ``keygen`` (:mod:`tools.ground_keygen_cmd`, which
-connects to nothing). Every other action is ``(station, args) -> exit code``,
-called by :func:`run` once the vehicle is heard.
+The subcommands with actions of their own are modules registered here: ``memory``,
+``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a vehicle), ``keygen``
+(connects to nothing), each ``tools.ground_<name>_cmd``. Every other action is ``(station,
+args) -> exit code``, called by :func:`run` once the vehicle is heard.
 """
 
 from __future__ import annotations
@@ -36,6 +34,7 @@ from tools import (
     ground_params_cmd,
     ground_stop_cmd,
     ground_teach_cmd,
+    ground_web_cmd,
 )
 from tools.harness.arg_types import KEY_IMAGE, POSITIVE, SYSTEM_ID
 
@@ -102,6 +101,7 @@ def add_parser(subparsers: Subparsers) -> None:
     sub.add_parser("drive", help="keyboard teleoperation in MANUAL: w/s speed, a/d turn, "
                    "space stop, q quit").set_defaults(action=run_drive)
     ground_stop_cmd.add_parser(sub)
+    ground_web_cmd.add_parser(sub)
     ground.set_defaults(run=run)
 
 
@@ -135,7 +135,8 @@ def run(args: argparse.Namespace) -> int:
             stack.callback(lambda: print(
                 f"vmnav ground: {ground_log.summary_text(ground_log.close())}", file=sys.stderr))
             station.packet_taps.append(ground_log.record)
-        station.wait_vehicle(args.timeout)
+        if getattr(args, "waits_for_vehicle", True):  # ``web`` shows vehicles as they come
+            station.wait_vehicle(args.timeout)
         return int(args.action(station, args))
 
 

@@ -3,13 +3,16 @@ in test_station.py."""
 
 from __future__ import annotations
 
+import math
 import os
 import pty
 import termios
 import time
 from collections.abc import Callable
 
-from ground.teleop import KeyboardTeleop, terminal_keys
+import pytest
+
+from ground.teleop import DeadMan, KeyboardTeleop, terminal_keys
 
 
 def test_keys_change_the_held_command_within_limits() -> None:
@@ -46,3 +49,23 @@ def read_within(read_keys: Callable[[], str], count: int) -> str:
         keys += read_keys()
         time.sleep(0.01)
     return keys
+
+
+def test_dead_man_holds_a_command_until_it_lapses() -> None:
+    dead_man = DeadMan(timeout_ns=500)
+    assert dead_man.command(0) == (0.0, 0.0)
+    dead_man.hold(0.6, -0.3, 1000)
+    assert dead_man.command(1500) == (0.6, -0.3)  # refreshed within the timeout
+    assert dead_man.command(1501) == (0.0, 0.0)  # lapsed: released
+    dead_man.hold(1.0, 1.0, 2000)
+    dead_man.release()
+    assert dead_man.command(2000) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("x, r", [(1.01, 0.0), (0.0, -1.5), (math.nan, 0.0), (0.0, math.inf)])
+def test_dead_man_refuses_axes_out_of_range(x: float, r: float) -> None:
+    dead_man = DeadMan()
+    dead_man.hold(0.5, 0.5, 0)
+    with pytest.raises(ValueError, match=r"is not in -1\.\.1"):
+        dead_man.hold(x, r, 1)
+    assert dead_man.command(1) == (0.5, 0.5)  # the command held is kept

@@ -242,13 +242,16 @@ class SimSide:
         self.close()
 
 
-def start_robot(sim: SimSide, station: GroundStation, folder: Path,
+def start_robot(sim: SimSide, station: GroundStation | int, folder: Path,
                 out_name: str) -> VmnavProcess:
     """``vmnav robot`` on the rig's transports, with ``folder``'s ``memory``, ``state`` and
     ``logs`` (the field log, as on the robot), its output in ``folder/out_name``; stopped
-    by SIGTERM, SIGKILL after :data:`STOP_GRACE_S`."""
+    by SIGTERM, SIGKILL after :data:`STOP_GRACE_S`. It sends MAVLink to ``station``'s UDP
+    port on 127.0.0.1, or to that port given as a number (a station in another process:
+    ``vmnav ground web``)."""
+    port = station if isinstance(station, int) else station.link.local_port
     argv = ["robot", "--aria", sim.aria_url, "--camera", sim.camera.stream_url,
-            "--mavlink", f"udpout:127.0.0.1:{station.link.local_port}",
+            "--mavlink", f"udpout:127.0.0.1:{port}",
             "--memory", str(folder / "memory"), "--state", str(folder / "state"),
             "--log", str(folder / "logs")]
     return VmnavProcess(argv, folder / out_name, STOP_GRACE_S)

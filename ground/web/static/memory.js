@@ -1,0 +1,97 @@
+// The memory browser: the robot's visual paths as strips of key-image thumbnails (fetched
+// over MAVLink FTP by the ground station, cached there); click one to see it large and
+// send it as the goal.
+
+import { showMessage } from "./message.js";
+
+const $ = id => document.getElementById(id);
+
+export class MemoryBrowser {
+  constructor(app) {
+    this.app = app;
+    this.index = null;  // {paths: [{id, name, keyframe_ids}], keyframes: {id: {...}}}
+    this.largeKey = null;
+    this.largeUrl = null;
+    $("memory-refresh").onclick = () => this.load(true);
+    $("large-go").onclick = () => this.goto(this.largeKey);
+    $("goal-form").onsubmit = event => {
+      event.preventDefault();
+      this.goto(Number($("goal-key").value));
+    };
+  }
+
+  url(kind, key) {
+    return `/api/vehicles/${this.app.selected}/memory/${kind}/${key}.png`;
+  }
+
+  async load(refresh) {
+    const reply = await this.app.command("memory", { refresh });
+    if (!reply.ok) return;
+    this.index = reply.memory;
+    const strips = this.index.paths.map(path => {
+      const block = document.createElement("div");
+      const title = document.createElement("h4");
+      title.textContent = `path ${path.id} '${path.name}': ${path.keyframe_ids.length} key images`;
+      const strip = document.createElement("div");
+      strip.className = "strip";
+      for (const key of path.keyframe_ids) {
+        const img = document.createElement("img");
+        img.loading = "lazy";
+        img.alt = img.title = `key image ${key}`;
+        img.dataset.key = key;
+        img.onerror = () => { img.classList.add("broken"); img.title = `key image ${key}: not fetched`; };
+        img.onclick = () => this.showLarge(key);
+        img.src = this.url("thumbnails", key);
+        strip.append(img);
+      }
+      block.append(title, strip);
+      return block;
+    });
+    if (strips.length === 0) strips.push(document.createTextNode("the memory is empty"));
+    $("memory-paths").replaceChildren(...strips);
+  }
+
+  async showLarge(key) {
+    const response = await fetch(this.url("images", key));
+    if (!response.ok) {
+      const body = await response.json().catch(() => ({ error: response.statusText }));
+      showMessage(`key image ${key}: ${body.error}`, true);
+      return;
+    }
+    if (this.largeUrl) URL.revokeObjectURL(this.largeUrl);
+    this.largeUrl = URL.createObjectURL(await response.blob());
+    this.largeKey = key;
+    $("large-image").src = this.largeUrl;
+    $("large-caption").textContent = this.describe(key);
+    $("memory-large").hidden = false;
+  }
+
+  goto(key) {
+    return this.app.command("goto", { key });
+  }
+
+  describe(key) {
+    const info = this.index?.keyframes[String(key)];
+    if (!info) return `key image ${key}`;
+    const path = this.index.paths.find(p => p.id === info.path_id);
+    return `key image ${key}: ${info.index + 1} of ${path ? path.keyframe_ids.length : "?"} `
+      + `on path '${path ? path.name : info.path_id}', ${info.distance_m.toFixed(2)} m from its start`;
+  }
+
+  // "key image i of n on 'name'" for the key image being servoed to.
+  progressText(current, next, goal) {
+    const info = this.index?.keyframes[String(next)];
+    const path = info && this.index.paths.find(p => p.id === info.path_id);
+    const where = path ? `key image ${info.index + 1} of ${path.keyframe_ids.length} on '${path.name}'`
+      : "no key image";
+    return `${where} (key ${current} → ${next}, goal ${goal})`;
+  }
+
+  highlight(next, goal) {
+    for (const img of document.querySelectorAll(".strip img")) {
+      const key = Number(img.dataset.key);
+      img.classList.toggle("next", key === next);
+      img.classList.toggle("goal", key === goal);
+    }
+  }
+}
