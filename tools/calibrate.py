@@ -24,20 +24,12 @@ import math
 import re
 import statistics
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from shared.chessboard import Chessboard
 from shared.errors import CalibrationError
-from tools.harness.arg_types import COUNT, COVERAGE, POSITIVE_COUNT
+from tools import calibrate_capture_cmd
+from tools.harness.image_folder import image_paths, read_images
 
-if TYPE_CHECKING:
-    import numpy as np
-    from numpy.typing import NDArray
-
-    from robot.calibration_capture import CaptureGoal
-
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".jpe", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".dib",
-                  ".tif", ".tiff", ".webp")
 #: What the ``source`` field of every file this command writes starts with.
 WRITER = "vmnav calibrate"
 
@@ -54,22 +46,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     p.add_argument("images_dir", metavar="IMAGES_DIR", type=Path, nargs="?",
                    help="folder of board images")
-    capture = p.add_argument_group(
-        "capture", "take the board views from a camera first: a frame is kept when its board "
-        "covers parts of the lens's image no kept view covered, until the image is covered")
-    capture.add_argument("--capture", metavar="SOURCE",
-                         help="cv2.VideoCapture source: device index, video file or URL")
-    capture.add_argument("--views", type=Path, metavar="DIR",
-                         help="new folder for the views kept (PNG), calibrated from after")
-    capture.add_argument("--coverage", type=COVERAGE, metavar="F",
-                         help="share of the lens's image to cover [default: 0.8]")
-    capture.add_argument("--min-views", type=COUNT, metavar="N",
-                         help="views to keep at least [default: 12]")
-    capture.add_argument("--max-views", type=COUNT, metavar="N",
-                         help="views to keep at most [default: 40]")
-    capture.add_argument("--max-frames", type=POSITIVE_COUNT, metavar="N",
-                         help="stop after reading N frames [default: until covered or the "
-                         "source ends]")
+    calibrate_capture_cmd.add_arguments(p)
     p.add_argument("--from-equidistant", type=Path, metavar="YAML",
                    help="import this equidistant (cv2.fisheye) calibration instead")
     p.add_argument(
@@ -99,14 +76,9 @@ def run(args: argparse.Namespace) -> int:
                                              "or --from-equidistant YAML (one of the three)")
     check_replaceable(args.output, WRITER)
     if args.capture is not None:
-        from tools.calibrate_capture_cmd import capture_views
-
-        if args.views is None:
-            raise CalibrationError("--views", "--capture needs a new folder for the views")
         board = _board(args.pattern, args.square)
         _fov_deg(args.fov)
-        capture_views(args.capture, args.views, board, _capture_goal(args), args.max_frames)
-        args.images_dir = args.views
+        args.images_dir = calibrate_capture_cmd.run_capture(args, board)
     if args.from_equidistant is not None:
         from tools.calibrate_equidistant_cmd import import_equidistant
 
@@ -126,8 +98,8 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     board = _board(args.pattern, args.square)
     fov_deg = _fov_deg(args.fov)
-    paths = _image_paths(args.images_dir)
-    images, size = _read_images(paths)
+    paths = image_paths(args.images_dir)
+    images, size = read_images(paths)
     detections = {
         path: find_board_corners(image, board) for path, image in zip(paths, images, strict=True)
     }
@@ -184,17 +156,6 @@ def _fov_deg(text: str | None) -> float:
     return fov_deg
 
 
-def _capture_goal(args: argparse.Namespace) -> CaptureGoal:
-    """``--coverage``, ``--min-views``, ``--max-views`` over the defaults."""
-    from robot.calibration_capture import CaptureGoal
-
-    given = {"target": args.coverage, "min_views": args.min_views, "max_views": args.max_views}
-    try:
-        return CaptureGoal(**{k: v for k, v in given.items() if v is not None})
-    except ValueError as e:
-        raise CalibrationError("--coverage/--min-views/--max-views", str(e)) from None
-
-
 def _board(pattern: str | None, square: str | None) -> Chessboard:
     """The board from ``--pattern COLSxROWS`` and ``--square M``."""
     if pattern is None or square is None:
@@ -221,37 +182,3 @@ def _number(option: str, text: str) -> float:
     if not math.isfinite(value):
         raise CalibrationError(option, f"expected a finite number, got {text!r}")
     return value
-
-
-def _image_paths(folder: Path) -> list[Path]:
-    """The images of ``folder``, sorted by name, numbers in it by value (2.jpg before 10.jpg)."""
-    if not folder.exists():
-        raise CalibrationError(folder, "folder not found")
-    if not folder.is_dir():
-        raise CalibrationError(folder, "not a folder")
-    try:
-        paths = sorted(
-            (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES),
-            key=lambda p: [int(part) if part.isdigit() else part
-                           for part in re.split(r"(\d+)", p.name)],
-        )
-    except OSError as e:
-        raise CalibrationError(folder, f"cannot list the folder: {e.strerror}") from None
-    if not paths:
-        raise CalibrationError(folder, f"no images ({', '.join(IMAGE_SUFFIXES)}) in this folder")
-    return paths
-
-
-def _read_images(paths: list[Path]) -> tuple[list[NDArray[np.uint8]], tuple[int, int]]:
-    """The images as (H, W) uint8 grey, and their common ``(width, height)``."""
-    from shared.image_decode import FILE_FORMATS, read_grey
-
-    images = []
-    for path in paths:
-        image = read_grey(path, error=CalibrationError, formats=FILE_FORMATS)
-        if images and image.shape != images[0].shape:
-            (h, w), (h0, w0) = image.shape, images[0].shape
-            raise CalibrationError(path, f"image is {w}x{h} but {paths[0].name} is {w0}x{h0}")
-        images.append(image)
-    height, width = images[0].shape
-    return images, (width, height)

@@ -10,14 +10,61 @@ when the goal is met, the source ends, or after ``--max-frames``.
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shared.errors import CalibrationError, InputError
+from tools.harness.arg_types import COUNT, COVERAGE, POSITIVE_COUNT
 
 if TYPE_CHECKING:
     from robot.calibration_capture import CaptureGoal
     from shared.chessboard import Chessboard
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """``vmnav calibrate``'s capture options."""
+    capture = p.add_argument_group(
+        "capture", "take the board views from a camera first: a frame is kept when its board "
+        "covers parts of the lens's image no kept view covered, until the image is covered")
+    capture.add_argument("--capture", metavar="SOURCE",
+                         help="cv2.VideoCapture source: device index, video file or URL")
+    capture.add_argument("--views", type=Path, metavar="DIR",
+                         help="new folder for the views kept (PNG), calibrated from after")
+    capture.add_argument("--coverage", type=COVERAGE, metavar="F",
+                         help="share of the lens's image to cover [default: 0.8]")
+    capture.add_argument("--min-views", type=COUNT, metavar="N",
+                         help="views to keep at least [default: 12]")
+    capture.add_argument("--max-views", type=COUNT, metavar="N",
+                         help="views to keep at most [default: 40]")
+    capture.add_argument("--max-frames", type=POSITIVE_COUNT, metavar="N",
+                         help="stop after reading N frames [default: until covered or the "
+                         "source ends]")
+
+
+def run_capture(args: argparse.Namespace, board: Chessboard) -> Path:
+    """Capture the views ``args`` ask for; the folder they are in.
+
+    Raises:
+        CalibrationError: no ``--views`` folder, a bad goal, or too few views kept.
+    """
+    if args.views is None:
+        raise CalibrationError("--views", "--capture needs a new folder for the views")
+    capture_views(args.capture, args.views, board, _capture_goal(args), args.max_frames)
+    return Path(args.views)
+
+
+def _capture_goal(args: argparse.Namespace) -> CaptureGoal:
+    """``--coverage``, ``--min-views``, ``--max-views`` over the defaults."""
+    from robot.calibration_capture import CaptureGoal
+
+    given = {"target": args.coverage, "min_views": args.min_views, "max_views": args.max_views}
+    try:
+        return CaptureGoal(**{k: v for k, v in given.items() if v is not None})
+    except ValueError as e:
+        raise CalibrationError("--coverage/--min-views/--max-views", str(e)) from None
+
+
 
 
 def capture_views(source: str, folder: Path, board: Chessboard, goal: CaptureGoal,

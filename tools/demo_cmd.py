@@ -19,13 +19,13 @@ from typing import TYPE_CHECKING
 from robot.config import CONTROL_LAWS
 from shared.errors import InputError
 from tools.harness.arg_types import KEY_IMAGE, POSITIVE
+from tools.harness.progress import Progress
 from tools.harness.scene_args import (
     add_change_arguments,
     check_change_fits,
     scene_change_from_args,
 )
 from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
-from tools.progress import Progress
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig

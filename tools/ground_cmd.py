@@ -12,10 +12,10 @@ Without ``--key`` the link stays on this machine (``shared.link_security``): the
 default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
 open to the network is refused unless ``--insecure`` (a warning on stderr).
 
-The subcommands with actions of their own are modules registered here: ``memory``,
-``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a vehicle), ``keygen``
-(connects to nothing), each ``tools.ground_<name>_cmd``. Every other action is ``(station,
-args) -> exit code``, called by :func:`run` once the vehicle is heard.
+The subcommands with actions of their own are modules registered here: ``goto``,
+``memory``, ``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a
+vehicle), ``keygen`` (connects to nothing), each ``tools.ground_<name>_cmd``. Every other
+action is ``(station, args) -> exit code``, called by :func:`run` once the vehicle is heard.
 """
 
 from __future__ import annotations
@@ -24,11 +24,11 @@ import argparse
 import contextlib
 import dataclasses
 import sys
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from tools import (
+    ground_goto_cmd,
     ground_keygen_cmd,
     ground_memory_cmd,
     ground_params_cmd,
@@ -36,19 +36,15 @@ from tools import (
     ground_teach_cmd,
     ground_web_cmd,
 )
-from tools.harness.arg_types import KEY_IMAGE, POSITIVE, SYSTEM_ID
+from tools.harness.arg_types import POSITIVE, SYSTEM_ID
 
 if TYPE_CHECKING:
     from ground.station import GroundStation
 
 #: Default wait for the vehicle's HEARTBEAT, s.
 DEFAULT_TIMEOUT_S = 5.0
-#: Default wait for a goal to be reached (``goto --wait``), s.
-DEFAULT_WAIT_S = 600.0
 #: ``watch`` without ``--duration`` runs until Ctrl-C: about 31 years, ns.
 FOREVER_NS = 10**18
-#: ``goto --wait`` refreshes its status line this often, s.
-_PROGRESS_PERIOD_S = 0.5
 
 Subparsers = argparse._SubParsersAction  # type: ignore[type-arg]
 
@@ -84,17 +80,7 @@ def add_parser(subparsers: Subparsers) -> None:
     watch.add_argument("--duration", type=POSITIVE, metavar="S", help="stop after S seconds")
     watch.set_defaults(action=run_watch)
     ground_memory_cmd.add_parser(sub)
-    goto = sub.add_parser("goto", help="drive to a key image, or to where a photo was taken",
-                          description="Upload a one-goal mission and start it, or upload a "
-                          "photo and ask the robot to localize it and go there.")
-    goto.add_argument("goal_key", type=KEY_IMAGE, nargs="?", metavar="KEY",
-                      help="goal key image id")
-    goto.add_argument("--image", type=Path, metavar="PHOTO", help="goal photo (JPEG, PNG...)")
-    goto.add_argument("--wait", action="store_true",
-                      help="wait for the outcome; exit code 0 reached, 1 not")
-    goto.add_argument("--wait-timeout", type=POSITIVE, default=DEFAULT_WAIT_S, metavar="S",
-                      help=f"give up waiting after S seconds (default {DEFAULT_WAIT_S:g})")
-    goto.set_defaults(action=run_goto)
+    ground_goto_cmd.add_parser(sub)
     ground_teach_cmd.add_parser(sub)
     ground_params_cmd.add_parser(sub)
     ground_keygen_cmd.add_parser(sub)
@@ -163,63 +149,6 @@ def run_watch(station: GroundStation, args: argparse.Namespace) -> int:
     with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C is the normal way out
         watch(station, lambda line: print(line, flush=True), duration_ns)
     return 0
-
-
-def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
-    """Dispatch the goal; with ``--wait``, 0 when reached and 1 when not."""
-    from ground.telemetry_text import not_reached_text
-    from shared.errors import InputError
-    from shared.image_decode import check_image
-    from shared.mavlink.mission.goal import Goal
-
-    if (args.goal_key is None) == (args.image is None):
-        raise InputError("goto", "give either a key image id KEY or --image PHOTO")
-    vehicle = station.vehicle
-    if args.image is not None:
-        try:
-            data = args.image.read_bytes()
-        except OSError as e:
-            raise InputError(args.image, f"cannot read the goal photo: {e.strerror}") from None
-        check_image(data, args.image)  # refused here in one line rather than by the robot
-        found = station.goto_photo(data, args.image.suffix)
-        print(f"vehicle {vehicle.system_id}: photo {args.image.name} (uploaded as photo "
-              f"{found.photo_id}) found at key image {found.keyframe_id}; going there"
-              + (f"\n  the robot: {found.said}" if found.said else ""))
-    else:
-        try:
-            goal = Goal(args.goal_key)
-        except ValueError as e:
-            raise InputError("KEY", str(e)) from None
-        station.upload_goals([goal])
-        station.start_mission()
-        print(f"vehicle {vehicle.system_id}: going to key image {args.goal_key}")
-    if not args.wait:
-        return 0
-    if _wait_with_progress(station, args.wait_timeout):
-        print(f"vehicle {vehicle.system_id}: goal reached")
-        return 0
-    why = not_reached_text(station.mission_outcome, args.wait_timeout, vehicle.notices)
-    print(f"vmnav ground: goal not reached: {why}", file=sys.stderr)
-    return 1
-
-
-def _wait_with_progress(station: GroundStation, timeout_s: float) -> bool:
-    """:meth:`GroundStation.wait_mission_done`, with the robot's servo state on a status
-    line while it drives (on a terminal)."""
-    from ground.telemetry_text import describe
-    from tools.progress import Progress
-
-    vehicle = station.vehicle
-    end_s = time.monotonic() + timeout_s
-    with Progress(f"vehicle {vehicle.system_id}") as bar:
-        while True:
-            step_s = max(0.0, min(_PROGRESS_PERIOD_S, end_s - time.monotonic()))
-            if station.wait_mission_done(step_s):
-                return True
-            if station.mission_outcome is not None or time.monotonic() >= end_s:
-                return False
-            servo = vehicle.telemetry.get("VISUAL_SERVO_STATUS")
-            bar.update(detail=(describe(servo) or "") if servo is not None else "")
 
 
 def run_drive(station: GroundStation, args: argparse.Namespace) -> int:

@@ -16,14 +16,14 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from shared.errors import ConfigError, InputError
-from shared.pose import Pose2
-from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
-
-if TYPE_CHECKING:
-    from sim.world import World
+from shared.errors import InputError
+from tools.harness.sim_args import (
+    add_sim_arguments,
+    add_start_arguments,
+    place_at_start,
+    sim_config_from_args,
+)
 
 DEFAULT_ARIA = "tcp:8101"
 DEFAULT_VIDEO_PORT = 8080
@@ -83,38 +83,6 @@ def _tcp_spec(option: str, text: str, rest: str, default_port: int) -> TcpSpec:
     raise InputError(option, f"{text!r}: the TCP port must be 0-65535")
 
 
-def parse_start(text: str) -> Pose2:
-    """A ``--start`` value ``X,Y,YAW`` (m, m, degrees) as a floor-plan pose.
-
-    Raises:
-        argparse.ArgumentTypeError: not three finite numbers.
-    """
-    parts = text.split(",")
-    try:
-        x, y, yaw_deg = (float(part) for part in parts)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is not X,Y,YAW (metres, metres, degrees)") from None
-    if not all(math.isfinite(v) for v in (x, y, yaw_deg)):
-        raise argparse.ArgumentTypeError(f"{text!r}: X, Y and YAW must be finite")
-    return Pose2(x, y, math.radians(yaw_deg))
-
-
-def start_pose(args: argparse.Namespace, world: World) -> Pose2 | None:
-    """The robot's start from ``--start`` or ``--route-start`` (None: the world's own).
-
-    Raises:
-        InputError: ``--route-start`` names no route of ``world``.
-    """
-    if args.route_start is None:
-        return args.start
-    routes = {route.name: route for route in world.routes}
-    if args.route_start not in routes:
-        raise InputError("--route-start", f"world '{world.name}' has no route "
-                         f"{args.route_start!r} (routes: {', '.join(routes) or 'none'})")
-    return routes[args.route_start].start_pose()
-
-
 def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``vmnav sim serve``."""
     serve = sim_sub.add_parser(
@@ -157,15 +125,7 @@ def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
     serve.add_argument(
         "--duration", type=float, metavar="S", help="stop after S seconds [default: never]"
     )
-    start = serve.add_mutually_exclusive_group()
-    start.add_argument(
-        "--start", type=parse_start, metavar="X,Y,YAW",
-        help="where the robot starts: x and y on the floor plan, m, and its heading, degrees "
-        "CCW from +x [default: the world's start]")
-    start.add_argument(
-        "--route-start", metavar="NAME",
-        help="the robot starts where the world's route NAME starts, facing along it (a "
-        "memory taught on that route localizes there)")
+    add_start_arguments(serve)
     serve.set_defaults(run=run_serve)
 
 
@@ -180,9 +140,6 @@ def run_serve(args: argparse.Namespace) -> int:
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
     config, camera = sim_config_from_args(args)
-    from sim.world import load_world
-
-    start = start_pose(args, load_world(config.world))
 
     from shared.clock import WallClock
     from sim.camera_server import CameraServer
@@ -204,12 +161,7 @@ def run_serve(args: argparse.Namespace) -> int:
             pioneer_server(config, camera, links, listeners, video_server))
         emulator = server.emulator
         sim = emulator.simulation
-        if start is not None:
-            try:
-                sim.place_robot(start)
-            except ConfigError as error:
-                option = "--start" if args.route_start is None else "--route-start"
-                raise InputError(option, error.problem) from None
+        place_at_start(args, sim)
         control_server = None
         if control is not None:
             hook = ControlHook(sim)

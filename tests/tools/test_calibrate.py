@@ -286,7 +286,8 @@ class TestFromEquidistant:
     ) -> None:
         code = main(["calibrate", str(tmp_path), "--from-equidistant", str(FISHEYE_LEFT_YAML),
                      "--out", str(tmp_path / "c.json")])
-        assert_fails(code, capsys, "give a folder of board images, --capture SOURCE or --from-equidistant YAML")
+        assert_fails(code, capsys, "give a folder of board images, --capture SOURCE or "
+                                   "--from-equidistant YAML")
         code = main(["calibrate", str(tmp_path), "--out", str(tmp_path / "c.json")])
         assert_fails(code, capsys, "--pattern/--square: both are needed")
         code = main(["calibrate", "--from-equidistant", str(FISHEYE_LEFT_YAML), "--fov", "190",

@@ -26,11 +26,12 @@ ALLOWED = {
 NESTED = {
     "tools.sim_cmd": {"tools.sim_serve_cmd"},
     "tools.memory_cmd": {"tools.memory_localize_cmd"},
-    "tools.calibrate": {"tools.calibrate_equidistant_cmd"},
+    "tools.calibrate": {"tools.calibrate_equidistant_cmd", "tools.calibrate_capture_cmd"},
     "tools.vision_cmd": {"tools.vision_pair_cmd", "tools.vision_localize_cmd"},
     "tools.ground_cmd": {"tools.ground_memory_cmd", "tools.ground_teach_cmd",
                          "tools.ground_params_cmd", "tools.ground_keygen_cmd",
-                         "tools.ground_stop_cmd", "tools.ground_web_cmd"},
+                         "tools.ground_stop_cmd", "tools.ground_goto_cmd",
+                         "tools.ground_web_cmd"},
     "tools.bench_cmd": {"tools.bench_safety_cmd"},
 }
 #: Lines a top-level tools/ module may have ("under ~200").

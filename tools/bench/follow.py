@@ -26,7 +26,7 @@ from tools.harness.demo import (
     repeat_in_sim,
     taught_memory,
 )
-from tools.progress import Progress
+from tools.harness.progress import Progress
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig

@@ -1,4 +1,4 @@
-"""``tools.progress``: a bar on a terminal, nothing elsewhere."""
+"""``tools.harness.progress``: a bar on a terminal, nothing elsewhere."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import io
 import os
 import pty
 
-from tools.progress import Progress
+from tools.harness.progress import Progress
 
 
 def test_nothing_is_drawn_when_the_stream_is_not_a_terminal() -> None:
