@@ -14,7 +14,7 @@ APT_GET      ?= apt-get
 
 .PHONY: demo test lint bench clean browser
 
-$(STAMP): pyproject.toml | browser
+$(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "vmnav needs Python >= 3.11, found " + sys.version.split()[0])'
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
@@ -36,7 +36,7 @@ browser:
 demo: $(STAMP)
 	$(BIN)/vmnav demo --out $(OUT)
 
-test: $(STAMP) lint
+test: $(STAMP) lint browser
 	$(BIN)/python -m pytest -q -n 2 --dist worksteal
 
 lint: $(STAMP)
