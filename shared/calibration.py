@@ -257,6 +257,11 @@ def camera_from_dict(data: Any, where: str | Path) -> CameraModel:
         raise CalibrationError(
             where, f"K: rows 2 and 3 must be [0, fy, cy] and [0, 0, 1], got {K[1]} and {K[2]}"
         )
+    (cx, cy), (width, height) = (K[0][2], K[1][2]), size
+    if not (0.0 <= cx <= width - 1 and 0.0 <= cy <= height - 1):
+        raise CalibrationError(
+            where, f"K: the principal point ({cx:g}, {cy:g}) px is outside the {width}x{height} "
+            "image (cx and cy are pixel coordinates of the optical axis)")
     xi = _number(data["xi"], "xi", where)
     if xi < 0.0:
         raise CalibrationError(where, f"xi: must be >= 0, got {xi}")
