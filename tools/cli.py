@@ -60,8 +60,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Environment that keeps OpenCV's and FFmpeg's own warnings off the output (a camera URL
+#: that does not open printed two lines of theirs before ours); set them to see them.
+_QUIET_LIBRARIES = {"OPENCV_LOG_LEVEL": "ERROR", "OPENCV_FFMPEG_LOGLEVEL": "-8"}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``vmnav`` console script; returns the exit code."""
+    for name, value in _QUIET_LIBRARIES.items():  # before anything imports cv2
+        os.environ.setdefault(name, value)
     args = build_parser().parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO,

@@ -170,6 +170,7 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
                            *memory)
     assert bad_camera.returncode == 1
     assert "nothing.mjpg: cannot open with OpenCV" in bad_camera.stderr.splitlines()[-1]
+    assert bad_camera.stderr.count("\n") == 1, bad_camera.stderr  # no OpenCV/FFmpeg warnings
     started = time.monotonic()
     no_robot = run_robot("--aria", "socket://127.0.0.1:9", "--camera", camera, *memory)
     assert no_robot.returncode == 1 and time.monotonic() - started < 30
