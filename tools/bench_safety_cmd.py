@@ -24,7 +24,7 @@ def add_parser(bench_sub: argparse._SubParsersAction,  # type: ignore[type-arg]
         "simulator's truth); time emergency stops on the hardware-in-the-loop rig; time "
         "the safety layer per frame. Prints JSON; progress on stderr.")
     safety.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
-    safety.add_argument("--camera", metavar="FILE",
+    safety.add_argument("--calibration", metavar="FILE",
                         help="camera calibration JSON [default: 800x600, 185 deg]")
     safety.add_argument("--worlds", nargs="+", default=["lab", "campus"], metavar="WORLD",
                         help="worlds of the people runs [default: lab campus]")

@@ -26,7 +26,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def add_info_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Register ``vmnav memory info DIR``."""
+    """Register ``vmnav memory info --memory DIR``."""
     info = memory_sub.add_parser(
         "info",
         help="paths, key images, spacing, junctions and connectivity of a memory",
@@ -34,29 +34,31 @@ def add_info_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ig
         "images, length, key image spacing), its junctions and whether it is strongly "
         "connected, naming the key images that are not.",
     )
-    info.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
+    info.add_argument("--memory", required=True, type=Path, metavar="DIR",
+                      help="the memory's folder")
     info.add_argument("--json", action="store_true", help="print the summary as JSON")
     info.set_defaults(run=run_info)
 
 
 def run_info(args: argparse.Namespace) -> int:
-    """Print the summary of the memory in ``args.directory``."""
+    """Print the summary of the memory in ``args.memory``."""
     from shared.memory import memory_summary, read_memory, summary_text
 
-    summary = memory_summary(read_memory(args.directory))
+    summary = memory_summary(read_memory(args.memory))
     print(json.dumps(summary, indent=2) if args.json else summary_text(summary))
     return 0
 
 
 def add_route_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Register ``vmnav memory route DIR START GOAL``."""
+    """Register ``vmnav memory route --memory DIR START GOAL``."""
     route = memory_sub.add_parser(
         "route",
         help="plan the visual route from one key image to a goal key image",
         description="Plan the shortest visual route (by teach odometric distance) through the "
         "memory's paths and junctions from key image START to key image GOAL, and list it.",
     )
-    route.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
+    route.add_argument("--memory", required=True, type=Path, metavar="DIR",
+                      help="the memory's folder")
     route.add_argument("start", type=KEY_IMAGE, metavar="START",
                        help="id of the key image to start from")
     route.add_argument("goal", type=KEY_IMAGE, metavar="GOAL", help="id of the goal key image")
@@ -69,11 +71,11 @@ def run_route(args: argparse.Namespace) -> int:
     from shared.errors import InputError
     from shared.memory import read_memory
 
-    memory = read_memory(args.directory)
+    memory = read_memory(args.memory)
     walk = memory.plan_route(args.start, args.goal)
     if not walk:
         raise InputError(
-            args.directory,
+            args.memory,
             f"key image {args.goal} cannot be reached from key image {args.start} "
             "(see 'vmnav memory info' for the memory's connectivity)",
         )
@@ -125,7 +127,7 @@ def add_build_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: i
     build.add_argument("--name",
                        help="the new path's name [default: the (first) log file's stem]")
     build.add_argument(
-        "--camera",
+        "--calibration",
         metavar="FILE",
         help="camera calibration JSON of a new memory; must match an existing memory's "
         "[default: the memory's camera, or 800x600, 185 deg]",
@@ -143,7 +145,7 @@ def run_build(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
     name = args.log[0].stem if args.name is None else args.name
-    built, memory = build_path(args.log, args.memory, name, args.camera, config)
+    built, memory = build_path(args.log, args.memory, name, args.calibration, config)
     print(summary_text(built, memory, args.memory))
     return 0
 

@@ -1,4 +1,4 @@
-"""``vmnav memory localize DIR IMAGE``: the key image of a memory that an image shows.
+"""``vmnav memory localize --memory DIR IMAGE``: the key image of a memory that an image shows.
 
 Registered under ``vmnav memory`` by :mod:`tools.memory_cmd`.
 """
@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 
 
 def add_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Register ``vmnav memory localize DIR IMAGE.png``."""
+    """Register ``vmnav memory localize --memory DIR IMAGE.png``."""
     localize = memory_sub.add_parser(
         "localize",
         help="the key image of a memory that an image shows, its scores and the time taken",
@@ -24,7 +24,8 @@ def add_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[
         "ZNCC matching and a relative pose on the best candidates; the key image verified "
         "with the most inliers wins. Prints it, its matches and inliers and the time taken.",
     )
-    localize.add_argument("directory", type=Path, metavar="DIR", help="the memory's folder")
+    localize.add_argument("--memory", required=True, type=Path, metavar="DIR",
+                      help="the memory's folder")
     localize.add_argument("image", type=Path, metavar="IMAGE", help="the query image (PNG, ...)")
     localize.add_argument(
         "--config", metavar="FILE", help="vmnav TOML config ([features], [localize] tables)"
@@ -39,7 +40,7 @@ def add_parser(memory_sub: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run_localize(args: argparse.Namespace) -> int:
-    """Print where ``args.image`` is in the memory in ``args.directory``."""
+    """Print where ``args.image`` is in the memory in ``args.memory``."""
     import time
 
     from robot.config import load_config
@@ -48,7 +49,7 @@ def run_localize(args: argparse.Namespace) -> int:
     from shared.memory import read_memory
 
     config = load_config(args.config)
-    memory = read_memory(args.directory)
+    memory = read_memory(args.memory)
     image = read_query_image(args.image, memory.camera.width, memory.camera.height)
     t0 = time.perf_counter()
     localizer = Localizer.from_memory(memory, config.camera.mount, config.features,

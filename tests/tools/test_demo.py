@@ -137,7 +137,7 @@ def test_a_memory_of_another_camera_is_refused_and_kept(short_demo, tmp_path, ca
     camera = tmp_path / "camera.json"
     write_camera(camera, dataclasses.replace(CameraModel.default(), fov_deg=180.0))
     before = folder_bytes(out)
-    code = main(["demo", "--routes", "corridor", "--camera", str(camera), "--out", str(out),
+    code = main(["demo", "--routes", "corridor", "--calibration", str(camera), "--out", str(out),
                  "--no-video"])
     err = capsys.readouterr().err
     assert code == 1 and err == (f"vmnav demo: error: {out / 'memory'}: holds a memory taught "

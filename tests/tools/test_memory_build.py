@@ -81,7 +81,7 @@ class TestBuild:
             assert kb.distance_m == pytest.approx(ka.distance_m, abs=1e-9)
 
     def test_memory_info_reads_it(self, built: Built) -> None:
-        code, out, err = run(["memory", "info", str(built.built)])
+        code, out, err = run(["memory", "info", "--memory", str(built.built)])
         assert code == 0, err
         assert "1 paths" in out and "'teach-east_a-0001'" in out
 
@@ -208,7 +208,7 @@ class TestBadInput:
         write_camera(camera, dataclasses.replace(CameraModel.default(), fov_deg=180.0))
         before = folder_bytes(built.taught)
         code, out, err = run(["memory", "build", str(built.log), "--memory", str(built.taught),
-                              "--camera", str(camera)])
+                              "--calibration", str(camera)])
         assert (code, out) == (1, "")
         assert err == (f"vmnav memory: error: {built.taught}: holds a memory taught with another "
                        "camera than the one given\n")

@@ -28,7 +28,7 @@ def memory_dir(tmp_path: Path, rng: np.random.Generator) -> Path:
 
 
 def test_info_text(memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, err = run(["memory", "info", str(memory_dir)], capsys)
+    code, out, err = run(["memory", "info", "--memory", str(memory_dir)], capsys)
     assert code == 0 and err == ""
     lines = out.splitlines()
     assert lines[0] == "10 key images on 3 paths, 4.50 m taught; camera 160x120 px, 185 deg"
@@ -41,7 +41,7 @@ def test_info_text(memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None
 
 
 def test_info_json_is_the_summary(memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = run(["memory", "info", "--json", str(memory_dir)], capsys)
+    code, out, _ = run(["memory", "info", "--json", "--memory", str(memory_dir)], capsys)
     assert code == 0
     summary = json.loads(out)
     assert summary == memory_summary(read_memory(memory_dir))
@@ -59,7 +59,7 @@ def test_bad_memory_is_one_line_and_exit_1(
     memory_dir: Path, capsys: pytest.CaptureFixture[str], damage: object, fragment: str
 ) -> None:
     damage(memory_dir)  # type: ignore[operator]
-    code, out, err = run(["memory", "info", str(memory_dir)], capsys)
+    code, out, err = run(["memory", "info", "--memory", str(memory_dir)], capsys)
     assert code == 1 and out == ""
     assert err.startswith("vmnav memory: error: ") and err.count("\n") == 1
     assert fragment in err and str(memory_dir) in err
@@ -79,7 +79,7 @@ class TestRoute:
     def test_plans_across_a_junction(
         self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
-        code, out, _ = run(["memory", "route", str(memory_dir), "2", "5"], capsys)
+        code, out, _ = run(["memory", "route", "--memory", str(memory_dir), "2", "5"], capsys)
         assert code == 0
         # 2 -> 3 along the corridor (0.5 m), junction 3 <-> 4 (0 m), 4 -> 5 along "back" (1 m).
         assert out.splitlines() == [
@@ -89,18 +89,19 @@ class TestRoute:
         ]
 
     def test_json(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-        code, out, _ = run(["memory", "route", "--json", str(memory_dir), "5", "1"], capsys)
+        code, out, _ = run(["memory", "route", "--json", "--memory", str(memory_dir), "5", "1"],
+                           capsys)
         assert code == 0
         report = json.loads(out)
         assert report["keyframe_ids"] == [5, 6, 0, 1]
         assert report["paths"] == ["back", "corridor"]
 
     def test_unknown_goal_id(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-        code, _, err = run(["memory", "route", str(memory_dir), "0", "99"], capsys)
+        code, _, err = run(["memory", "route", "--memory", str(memory_dir), "0", "99"], capsys)
         assert code == 1 and err.count("\n") == 1
         assert "no key image with id 99" in err
 
     def test_unreachable_goal(self, memory_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-        code, _, err = run(["memory", "route", str(memory_dir), "8", "0"], capsys)
+        code, _, err = run(["memory", "route", "--memory", str(memory_dir), "8", "0"], capsys)
         assert code == 1 and err.count("\n") == 1
         assert "cannot be reached from key image 8" in err

@@ -1,4 +1,4 @@
-"""``vmnav memory localize DIR IMAGE`` (tools/memory_localize_cmd.py) on a synthetic memory
+"""``vmnav memory localize --memory DIR IMAGE`` (tools/memory_localize_cmd.py) on a synthetic memory
 on disk."""
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ class TestLocalize:
     ) -> None:
         query = query_file(memory_dir.parent, places[4].query)
         config = str(memory_dir.parent / "vmnav.toml")
-        argv = ["memory", "localize", str(memory_dir), str(query), "--config", config]
+        argv = ["memory", "localize", "--memory", str(memory_dir), str(query), "--config", config]
         code, out, err = run(argv, capsys)
         assert code == 0, err
         first, second = out.splitlines()
@@ -69,8 +69,8 @@ class TestLocalize:
     ) -> None:
         query = query_file(memory_dir.parent, places[1].query)
         code, out, _ = run(
-            ["memory", "localize", str(memory_dir), str(query), "--exhaustive", "--json",
-             "--config", str(memory_dir.parent / "features.toml")], capsys
+            ["memory", "localize", "--memory", str(memory_dir), str(query), "--exhaustive",
+             "--json", "--config", str(memory_dir.parent / "features.toml")], capsys
         )
         assert code == 0
         report = json.loads(out)
@@ -90,8 +90,8 @@ class TestLocalize:
         other = make_places(np.random.default_rng(99), 1, small_camera())[0].query
         query = query_file(memory_dir.parent, other)
         config = str(memory_dir.parent / "vmnav.toml")
-        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--config",
-                            config], capsys)
+        code, out, _ = run(["memory", "localize", "--memory", str(memory_dir), str(query),
+                            "--config", config], capsys)
         assert code == 0
         assert ": not localized)" in out.splitlines()[0]
 
@@ -100,7 +100,7 @@ class TestLocalize:
     ) -> None:
         colour = cv2.cvtColor(places[2].query, cv2.COLOR_GRAY2BGR)
         query = query_file(memory_dir.parent, colour)
-        code, out, _ = run(["memory", "localize", str(memory_dir), str(query), "--json",
+        code, out, _ = run(["memory", "localize", "--memory", str(memory_dir), str(query), "--json",
                             "--config", str(memory_dir.parent / "features.toml")], capsys)
         assert code == 0 and json.loads(out)["keyframe_id"] == 2
 
@@ -122,7 +122,8 @@ class TestBadInput:
         capsys: pytest.CaptureFixture[str],
     ) -> None:
         query = query_file(memory_dir.parent, image)
-        code, out, err = run(["memory", "localize", str(memory_dir), str(query)], capsys)
+        code, out, err = run(["memory", "localize", "--memory", str(memory_dir), str(query)],
+                             capsys)
         assert code == 1 and out == ""
         assert err.startswith("vmnav memory: error: ") and message in err
 
@@ -130,16 +131,18 @@ class TestBadInput:
         self, memory_dir: Path, capsys: pytest.CaptureFixture[str]
     ) -> None:
         missing = memory_dir.parent / "nothing.png"
-        code, _, err = run(["memory", "localize", str(memory_dir), str(missing)], capsys)
+        code, _, err = run(["memory", "localize", "--memory", str(memory_dir), str(missing)],
+                           capsys)
         assert code == 1 and "nothing.png: no such image file" in err
         broken = memory_dir.parent / "broken.png"
         broken.write_bytes(b"\x89PNG\r\n\x1a\n truncated")
-        code, _, err = run(["memory", "localize", str(memory_dir), str(broken)], capsys)
+        code, _, err = run(["memory", "localize", "--memory", str(memory_dir), str(broken)], capsys)
         assert code == 1 and "broken.png: cannot be decoded as an image" in err
 
     def test_a_missing_memory(
         self, tmp_path: Path, places: list[Place], capsys: pytest.CaptureFixture[str]
     ) -> None:
         query = query_file(tmp_path, places[0].query)
-        code, _, err = run(["memory", "localize", str(tmp_path / "none"), str(query)], capsys)
+        code, _, err = run(["memory", "localize", "--memory", str(tmp_path / "none"),
+                            str(query)], capsys)
         assert code == 1 and "manifest.json" in err

@@ -75,7 +75,7 @@ class TestSnapshot:
             (["--x", "0.0", "--y", "10.0"], "--x/--y/--yaw: (0.0, 10.0, 0.0 deg) overlaps a wall"),
             (["--x", "1e9", "--y", "10.0"], "--x/--y/--yaw: (1000000000.0, 10.0, 0.0 deg) is "
              "outside world 'lab' (x 0 to 30 m, y 0 to 20 m)"),
-            (["--camera", "/nonexistent/camera.json"], "/nonexistent/camera.json"),
+            (["--calibration", "/nonexistent/camera.json"], "/nonexistent/camera.json"),
             (["--config", "/nonexistent/vmnav.toml"], "/nonexistent/vmnav.toml"),
             (["--doors", "nosuch=open"], "scene change: world 'lab' has no door named 'nosuch'"),
         ],

@@ -475,7 +475,7 @@ def measure(seed: int = 0) -> dict[str, object]:
             shutil.copytree(valid, directory)
             damage(directory)
             runs[f"{name} memory info"] = _figures(
-                run_command(["memory", "info", str(directory)], root), must_refuse=True)
+                run_command(["memory", "info", "--memory", str(directory)], root), must_refuse=True)
             shutil.rmtree(directory)
         for name, write in LOG_CASES.items():
             path = root / "hostile.mcap"

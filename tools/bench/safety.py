@@ -100,7 +100,7 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
     result: dict[str, Any] = {}
     for world in worlds:
         base_sim, camera = sim_config_from_args(argparse.Namespace(
-            config=args.config, world=world, seed=None, camera=args.camera, people=None))
+            config=args.config, world=world, seed=None, calibration=args.calibration, people=None))
         rows = []
         for seed in seeds:
             seeded = replace(base_sim, seed=seed)

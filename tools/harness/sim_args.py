@@ -34,7 +34,8 @@ def add_sim_arguments(parser: argparse.ArgumentParser) -> None:
         "--people", type=COUNT, metavar="N", help="number of people walking about [default: 0]"
     )
     parser.add_argument(
-        "--camera", metavar="FILE", help="camera calibration JSON [default: 800x600, 185 deg]"
+        "--calibration", metavar="FILE",
+        help="camera calibration JSON of the simulated lens [default: 800x600, 185 deg]"
     )
 
 
@@ -54,8 +55,8 @@ def sim_config_from_args(args: argparse.Namespace) -> tuple[SimConfig, CameraMod
         overrides["world"] = args.world
     if args.seed is not None:
         overrides["seed"] = args.seed
-    if args.camera is not None:
-        overrides["camera_file"] = args.camera
+    if args.calibration is not None:
+        overrides["camera_file"] = args.calibration
     if args.people is not None:
         overrides["people"] = dataclasses.replace(config.people, count=args.people)
     config = dataclasses.replace(config, **overrides)

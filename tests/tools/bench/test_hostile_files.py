@@ -50,7 +50,7 @@ def test_memory_info_refuses_the_npz_bomb_in_one_line(tmp_path: Path) -> None:
     memory = tmp_path / "memory"
     hostile_files.write_valid_memory(memory, seed=0)
     hostile_files.npz_bomb(memory)
-    run = run_command(["memory", "info", str(memory)], tmp_path)
+    run = run_command(["memory", "info", "--memory", str(memory)], tmp_path)
     assert run.refused_one_line, run.stderr
     assert "features/0.npz: its arrays declare 671089088 bytes uncompressed" in run.stderr
     assert 0 < run.peak_rss_mb < MAX_RSS_MB
