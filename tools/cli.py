@@ -23,6 +23,7 @@ import os
 import signal
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from shared.errors import VmnavError
 from tools import (
@@ -44,9 +45,17 @@ COMMANDS = (sim_cmd, calibrate, bench_cmd, memory_cmd, teach_cmd, demo_cmd, pion
             log_cmd, replay_cmd, ground_cmd, vision_cmd)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a usage error in one line, as every other error of vmnav (the usage is
+    one ``--help`` away); exit status 2, argparse's."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every working subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="vmnav",
         description="Visual teach-and-repeat navigation with a fisheye camera "
         "(Courbon et al. 2008).",

@@ -76,7 +76,7 @@ def test_a_bad_number_on_the_command_line_is_one_usage_error(
         main(argv)
     assert exit_.value.code == 2
     err = capsys.readouterr().err
-    assert err.splitlines()[-1].endswith(f"error: {message}")
+    assert err.count("\n") == 1 and f"error: {message} (see vmnav " in err
     assert "Traceback" not in err
     assert not (tmp_path / "out").exists()
 
