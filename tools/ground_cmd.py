@@ -15,7 +15,9 @@ open to the network is refused unless ``--insecure`` (a warning on stderr).
 The subcommands with actions of their own are modules registered here: ``goto``,
 ``memory``, ``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a
 vehicle), ``keygen`` (connects to nothing), each ``tools.ground_<name>_cmd``. Every other
-action is ``(station, args) -> exit code``, called by :func:`run` once the vehicle is heard.
+action is ``(station, args) -> exit code``, called by :func:`run` once the vehicle is heard;
+one that takes input of its own (a photo, a name) checks it in ``args.check(args)`` before
+anything connects.
 """
 
 from __future__ import annotations
@@ -105,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.action is run_drive and not sys.stdin.isatty():
         raise InputError("stdin", "not a terminal: drive reads keys, run it from one")
+    if getattr(args, "check", None) is not None:  # the subcommand's own input, before the link
+        args.check(args)
     clock = WallClock()
     key = read_key_file(args.key) if args.key is not None else None
     log_config = load_log_config(args.config)  # before connecting: a bad file is one line

@@ -38,26 +38,40 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="wait for the outcome; exit code 0 reached, 1 not")
     goto.add_argument("--wait-timeout", type=POSITIVE, default=DEFAULT_WAIT_S, metavar="S",
                       help=f"give up waiting after S seconds (default {DEFAULT_WAIT_S:g})")
-    goto.set_defaults(action=run_goto)
+    goto.set_defaults(action=run_goto, check=check_goto)
 
 
-def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
-    """Dispatch the goal; with ``--wait``, 0 when reached and 1 when not."""
-    from ground.telemetry_text import not_reached_text
+def check_goto(args: argparse.Namespace) -> None:
+    """One goal, and a photo that reads and decodes (sets ``args.photo``, its bytes), before
+    anything connects.
+
+    Raises:
+        InputError: no goal or two; a photo that cannot be read or is not a sound image.
+    """
     from shared.errors import InputError
     from shared.image_decode import check_image
-    from shared.mavlink.mission.goal import Goal
 
     if (args.goal_key is None) == (args.image is None):
         raise InputError("goto", "give either a key image id KEY or --image PHOTO")
-    vehicle = station.vehicle
+    args.photo = None
     if args.image is not None:
         try:
-            data = args.image.read_bytes()
+            args.photo = args.image.read_bytes()
         except OSError as e:
             raise InputError(args.image, f"cannot read the goal photo: {e.strerror}") from None
-        check_image(data, args.image)  # refused here in one line rather than by the robot
-        found = station.goto_photo(data, args.image.suffix)
+        check_image(args.photo, args.image)  # refused here in one line rather than by the robot
+
+
+def run_goto(station: GroundStation, args: argparse.Namespace) -> int:
+    """Dispatch the goal (checked by :func:`check_goto`); with ``--wait``, 0 when reached and
+    1 when not."""
+    from ground.telemetry_text import not_reached_text
+    from shared.errors import InputError
+    from shared.mavlink.mission.goal import Goal
+
+    vehicle = station.vehicle
+    if args.image is not None:
+        found = station.goto_photo(args.photo, args.image.suffix)
         print(f"vehicle {vehicle.system_id}: photo {args.image.name} (uploaded as photo "
               f"{found.photo_id}) found at key image {found.keyframe_id}; going there"
               + (f"\n  the robot: {found.said}" if found.said else ""))

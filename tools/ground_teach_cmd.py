@@ -19,9 +19,24 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
     teach_sub = teach.add_subparsers(dest="teach_command", metavar="ACTION", required=True)
     start = teach_sub.add_parser("start", help="start recording")
     start.add_argument("name", metavar="NAME", help="the path's name (up to 21 ASCII characters)")
-    start.set_defaults(action=run_start)
+    start.set_defaults(action=run_start, check=check_start)
     teach_sub.add_parser("stop", help="stop; the path joins the memory").set_defaults(
         action=run_stop)
+
+
+def check_start(args: argparse.Namespace) -> None:
+    """The path's name fits a TEACH_START, before anything connects.
+
+    Raises:
+        InputError: not up to 21 printable ASCII characters.
+    """
+    from shared.errors import InputError
+    from shared.mavlink.commands.user import params_from_name
+
+    try:
+        params_from_name(args.name)
+    except ValueError as e:
+        raise InputError("NAME", str(e)) from None
 
 
 def run_start(station: GroundStation, args: argparse.Namespace) -> int:

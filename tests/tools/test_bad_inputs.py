@@ -129,6 +129,13 @@ CASES: list[tuple[list[str], int, str]] = [
     (["ground", "--connect", "udpin:0.0.0.0:14556", "status"], 1,
      "an unsigned link open to the network lets anyone drive the robot"),
     ([*NO_VEHICLE, "status"], 1, "no HEARTBEAT from a vehicle within 0.2 s"),
+    # checked before connecting: no vehicle needed to be told
+    ([*NO_VEHICLE, "goto", "--image", "notimg.png"], 1,
+     "notimg.png: not a PNG or JPEG image (the file starts with 78 78)"),
+    ([*NO_VEHICLE, "goto", "--image", "nothere.jpg"], 1, "nothere.jpg: cannot read the goal"),
+    ([*NO_VEHICLE, "goto"], 1, "goto: give either a key image id KEY or --image PHOTO"),
+    ([*NO_VEHICLE, "teach", "start", "\u00e9t\u00e9"], 1,
+     "NAME: path name '\u00e9t\u00e9': at most 21 printable ASCII characters"),
 ]
 
 
