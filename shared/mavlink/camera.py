@@ -20,8 +20,9 @@ The camera answers, through its own :class:`~shared.mavlink.commands.vehicle.
 CommandDispatcher` (ACK first, then the message; anything else UNSUPPORTED):
 
 * REQUEST_MESSAGE (512) for CAMERA_INFORMATION (259), VIDEO_STREAM_INFORMATION (269,
-  param2: the stream, 0 for all, 1 the only one) and VIDEO_STREAM_STATUS (270); a stream
-  id that does not exist is DENIED;
+  param2: the stream, 0 for all, 1 the only one), VIDEO_STREAM_STATUS (270) and HEARTBEAT
+  (0: a station discovering components, as ``vmnav ground`` does, hears the camera at
+  once rather than at its next beat); a stream id that does not exist is DENIED;
 * the deprecated REQUEST_CAMERA_INFORMATION (521), REQUEST_VIDEO_STREAM_INFORMATION (2504)
   and REQUEST_VIDEO_STREAM_STATUS (2505, param1 the stream), which older ground stations
   send.
@@ -163,6 +164,8 @@ def camera_handlers(stream: VideoStream, time_boot_ms: Callable[[], int]) -> dic
 
     def request_message(r: CommandRequest) -> CommandReply:
         msg_id = r.params[0]
+        if msg_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:  # a station looking for components
+            return CommandReply(mavlink.MAV_RESULT_ACCEPTED, (camera_heartbeat(),))
         if msg_id == mavlink.MAVLINK_MSG_ID_CAMERA_INFORMATION:
             return stream_message(math.nan, camera_information)
         if msg_id == mavlink.MAVLINK_MSG_ID_VIDEO_STREAM_INFORMATION:
