@@ -5,6 +5,8 @@ Rules:
 1. A vehicle is a system whose HEARTBEAT names an autopilot (``autopilot`` not
    ``MAV_AUTOPILOT_INVALID``): ground stations, cameras and gimbals beat with
    INVALID and are not vehicles. The component that beats is the one to talk to.
+   A camera's HEARTBEAT from a known vehicle's system (``shared.mavlink.camera``) is
+   kept as that vehicle's camera, by component id, with when it was heard.
 2. Every other message from a known vehicle's system is kept as its last telemetry
    of that type (``telemetry["SYS_STATUS"]``...); messages from systems that have
    not beaten yet are ignored.
@@ -21,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from shared.mavlink.address import Address, source_of
+from shared.mavlink.camera import is_camera_heartbeat
 from shared.mavlink.dialect import Message, mavlink
 from shared.mavlink.modes import Mode
 from shared.mavlink.statustext import TEXT_LEN
@@ -48,6 +51,7 @@ class VehicleState:
         armed: HEARTBEAT ``base_mode`` has ``MAV_MODE_FLAG_SAFETY_ARMED``.
         telemetry: message type -> the last message of that type from the system.
         notices: STATUSTEXT texts, chunks joined, oldest first.
+        cameras: camera component id -> when its last HEARTBEAT arrived, station clock, ns.
     """
 
     address: Address
@@ -58,6 +62,7 @@ class VehicleState:
     armed: bool = False
     telemetry: dict[str, Any] = field(default_factory=dict)
     notices: list[str] = field(default_factory=list)
+    cameras: dict[int, int] = field(default_factory=dict)
     _chunks: dict[int, str] = field(default_factory=dict)
 
     @property
@@ -106,6 +111,8 @@ class Fleet:
         source = source_of(msg)
         vehicle = self.vehicles.get(source.system_id)
         if isinstance(msg, mavlink.MAVLink_heartbeat_message):
+            if is_camera_heartbeat(msg) and vehicle is not None:
+                vehicle.cameras[source.component_id] = now_ns
             if msg.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
                 return None
             if vehicle is None:

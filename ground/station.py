@@ -189,6 +189,7 @@ class GroundStation:
         self._mission: MissionClient | None = None
         self._params: ParamClient | None = None
         self._commands: CommandClient | None = None
+        self._component_commands: CommandClient | None = None  # command_to's, while it runs
         self._ftp = FtpClient(ftp)
         self._watch: MissionWatch | None = None
         self._mission_count = 0
@@ -238,7 +239,7 @@ class GroundStation:
         if self._next_beat_ns is None or now_ns >= self._next_beat_ns:
             self._beat()
             self._next_beat_ns = now_ns + HEARTBEAT_PERIOD_NS
-        for core in (self._mission, self._params, self._commands):
+        for core in (self._mission, self._params, self._commands, self._component_commands):
             timer = core.get_timer() if core is not None else None
             if core is not None and timer is not None and now_ns >= timer:
                 self._send(core.handle_timer(now_ns))
@@ -268,7 +269,8 @@ class GroundStation:
 
     def _next_deadline_ns(self) -> int:
         timers = [self._next_beat_ns, self._ftp.get_timer()]
-        timers += [core.get_timer() for core in (self._mission, self._params, self._commands)
+        timers += [core.get_timer() for core in (self._mission, self._params, self._commands,
+                                                 self._component_commands)
                    if core is not None]
         if self._signing is not None:
             timers.append(self._signing.get_timer())
@@ -280,6 +282,9 @@ class GroundStation:
             return
         for listener in self.listeners:
             listener(vehicle, msg)
+        other = self._component_commands
+        if other is not None and source_of(msg) == other.vehicle:
+            self._send(other.handle_message(msg, now_ns))
         if self.vehicle is None or source_of(msg) != self.vehicle.address:
             return
         for core in (self._mission, self._params, self._commands):
@@ -417,6 +422,27 @@ class GroundStation:
         if not isinstance(outcome, CommandDone):
             raise GroundError(f"no COMMAND_ACK to {_command_name(command)} "
                               f"after {outcome.sends} tries")
+        return outcome
+
+    def command_to(self, component_id: int, command: int, *params: float) -> CommandDone:
+        """Send COMMAND_LONG ``command`` to another component of the vehicle (its camera)
+        and wait for that component's final ACK.
+
+        Raises:
+            GroundError: no ACK after the resends.
+        """
+        vehicle = self._target("command_to")
+        client = CommandClient(self.address, Address(vehicle.system_id, component_id))
+        self._component_commands = client
+        try:
+            self._send(client.send(command, tuple(params), self.clock.now_ns()))
+            outcome = self._finish(client)
+        finally:
+            self._component_commands = None
+        if not isinstance(outcome, CommandDone):
+            raise GroundError(f"no COMMAND_ACK to {_command_name(command)} from component "
+                              f"{component_id} of vehicle {vehicle.system_id} after "
+                              f"{outcome.sends} tries")
         return outcome
 
     def command(self, command: int, *params: float) -> CommandDone:

@@ -15,7 +15,8 @@ rejected (``UdpVehicle`` rule 3).
 Rules:
 
 1. **The loop** (:meth:`RobotProcess.run`) hands each frame to
-   :meth:`RobotRuntime.step` and, when no frame comes within
+   :meth:`RobotRuntime.step` (then, with a live view, to :meth:`robot.video.LiveView.offer`,
+   which never waits) and, when no frame comes within
    ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled
    (:meth:`RobotRuntime.stall`: the base stops), until the camera ends, the loop's
    clock reaches ``end_ns``, or the caller's ``on_step`` says :attr:`AfterStep.STOP`.
@@ -63,6 +64,7 @@ from robot.runtime import RobotRuntime
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
 from robot.vehicle.udp_vehicle import Rejected, UdpVehicle
+from robot.video import LiveView, video_stream
 from shared.clock import Clock
 from shared.interfaces import MobileBase
 from shared.memory import VisualMemory
@@ -122,6 +124,9 @@ class RobotParts:
             --insecure``); None: nothing.
         lockstep: the clock is a simulation's (the runtime's worker results land on
             the next frame; the loop may hold the clock).
+        video: the live view (``vmnav robot --video``): offered every frame (rule 1) and
+            advertised by the vehicle's camera component; None: no live view, no camera
+            component.
     """
 
     memory: VisualMemory
@@ -135,6 +140,7 @@ class RobotParts:
     signing: SigningSetup | None = None
     link_warning: str | None = None
     lockstep: bool = False
+    video: LiveView | None = None
 
 
 class RobotProcess:
@@ -177,9 +183,12 @@ class RobotProcess:
                                         parts.base, parts.clock, parts.rng, log=log,
                                         lockstep=parts.lockstep)
             undo.callback(self.runtime.close)
+            self._video = parts.video
+            stream = None if parts.video is None else video_stream(
+                parts.video.server, parts.config.video, parts.memory.camera)
             endpoint = VehicleEndpoint(self.runtime, parts.config, parts.files,
                                        signing=parts.signing,
-                                       link_warning=parts.link_warning)
+                                       link_warning=parts.link_warning, video=stream)
             self.vehicle = undo.enter_context(UdpVehicle.open(link, endpoint, self._link_clock))
             if log is not None:
                 self.vehicle.packet_taps.append(self._mavlink_tap(log))
@@ -230,6 +239,8 @@ class RobotProcess:
     def _step(self, frame: Frame, on_step: OnStep | None) -> AfterStep:
         """Step ``frame``, again while ``on_step`` holds the clock (rule 2); what then."""
         record = self.runtime.step(*frame)
+        if self._video is not None:
+            self._video.offer(*frame, record)
         if on_step is None:
             return AfterStep.NEXT_FRAME
         after = on_step(record)

@@ -32,7 +32,7 @@ Rules:
    step: 200 with ``{"id": n, "t_ns": ...}``, or 404 when there is no such box.
 4. Threads: the simulation is only touched in its own loop (:class:`ControlHook`, a
    step hook); HTTP requests wait on it. Loopback by default; anything else is 404.
-5. Hostile clients (:mod:`sim.guarded_http`): idle connections hold no thread, handler
+5. Hostile clients (:mod:`shared.guarded_http`): idle connections hold no thread, handler
    threads are bounded, a cross-origin request (a web page in a browser on the same
    machine) is refused (403), and so is a body that is not JSON (415) or too long (413).
 """
@@ -49,9 +49,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from shared.errors import InputError, TransportError, VmnavError
+from shared.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits, RequestRefusedError
 from shared.pose import Pose2
 from sim.decor import PlacedObject
-from sim.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits, RequestRefusedError
 from sim.simulation import Simulation
 
 TRUTH_PATH = "/truth"

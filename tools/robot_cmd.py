@@ -12,7 +12,10 @@ It wires the parts the field runs, each on its own thread, around one loop:
   kept in ``--state DIR``. Without a key the link stays on loopback
   (``shared.link_security``): the default is ``udpin:127.0.0.1:14550``, and a link open
   to the network is refused unless ``--insecure``;
-* the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``.
+* the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``;
+* with ``--video http:[HOST:]PORT`` (loopback unless a host is given), the live view: the
+  camera's frames as MJPEG over HTTP (:mod:`robot.video`, ``[video]`` sizes and rate),
+  advertised through the MAVLink camera protocol.
 
 :class:`robot.process.RobotProcess` assembles them and runs the loop: it hands each
 frame to the runtime and, when no frame comes within ``TeleopConfig.frame_timeout_ns``,
@@ -31,6 +34,10 @@ from pathlib import Path
 
 from shared.errors import InputError, TransportError
 from tools.harness.arg_types import POSITIVE, SYSTEM_ID
+from tools.harness.tcp_spec import parse_http_spec
+
+#: The live view's port for a plain ``--video http``.
+DEFAULT_VIDEO_PORT = 8090
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -75,6 +82,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                              "servo state, commands, odometry, SIPs, MAVLink in and out, events "
                              "[default: the config's log.output_dir]")
     parser.add_argument("--no-log", action="store_true", help="write no field log")
+    parser.add_argument("--video", metavar="SPEC",
+                        help="serve what the camera sees as MJPEG over HTTP (/stream.mjpg, "
+                             "/snapshot.jpg; ?matches=1 draws the matched points), advertised "
+                             "to ground stations by the MAVLink camera protocol: http:PORT or "
+                             f"http:HOST:PORT (host 127.0.0.1 unless given; port "
+                             f"{DEFAULT_VIDEO_PORT} for plain http; 0 picks a free one) "
+                             "[default: off]")
     parser.add_argument("--duration", type=POSITIVE, metavar="S",
                         help="stop after this long, s [default: until Ctrl-C or SIGTERM]")
     parser.set_defaults(run=run)
@@ -91,11 +105,13 @@ def run(args: argparse.Namespace) -> int:
     from robot.pioneer.driver import PioneerDriver
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
+    from robot.video import LiveView
     from shared.calibration import read_camera
     from shared.clock import WallClock, unix_offset_ns
     from shared.key_file import read_key_file
     from shared.link_security import INSECURE_NOTICE, check_link
     from shared.memory import open_or_create
+    from shared.mjpeg_server import MjpegServer
 
     config = load_config(args.config)
     config = dataclasses.replace(
@@ -108,6 +124,8 @@ def run(args: argparse.Namespace) -> int:
                                                        else {"system_id": args.system})))
     if args.duration is not None and not args.duration > 0:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
+    video = None if args.video is None else parse_http_spec(args.video, "--video",
+                                                            DEFAULT_VIDEO_PORT)
     key = read_key_file(args.key) if args.key is not None else None
     link_check = check_link(args.mavlink, "--mavlink", key is not None, args.insecure)
     url = link_check.url
@@ -124,6 +142,12 @@ def run(args: argparse.Namespace) -> int:
     # (robot.process, rule 4).
     with contextlib.ExitStack() as owned:
         camera = owned.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
+        view = None
+        if video is not None:
+            view = LiveView(owned.enter_context(MjpegServer(
+                video.host, video.port, config.video.jpeg_quality,
+                width_px=config.video.width_px, max_clients=config.video.max_clients)),
+                config.video)
         driver = owned.enter_context(PioneerDriver.from_config(config.pioneer, clock))
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
@@ -143,7 +167,8 @@ def run(args: argparse.Namespace) -> int:
         files = VehicleFiles(args.memory, args.state / "upload", args.state / "params.parm")
         parts = RobotParts(memory, driver, camera, clock, config, files, np.random.default_rng(),
                            log=log, signing=signing,
-                           link_warning=INSECURE_NOTICE if link_check.insecure else None)
+                           link_warning=INSECURE_NOTICE if link_check.insecure else None,
+                           video=view)
         with RobotProcess(parts, url, owned=owned.pop_all(),
                           log_end=pioneer_closed) as process:
             identity = driver.status().identity
@@ -153,6 +178,8 @@ def run(args: argparse.Namespace) -> int:
                   f"MAVLink system {config.mavlink.system_id} on {url}"
                   f"{' (signed)' if signing else ''}; memory {args.memory}: "
                   f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
+            if view is not None:
+                print(f"vmnav robot: live view on {view.server.stream_url}", flush=True)
             if link_check.line is not None:
                 print(f"vmnav robot: {link_check.line}", flush=True)
             ended = process.run(end_ns=None if args.duration is None

@@ -24,6 +24,7 @@ from tools.harness.sim_args import (
     place_at_start,
     sim_config_from_args,
 )
+from tools.harness.tcp_spec import TcpSpec, parse_http_spec, tcp_spec
 
 DEFAULT_ARIA = "tcp:8101"
 DEFAULT_VIDEO_PORT = 8080
@@ -37,14 +38,6 @@ class PtySpec:
     symlink: Path | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class TcpSpec:
-    """Serve on a TCP port (0: any free port)."""
-
-    host: str
-    port: int
-
-
 def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
     """An ``--aria`` value: ``pty``, ``pty:LINK``, ``tcp``, ``tcp:PORT`` or ``tcp:HOST:PORT``.
 
@@ -55,7 +48,7 @@ def parse_aria_spec(text: str) -> PtySpec | TcpSpec:
     if kind == "pty":
         return PtySpec(Path(rest) if rest else None)
     if kind == "tcp":
-        return _tcp_spec("--aria", text, rest, int(DEFAULT_ARIA.split(":")[1]))
+        return tcp_spec("--aria", text, rest, int(DEFAULT_ARIA.split(":")[1]))
     raise InputError(
         "--aria", f"{text!r} is not pty, pty:LINK, tcp:PORT or tcp:HOST:PORT"
     )
@@ -68,19 +61,7 @@ def parse_video_spec(text: str, option: str = "--video",
     Raises:
         InputError: anything else (the message names ``option`` and the value).
     """
-    kind, _, rest = text.partition(":")
-    if kind == "http":
-        return _tcp_spec(option, text, rest, default_port)
-    raise InputError(option, f"{text!r} is not http:PORT or http:HOST:PORT")
-
-
-def _tcp_spec(option: str, text: str, rest: str, default_port: int) -> TcpSpec:
-    """``[HOST:]PORT`` (``rest`` of ``text``), default host 127.0.0.1."""
-    host, _, port_text = rest.rpartition(":")
-    port_text = port_text or str(default_port)
-    if port_text.isdigit() and 0 <= int(port_text) <= 65535:
-        return TcpSpec(host or "127.0.0.1", int(port_text))
-    raise InputError(option, f"{text!r}: the TCP port must be 0-65535")
+    return parse_http_spec(text, option, default_port)
 
 
 def add_parser(sim_sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -5,6 +5,8 @@ Routes:
 * ``GET /``: the page (``static/index.html``); ``/static/...``: its modules and style;
 * ``GET /api/vehicles/{system}/memory/{thumbnails|images}/{key}.png``: a key image file
   fetched from the robot over MAVLink FTP (cached by the station loop);
+* ``GET /api/vehicles/{system}/camera.mjpg`` (``?matches=1``): the robot's camera, relayed
+  (``ground.web.camera_proxy``);
 * ``WS /ws``: live data and the page's requests (``ground.web.requests``).
 
 On the WebSocket the server sends JSON objects with a ``type``:
@@ -47,6 +49,7 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from ground.web.camera_proxy import CameraProxy, StreamUnavailableError
 from ground.web.requests import parse_request, request_id_of
 from ground.web.station_loop import StationLoop
 from shared.errors import InputError, VmnavError
@@ -221,6 +224,23 @@ async def _memory_file(request: HttpRequest) -> Response:
                     headers={"Cache-Control": "private, max-age=86400, immutable"})
 
 
+async def _camera(request: HttpRequest) -> Response:
+    station_loop: StationLoop = request.app.state.station_loop
+    proxy: CameraProxy = request.app.state.camera_proxy
+    system = request.path_params["system"]
+    try:
+        stream = await asyncio.wrap_future(station_loop.video_stream(system))
+        return await proxy.relay(system, stream, request.query_params.get("matches") == "1")
+    except VmnavError as e:
+        _log.warning("camera of vehicle %d: %s", system, e)
+        return JSONResponse({"error": str(e)}, status_code=400 if isinstance(e, InputError)
+                            else 502)
+    except StreamUnavailableError as e:
+        _log.warning("camera of vehicle %d: %s", system, e)
+        station_loop.forget_video_stream(system)
+        return JSONResponse({"error": str(e)}, status_code=502)
+
+
 def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
     """The app around a (not yet started) station loop: the loop runs while the app does."""
 
@@ -237,8 +257,10 @@ def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
         Route("/", _index),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
         Route("/api/vehicles/{system:int}/memory/{kind}/{key:int}.png", _memory_file),
+        Route("/api/vehicles/{system:int}/camera.mjpg", _camera),
         WebSocketRoute("/ws", _websocket),
     ], lifespan=lifespan)
     app.state.station_loop = station_loop
     app.state.hub = hub
+    app.state.camera_proxy = CameraProxy()
     return app

@@ -21,6 +21,7 @@ vehicle's system id, the one selected last when absent. Each command's other fie
 ``teleop``     ``on``: true or false (drive from this page, in MANUAL)
 ``drive``      ``x`` forward, ``r`` yaw clockwise: numbers in -1..1
 ``memory``     ``refresh`` (optional): fetch the manifest again
+``camera``     ``refresh`` (optional): ask the vehicle's camera for its stream again
 =============  ==============================================================
 
 Anything else (not JSON, not an object, an unknown command, a missing or out-of-range
@@ -48,7 +49,7 @@ MAX_SYSTEM_ID = 255
 
 _NO_ARGS = frozenset({"select", "arm", "hold", "estop", "params", "teach_stop"})
 COMMANDS = frozenset({*_NO_ARGS, "mode", "goto", "param_set", "teach_start", "teleop",
-                      "drive", "memory"})
+                      "drive", "memory", "camera"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,6 +149,6 @@ def parse_request(text: str) -> Request:
     elif command == "drive":
         args["x"] = _number(data, "x", -1.0, 1.0)
         args["r"] = _number(data, "r", -1.0, 1.0)
-    elif command == "memory":
+    elif command in ("memory", "camera"):
         args["refresh"] = bool(data.get("refresh", False))
     return Request(command, request_id, system_id, args)

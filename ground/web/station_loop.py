@@ -28,6 +28,9 @@ asyncio. So the station lives on this loop's thread alone:
 5. Key images never change once in a memory (``shared.memory.store`` rule 1), so their
    files fetched over FTP are cached by (system, path) up to :data:`CACHE_BYTES`; the
    manifest is fetched again on request (a path taught since).
+6. The camera (``ground.camera_stream``): a vehicle's video stream is asked of its camera
+   component once and kept per system, until the page asks again (``refresh``) or the
+   stream fails to open (:meth:`StationLoop.forget_video_stream`).
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ import threading
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+from ground.camera_stream import find_video_stream
 from ground.fleet import VehicleState
 from ground.station import GroundError, GroundStation
 from ground.teleop import PERIOD_NS, DeadMan
@@ -53,6 +57,7 @@ from ground.web.requests import Request
 from ground.web.vehicle_json import sample_json, vehicle_json
 from shared.clock import NS_PER_S, Clock
 from shared.errors import InputError
+from shared.mavlink.camera import VideoStream
 from shared.mavlink.dialect import Message, mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
@@ -112,6 +117,7 @@ class StationLoop:
         self._files: collections.OrderedDict[tuple[int, str], bytes] = collections.OrderedDict()
         self._file_bytes = 0
         self._indexes: dict[int, MemoryIndex] = {}
+        self._streams: dict[int, VideoStream] = {}
         station.listeners.append(self._on_message)
         station.packet_taps.append(self._on_packet)
 
@@ -161,6 +167,15 @@ class StationLoop:
     def memory_file(self, system_id: int, kind: str, key: int) -> concurrent.futures.Future[bytes]:
         """The bytes of ``/memory/<kind>/<key>.png`` of vehicle ``system_id`` (rule 5)."""
         return self.submit(lambda station: self._memory_file(system_id, kind, key))
+
+    def video_stream(self, system_id: int,
+                     refresh: bool = False) -> concurrent.futures.Future[VideoStream]:
+        """Vehicle ``system_id``'s video stream (rule 6)."""
+        return self.submit(lambda station: self._video_stream(system_id, refresh))
+
+    def forget_video_stream(self, system_id: int) -> None:
+        """The stream of ``system_id`` did not open: ask its camera again next time (rule 6)."""
+        self.submit(lambda station: self._streams.pop(system_id, None))
 
     # -- the loop -------------------------------------------------------------------------
 
@@ -312,6 +327,12 @@ class StationLoop:
         if command == "memory":
             index = self._memory_index(vehicle.system_id, args["refresh"])
             return {"memory": index.to_json()}
+        if command == "camera":
+            stream = self._video_stream(vehicle.system_id, args["refresh"])
+            return {"camera": {"uri": stream.uri, "width": stream.width_px,
+                               "height": stream.height_px, "rate_hz": stream.rate_hz,
+                               "name": stream.name,
+                               "url": f"/api/vehicles/{vehicle.system_id}/camera.mjpg"}}
         raise InputError("cmd", f"unknown command {command!r}")  # parse_request stops these
 
     def _goto(self, vehicle: VehicleState, key: int) -> dict[str, Any]:
@@ -356,6 +377,13 @@ class StationLoop:
             index = memory_index_from_manifest(self.station.ftp_get(MANIFEST_PATH))
             self._indexes[system_id] = index
         return index
+
+    def _video_stream(self, system_id: int, refresh: bool) -> VideoStream:
+        stream = self._streams.get(system_id)
+        if stream is None or refresh:
+            self._aim(system_id)
+            stream = self._streams[system_id] = find_video_stream(self.station)
+        return stream
 
     def _memory_file(self, system_id: int, kind: str, key: int) -> bytes:
         if kind not in MEMORY_FILES:

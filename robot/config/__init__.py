@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from robot.config.devices import CameraSourceConfig, PioneerDriverConfig
+from robot.config.devices import CameraSourceConfig, PioneerDriverConfig, VideoConfig
 from robot.config.driving import (
     BASE_LOST_ACTIONS,
     CONTROL_LAWS,
@@ -83,6 +83,7 @@ __all__ = [
     "SwitchingConfig",
     "TeachConfig",
     "TeleopConfig",
+    "VideoConfig",
     "VmnavConfig",
     "config_from_log",
     "load_config",
@@ -109,6 +110,7 @@ class VmnavConfig:
     log: LogConfig = field(default_factory=LogConfig)
     teleop: TeleopConfig = field(default_factory=TeleopConfig)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
+    video: VideoConfig = field(default_factory=VideoConfig)
 
 
 #: Tables of the layout before the simulator's tables left the robot's config: the old

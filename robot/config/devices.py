@@ -1,6 +1,7 @@
-"""The robot's device configs: the Pioneer's ARIA driver and the camera, with its mount.
+"""The robot's device configs: the Pioneer's ARIA driver, the camera with its mount, and the
+camera's live view.
 
-Tables ``[pioneer]`` and ``[camera]`` (``[camera.mount]``) of a vmnav config file
+Tables ``[pioneer]``, ``[camera]`` (``[camera.mount]``) and ``[video]`` of a vmnav config file
 (:mod:`robot.config`).
 """
 
@@ -125,3 +126,33 @@ class CameraSourceConfig:
                 f"reconnect_max_ns ({self.reconnect_max_ns}) must be >= reconnect_initial_ns "
                 f"({self.reconnect_initial_ns})")
 
+
+
+@dataclass(frozen=True, slots=True)
+class VideoConfig:
+    """The robot's live view (``vmnav robot --video``, :mod:`robot.video`): what its camera
+    sees as MJPEG over HTTP, smaller and slower than the camera, advertised to ground
+    stations through the MAVLink camera protocol. Table ``[video]``.
+
+    The robot's loop hands a frame over at most every ``frame_period_ns`` and never waits;
+    the server's client threads scale, draw and encode it.
+    """
+
+    width_px: int = 400
+    """Frames are scaled down to this wide, px (the aspect kept; a narrower camera's frames
+    stay as they are)."""
+    frame_period_ns: int = 200_000_000
+    """At most one frame this often, ns (5 frames/s)."""
+    jpeg_quality: int = 70
+    """cv2.IMWRITE_JPEG_QUALITY of the frames, 1-100."""
+    max_clients: int = 4
+    """Viewers served at once; more get HTTP 503 at once."""
+
+    def __post_init__(self) -> None:
+        require(16 <= self.width_px <= 4096, f"width_px must be in 16..4096, got {self.width_px}")
+        require(self.frame_period_ns >= 10_000_000,
+                f"frame_period_ns must be >= 10 ms (10000000), got {self.frame_period_ns}")
+        require(1 <= self.jpeg_quality <= 100,
+                f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
+        require(1 <= self.max_clients <= 64,
+                f"max_clients must be in 1..64, got {self.max_clients}")

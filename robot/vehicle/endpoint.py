@@ -70,6 +70,14 @@ Rules:
    bug, but one packet must not end the link: it is counted per kind and logged once
    per kind with its traceback (:class:`~shared.handler_faults.HandlerFaults`,
    :attr:`VehicleEndpoint.faults`), the message is dropped and the next one handled.
+10. The camera (``shared.mavlink.camera``; only with a ``video`` stream, ``vmnav robot
+   --video``): component 100 of the same system, with its own HEARTBEAT at the
+   autopilot's period, its own sequence numbers
+   (:meth:`~shared.mavlink.dialect.MavlinkCodec.pack_as`) and its own command
+   dispatcher, which answers the requests for CAMERA_INFORMATION,
+   VIDEO_STREAM_INFORMATION and VIDEO_STREAM_STATUS addressed to it. Without a stream
+   there is no camera component, and the autopilot DENIES those messages as any it
+   lacks.
 """
 
 from __future__ import annotations
@@ -101,6 +109,12 @@ from shared.config import FtpConfig
 from shared.errors import InputError
 from shared.handler_faults import HandlerFaults
 from shared.mavlink.address import Address, is_for
+from shared.mavlink.camera import (
+    CAMERA_COMPONENT_ID,
+    VideoStream,
+    camera_handlers,
+    camera_heartbeat,
+)
 from shared.mavlink.commands.intervals import MessageIntervals
 from shared.mavlink.commands.vehicle import (
     CommandDispatcher,
@@ -196,6 +210,8 @@ class VehicleEndpoint:
         ftp: FTP server limits; None: ``config.ftp``.
         uid: the robot's unique id in AUTOPILOT_VERSION (64 bits).
         link_warning: told to every ground station that connects (rule 7); None: nothing.
+        video: the camera's stream, which its component advertises (rule 10); None: no
+            camera component.
 
     Raises:
         ConfigError: the parameter file is malformed, or a config value lies outside its
@@ -207,7 +223,8 @@ class VehicleEndpoint:
 
     def __init__(self, app: VehicleApp, config: VmnavConfig, files: VehicleFiles, *,
                  signing: SigningSetup | None = None, ftp: FtpConfig | None = None,
-                 uid: int = 0, link_warning: str | None = None) -> None:
+                 uid: int = 0, link_warning: str | None = None,
+                 video: VideoStream | None = None) -> None:
         link = config.mavlink
         self.address = Address(link.system_id, COMPONENT_ID)
         self.codec = make_codec(link.system_id, COMPONENT_ID)
@@ -251,6 +268,13 @@ class VehicleEndpoint:
                             lambda text: self._notice(mavlink.MAV_SEVERITY_WARNING, text),
                             self._jobs, lambda: self._now_ns),
         })
+        self._camera: CommandDispatcher | None = None
+        if video is not None:  # rule 10
+            self._camera = CommandDispatcher(
+                Address(link.system_id, CAMERA_COMPONENT_ID),
+                camera_handlers(video, lambda: self._time_usec() // 1000))
+        self._camera_outbox: list[Message] = []
+        self._camera_beat_ns: int | None = None
         self._policy: UnsignedPolicy | None = None
         self._signing_clock: SigningClock | None = None
         self._timestamp_file = signing.timestamp_file if signing is not None else None
@@ -296,11 +320,13 @@ class VehicleEndpoint:
             try:
                 replies = self._handle(msg, now_ns)
                 replies += self._drain_events()
+                camera = [] if self._camera is None else self._camera.handle_message(msg)
             except Exception as e:  # a bug; one packet must not end the link (rule 9)
                 self.faults.record(msg.get_type(), e)
                 continue
-            self._refused += sum(map(_is_refusal, replies))
+            self._refused += sum(map(_is_refusal, replies + camera))
             self._outbox += replies
+            self._camera_outbox += camera
         self._messages += len(messages)
         return len(messages)
 
@@ -324,14 +350,22 @@ class VehicleEndpoint:
             if timer is not None and now_ns >= timer:
                 out += core.handle_timer(now_ns)
         out += self._drain_events()
-        return [self.codec.pack(msg) for msg in out]
+        camera, self._camera_outbox = self._camera_outbox, []
+        if self._camera is not None and (self._camera_beat_ns is None
+                                         or now_ns >= self._camera_beat_ns):
+            camera.append(camera_heartbeat())  # rule 10
+            self._camera_beat_ns = now_ns + self.config.mavlink.heartbeat_period_ns
+        return ([self.codec.pack(msg) for msg in out]
+                + [self.codec.pack_as(msg, CAMERA_COMPONENT_ID) for msg in camera])
 
     def get_timer(self) -> int | None:
         """When :meth:`poll` next has something to send, ns (0: at once)."""
-        if self._outbox:
+        if self._outbox or self._camera_outbox:
             return self._now_ns
         timers = [self._streams.get_timer(), self._watchdog.get_timer(),
                   self._mission.get_timer(), self._params.get_timer(), self._jobs.get_timer()]
+        if self._camera is not None:
+            timers.append(self._camera_beat_ns or 0)
         if self._signing_clock is not None:
             timers.append(self._signing_clock.get_timer() or 0)
         return min((t for t in timers if t is not None), default=None)

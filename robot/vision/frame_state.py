@@ -25,7 +25,7 @@ Detection stays with the caller, which describes each frame once
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -86,11 +86,14 @@ class FrameState:
         image_errors: errImageMax and errPoints over the epipolar inliers of the
             estimate, px (inf when there are none).
         matches: corners of the frame matched with the next key image (valid rays).
+        matched_xy: (matches, 2) float64 pixels of those corners in the frame, in the
+            order of ``state.inlier_mask`` (for display: the robot's live view).
     """
 
     state: PathState
     image_errors: ImageErrors
     matches: int
+    matched_xy: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
 
 
 def key_correspondences(
@@ -220,4 +223,5 @@ def state_from_frame(
     inliers = state.inlier_mask
     errors = image_errors(current.pixels_xy[idx_current[inliers]],
                           segment.next_features.pixels_xy[idx_next[inliers]])
-    return FrameState(state=state, image_errors=errors, matches=len(idx_current))
+    return FrameState(state=state, image_errors=errors, matches=len(idx_current),
+                      matched_xy=current.pixels_xy[idx_current])

@@ -42,6 +42,9 @@ FTP             ``ftp/``: ``payload`` (codec, CRC32),   ``robot/vehicle/ftp_memo
                 ``vehicle`` (server, the file-system    (the memory and upload area)
                 Protocol), ``gcs`` (client)
 statustext      ``statustext`` (chunking, text length)  --
+camera          ``camera`` (the camera component's     ``robot/vehicle/endpoint.py`` (its
+                HEARTBEAT and answers; the stream as    camera component), ``ground/``
+                a station reads it)                     (finds the stream)
 signing         ``signing`` (keys, unsigned policy,     ``shared/key_file.py`` (reads and
                 the signature check, the timestamp      creates the key file, for both
                 bump, the timestamps kept across        entry points),

@@ -60,6 +60,7 @@ class MavlinkCodec(mavlink.MAVLink):
         """Packets of a message id the dialect lacks (returned, but unverified)."""
         self.verified_packets = 0
         """Packets that decoded as :meth:`is_verified` messages."""
+        self._other_seqs: dict[int, int] = {}  # component id -> next seq (pack_as)
 
     def is_verified(self, msg: Message) -> bool:
         """Whether ``msg``, as :meth:`parse` returned it, proved itself genuine: a message
@@ -83,6 +84,22 @@ class MavlinkCodec(mavlink.MAVLink):
         """Encode one message as a MAVLink 2 packet and advance the sequence number."""
         data = bytes(msg.pack(self))
         self.seq = (self.seq + 1) % 256
+        self.total_packets_sent += 1
+        self.total_bytes_sent += len(data)
+        return data
+
+    def pack_as(self, msg: Message, component_id: int) -> bytes:
+        """Encode one message as sent by another component of this system (the robot's
+        camera beside its autopilot), with that component's own sequence numbers (a
+        receiver counts losses per component). Signed like :meth:`pack`: one timestamp
+        counter for every component keeps each component's stream increasing."""
+        own_component, own_seq = self.srcComponent, self.seq
+        self.srcComponent, self.seq = component_id, self._other_seqs.get(component_id, 0)
+        try:
+            data = bytes(msg.pack(self))
+        finally:
+            self._other_seqs[component_id] = (self.seq + 1) % 256
+            self.srcComponent, self.seq = own_component, own_seq
         self.total_packets_sent += 1
         self.total_bytes_sent += len(data)
         return data

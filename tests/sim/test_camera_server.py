@@ -23,9 +23,9 @@ import pytest
 
 from shared.camera_model import CameraModel
 from shared.errors import ShapeError, TransportError
+from shared.guarded_http import HttpLimits
 from sim.camera_server import DEFAULT_JPEG_QUALITY, CameraFeed, CameraServer
 from sim.config import SensorConfig, SimConfig
-from sim.guarded_http import HttpLimits
 from sim.sim_camera import SimFrameSource
 from sim.sim_clock import SimClock
 from sim.simulation import Simulation

@@ -182,7 +182,26 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
                            f"udpin:127.0.0.1:{port}", *memory)
     assert in_use.returncode == 1
     assert f"udpin:127.0.0.1:{port}" in in_use.stderr.splitlines()[-1]
-    assert "Traceback" not in bad_camera.stderr + no_robot.stderr + in_use.stderr
+    with socket.socket() as taken_tcp:
+        taken_tcp.bind(("127.0.0.1", 0))
+        taken_tcp.listen(1)
+        port = taken_tcp.getsockname()[1]
+        video_in_use = run_robot("--aria", aria, "--camera", camera, "--video",
+                                 f"http:127.0.0.1:{port}", *memory)
+    assert video_in_use.returncode == 1
+    assert f"http:127.0.0.1:{port}: cannot listen" in video_in_use.stderr.splitlines()[-1]
+    assert "Traceback" not in (bad_camera.stderr + no_robot.stderr + in_use.stderr
+                               + video_in_use.stderr)
+
+
+def test_a_bad_video_spec_is_one_line_before_anything_opens(tmp_path) -> None:
+    memory = tmp_path / "memory"
+    result = run_robot("--aria", "socket://127.0.0.1:9", "--camera", str(tmp_path / "none.mp4"),
+                       "--memory", str(memory), "--video", "rtsp:8554", "--no-log")
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "vmnav robot: error: --video: 'rtsp:8554' is not http:PORT or http:HOST:PORT"]
+    assert not memory.exists()
 
 
 def test_an_unsigned_link_open_to_the_network_is_refused_at_start(tmp_path) -> None:

@@ -24,7 +24,7 @@ import math
 import re
 import shutil
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -243,17 +243,17 @@ class SimSide:
 
 
 def start_robot(sim: SimSide, station: GroundStation | int, folder: Path,
-                out_name: str) -> VmnavProcess:
+                out_name: str, extra: Sequence[str] = ()) -> VmnavProcess:
     """``vmnav robot`` on the rig's transports, with ``folder``'s ``memory``, ``state`` and
     ``logs`` (the field log, as on the robot), its output in ``folder/out_name``; stopped
     by SIGTERM, SIGKILL after :data:`STOP_GRACE_S`. It sends MAVLink to ``station``'s UDP
     port on 127.0.0.1, or to that port given as a number (a station in another process:
-    ``vmnav ground web``)."""
+    ``vmnav ground web``). ``extra``: more ``vmnav robot`` options (``--video``)."""
     port = station if isinstance(station, int) else station.link.local_port
     argv = ["robot", "--aria", sim.aria_url, "--camera", sim.camera.stream_url,
             "--mavlink", f"udpout:127.0.0.1:{port}",
             "--memory", str(folder / "memory"), "--state", str(folder / "state"),
-            "--log", str(folder / "logs")]
+            "--log", str(folder / "logs"), *extra]
     return VmnavProcess(argv, folder / out_name, STOP_GRACE_S)
 
 

@@ -1,6 +1,7 @@
 // The page: the WebSocket to the ground station, the fleet view and the vehicle view.
 // Plain ES modules, no build step; every asset is served by `vmnav ground web` itself.
 
+import { CameraView } from "./camera.js";
 import { DEG, ScrollingPlot, TrailView } from "./plot.js";
 import { MemoryBrowser } from "./memory.js";
 import { showMessage } from "./message.js";
@@ -79,6 +80,7 @@ class App {
     this.trail = new TrailView($("trail"));
     this.link = new Link(message => this.handle(message));
     this.memory = new MemoryBrowser(this);
+    this.camera = new CameraView(this);
     this.params = new ParamsTable(this);
     this.teleop = new Teleop(this);
     this.wireControls();
@@ -148,6 +150,7 @@ class App {
       this.plots.theta.push(s.t, s.theta === null ? null : s.theta * DEG);
       this.plots.err.push(s.t, s.err_max);
       this.memory.highlight(s.next, s.goal);
+      this.camera.setTarget(s.next);
     }
   }
 
@@ -161,6 +164,7 @@ class App {
     $("vehicle").hidden = false;
     this.command("select");
     this.memory.load(false);
+    this.camera.start(system);
     this.renderFleet();
   }
 

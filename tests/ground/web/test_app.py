@@ -37,7 +37,7 @@ def test_the_page_and_its_modules_are_served_locally(web: RunningWeb) -> None:
     assert status == 200 and b'<script type="module" src="/static/main.js">' in html
     assert b"http" not in html.replace(b"http-equiv", b"")  # no CDN, nothing remote
     for name in ("main.js", "plot.js", "memory.js", "params.js", "teleop.js", "message.js",
-                 "style.css"):
+                 "camera.js", "style.css"):
         status, body = get(web.url + "static/" + name)
         assert status == 200 and b"https://" not in body and b"http://" not in body, name
 
@@ -61,9 +61,9 @@ def test_updates_show_the_vehicle_with_its_mode_battery_and_link(
 @pytest.mark.parametrize("text, error", [
     ("not json", "request: not JSON (Expecting value: line 1 column 1 (char 0))"),
     ("[1, 2]", "request: expected a JSON object, got list"),
-    ('{"id": 3, "cmd": "fly"}', "cmd: unknown command 'fly' (known: arm, drive, estop, goto, "
-                                "hold, memory, mode, param_set, params, select, teach_start, "
-                                "teach_stop, teleop)"),
+    ('{"id": 3, "cmd": "fly"}', "cmd: unknown command 'fly' (known: arm, camera, drive, estop, "
+                                "goto, hold, memory, mode, param_set, params, select, "
+                                "teach_start, teach_stop, teleop)"),
     ('{"id": 4, "cmd": "goto", "key": -1}', "key: expected an integer in 0..16777216, got -1"),
     ('{"id": 5, "cmd": "goto", "key": 1.5}', "key: expected an integer in 0..16777216, got 1.5"),
     ('{"id": 6, "cmd": "mode", "mode": "FLY"}',

@@ -1,7 +1,9 @@
 """``vmnav ground web`` as its own process, in headless Chromium, with ``vmnav robot`` driving
 the simulator's Pioneer (the HIL rig's parts: ``tools.harness.hil_rig``): the robot appears
 in the fleet view with its mode, Hold reaches it, a key image clicked in the memory browser
-makes it drive there, and the emergency stop stops it.
+makes it drive there, and the emergency stop stops it. The robot serves its camera
+(``--video``): the page finds it through the MAVLink camera protocol and shows it live,
+beside the key image the robot heads for.
 
 Set ``VMNAV_WEB_SCREENSHOT=docs/img/ground-web.png`` to write the README's picture of the
 vehicle view."""
@@ -24,6 +26,22 @@ from tools.harness.vmnav_process import VmnavProcess
 SERVING = re.compile(r"serving (http://\S+) \(MAVLink on udpin:127\.0\.0\.1:0, port (\d+)\)")
 
 
+def camera_frame(driver) -> str | None:
+    """A digest of the live camera image the page shows now (None before its first frame):
+    the image drawn on a canvas, read back."""
+    return driver.execute_script("""
+        const img = document.getElementById('camera-image');
+        if (!img.complete || img.naturalWidth === 0) return null;
+        const canvas = document.createElement('canvas');
+        canvas.width = img.naturalWidth; canvas.height = img.naturalHeight;
+        const context = canvas.getContext('2d');
+        context.drawImage(img, 0, 0);
+        const data = context.getImageData(0, 0, canvas.width, canvas.height).data;
+        let hash = 0;
+        for (let i = 0; i < data.length; i += 7) hash = (hash * 31 + data[i]) >>> 0;
+        return `${canvas.width}x${canvas.height}:${hash}`;""")
+
+
 def cpu_s() -> float:
     """CPU time of this process and its children so far, s."""
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -43,11 +61,16 @@ def test_a_simulated_robot_goes_where_a_key_image_is_clicked(
         url, port = wait_for(lambda: (m := SERVING.search(web.output())) and m.groups(),
                              f"vmnav ground web serving ({web.out})", ROBOT_START_S)
         with SimSide(world_file) as sim:
-            robot = start_robot(sim, int(port), tmp_path, "robot.out")
+            robot = start_robot(sim, int(port), tmp_path, "robot.out",
+                                ["--video", "http:127.0.0.1:0"])
             chromium.get(url)
             row = wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"),
                            "the robot in the fleet view", ROBOT_START_S)[0]
             assert "ground rover 1" in row.text
+            first = wait_for(lambda: camera_frame(chromium), "a camera frame in the page")
+            wait_for(lambda: camera_frame(chromium) not in (None, first),
+                     "the camera image changing")
+            assert "400x300" in chromium.find_element("id", "camera-caption").text
             chromium.find_element("id", "hold").click()
             wait_for(lambda: row.find_elements("xpath", "td[3]")[0].text == "HOLD",
                      "mode HOLD from the robot's HEARTBEAT")
@@ -65,6 +88,11 @@ def test_a_simulated_robot_goes_where_a_key_image_is_clicked(
             wait_for(lambda: "matches" in chromium.find_element("id", "servo-summary").text
                      and "of" in chromium.find_element("id", "servo-summary").text,
                      "the servo state in the vehicle view")
+            wait_for(lambda: chromium.execute_script(
+                "const i = document.getElementById('target-image');"
+                "return i.complete && i.naturalWidth > 0;"), "the target key image")
+            assert chromium.find_element("id", "target-caption").text.startswith(
+                "target: key image ")
             if path := os.environ.get("VMNAV_WEB_SCREENSHOT"):
                 time.sleep(3)  # a few seconds of plots for the picture (not a synchronisation)
                 chromium.find_element("id", "vehicle").screenshot(path)

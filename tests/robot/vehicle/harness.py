@@ -24,6 +24,7 @@ from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import NS_PER_S, Clock, ManualClock
 from shared.config import MavlinkConfig
 from shared.mavlink.address import Address, is_for, source_of
+from shared.mavlink.camera import VideoStream
 from shared.mavlink.dialect import Message, make_codec, mavlink
 from shared.mavlink.ftp.gcs import FtpClient
 from shared.mavlink.mission.gcs import MissionClient
@@ -45,13 +46,15 @@ UNIX_OFFSET_NS = 1_750_000_000 * NS_PER_S
 def make_vehicle(root: Path, app: FakeApp, clock: Clock,
                  config: VmnavConfig | None = None, key: bytes | None = None,
                  url: str = "udpin:127.0.0.1:0", timestamp_file: Path | None = None,
-                 link_warning: str | None = None) -> UdpVehicle:
-    """A vehicle endpoint on ``url`` with its files under ``root``."""
+                 link_warning: str | None = None, video: VideoStream | None = None) -> UdpVehicle:
+    """A vehicle endpoint on ``url`` with its files under ``root`` (and a camera component
+    advertising ``video``, if given)."""
     signing = (SigningSetup(key, UNIX_OFFSET_NS, timestamp_file=timestamp_file)
                if key is not None else None)
     files = VehicleFiles(root / "memory", root / "upload", root / "params.json")
     endpoint = VehicleEndpoint(app, config if config is not None else VmnavConfig(), files,
-                               signing=signing, uid=0xC0FFEE, link_warning=link_warning)
+                               signing=signing, uid=0xC0FFEE, link_warning=link_warning,
+                               video=video)
     return UdpVehicle.open(url, endpoint, clock)
 
 

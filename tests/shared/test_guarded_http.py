@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from sim.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits, RequestRefusedError
+from shared.guarded_http import GuardedHandler, GuardedHTTPServer, HttpLimits, RequestRefusedError
 from tests.sim.camera_stream import eventually
 
 RELEASE = threading.Event()
@@ -114,7 +114,7 @@ def test_beyond_max_waiting_the_oldest_waiting_connection_is_closed() -> None:
 
 def test_a_handler_exception_ends_its_request_only_and_is_logged_once(
         caplog: pytest.LogCaptureFixture) -> None:
-    with serving(HttpLimits()) as server, caplog.at_level(logging.WARNING, "sim.guarded_http"):
+    with serving(HttpLimits()) as server, caplog.at_level(logging.WARNING, "shared.guarded_http"):
         for _ in range(3):
             request(server, b"GET /boom HTTP/1.0\r\n\r\n")
         assert request(server, b"GET / HTTP/1.0\r\n\r\n").startswith(b"HTTP/1.0 200")

@@ -1,9 +1,10 @@
-"""The simulator's HTTP serving, guarded against a hostile client on the same machine or net.
+"""HTTP serving guarded against a hostile client on the same machine or net.
 
 :class:`GuardedHTTPServer` is a :class:`~http.server.ThreadingHTTPServer` whose threads
 are bounded; :class:`GuardedHandler` adds the request checks its handlers share. The
-camera (:mod:`sim.camera_server`) and the control endpoint (:mod:`sim.control_server`)
-serve on it.
+MJPEG cameras (:mod:`shared.mjpeg_server`: the simulator's network camera and the
+robot's ``vmnav robot --video``) and the simulator's control endpoint
+(:mod:`sim.control_server`) serve on it.
 
 Rules:
 
