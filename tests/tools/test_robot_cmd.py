@@ -172,9 +172,11 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
     assert "nothing.mjpg: cannot open with OpenCV" in bad_camera.stderr.splitlines()[-1]
     assert bad_camera.stderr.count("\n") == 1, bad_camera.stderr  # no OpenCV/FFmpeg warnings
     started = time.monotonic()
-    no_robot = run_robot("--aria", "socket://127.0.0.1:9", "--camera", camera, *memory)
+    no_robot = run_robot("--aria", "tcp:127.0.0.1:9", "--camera", camera, *memory)
     assert no_robot.returncode == 1 and time.monotonic() - started < 30
-    assert "socket://127.0.0.1:9: no Pioneer ready within 10 s" in no_robot.stderr
+    assert no_robot.stderr.splitlines()[-1] == (
+        "vmnav robot: error: --aria tcp:127.0.0.1:9: cannot connect to 127.0.0.1:9: "
+        "Connection refused")
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))
         port = taken.getsockname()[1]
