@@ -121,9 +121,11 @@ class StreamVehicle(VehicleIo):
     def _lost(self, problem: str, now_ns: int) -> None:
         """Rule 2: one line per outage, then retries."""
         self.link.drop()
+        listening = self.link.local_port is not None
         if self._outage is None:
-            logger.warning("vehicle: ground link lost: %s; trying again every %.0f s",
-                           problem, RETRY_NS / NS_PER_S)
+            then = ("waiting for the next ground station" if listening
+                    else f"trying again every {RETRY_NS / NS_PER_S:.0f} s")
+            logger.warning("vehicle: ground link lost: %s; %s", problem, then)
         self._outage = problem
         # A listener takes the next station at once; a device or host is retried later.
-        self._retry_ns = None if self.link.local_port is not None else now_ns + RETRY_NS
+        self._retry_ns = None if listening else now_ns + RETRY_NS

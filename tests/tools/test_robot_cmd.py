@@ -36,7 +36,7 @@ def sim_serve(tmp_path):
     try:
         aria = wait_for(r"ARIA on tcp 127\.0\.0\.1:(\d+)", log, process).group(1)
         camera = wait_for(r"camera on (http://\S+/stream\.mjpg)", log, process).group(1)
-        yield f"socket://127.0.0.1:{aria}", camera
+        yield f"tcp:127.0.0.1:{aria}", camera
     finally:
         process.send_signal(signal.SIGTERM)
         process.wait(10)
@@ -225,3 +225,45 @@ def test_a_signed_robot_talks_only_to_its_key_and_keeps_its_timestamps(
     assert station.codec.signing.badsig_count == 0 and station.codec.signing.goodsig_count > 0
     kept = json.loads((tmp_path / "state" / "signing-timestamps.json").read_text())
     assert [stream[:3] for stream in kept["streams"]] == [[1, 255, 190]]  # ours, link 1
+
+
+@pytest.mark.slow
+def test_the_ground_over_tcp_and_the_old_aria_url(sim_serve, tmp_path) -> None:
+    """``vmnav robot --aria socket://... --mavlink tcpin:...``, ``vmnav ground --connect
+    tcp:...``: the robot takes the old ARIA form and a ground station over TCP."""
+    aria, camera = sim_serve
+    log = tmp_path / "robot.out"
+    robot = start(["robot", "--aria", aria.replace("tcp:", "socket://"), "--camera", camera,
+                   "--mavlink", "tcpin:127.0.0.1:0", "--memory", str(tmp_path / "memory"),
+                   "--state", str(tmp_path / "state"), "--no-log"], log)
+    try:
+        port = wait_for(r"MAVLink system 1 on tcpin:127\.0\.0\.1:(\d+)", log, robot).group(1)
+        status = subprocess.run([*VMNAV, "ground", "--connect", f"tcp:127.0.0.1:{port}",
+                                 "--timeout", "20", "status"],
+                                capture_output=True, text=True, timeout=60)
+        assert status.returncode == 0, status.stderr
+        assert status.stdout.startswith("vehicle 1: mode HOLD, "), status.stdout
+    finally:
+        robot.send_signal(signal.SIGTERM)
+        robot.wait(15)
+    assert "Traceback" not in log.read_text()
+
+
+@pytest.mark.parametrize(("args", "line"), [
+    (["--mavlink", "tcp:5760"],
+     "--mavlink: 'tcp:5760': expected tcp:HOST:PORT (a host and a port)"),
+    (["--mavlink", "tcpin:0.0.0.0:5760"],
+     "--mavlink tcpin:0.0.0.0:5760: an unsigned link open to the network"),
+    (["--mavlink", "serial:/dev/ttyNOPE:57600"], "/dev/ttyNOPE: no such device"),
+    (["--aria", "udpin:127.0.0.1:8101"], "--aria: 'udpin:127.0.0.1:8101': udpin:HOST:PORT "
+                                         "cannot be used here"),
+])
+def test_bad_links_are_one_line_before_anything_starts(tmp_path, args, line) -> None:
+    memory = tmp_path / "memory"
+    result = run_robot("--camera", str(tmp_path / "none.mp4"), "--memory", str(memory),
+                       "--no-log", *(["--aria", "tcp:127.0.0.1:9"] if "--aria" not in args
+                                     else []), *args)
+    assert result.returncode == 1, result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("vmnav robot: error: ") and line in last, result.stderr
+    assert "Traceback" not in result.stderr
