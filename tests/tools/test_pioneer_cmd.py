@@ -171,3 +171,22 @@ def test_a_bad_aria_address_is_one_line_naming_it(aria: str, problem: str,
     code = main(["pioneer", "--aria", aria])
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1 and f"--aria: {aria!r}: {problem}" in err, err
+
+
+@pytest.mark.slow
+def test_sim_serve_and_pioneer_read_alike(tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """docs/links.md: ``vmnav sim serve --aria tcp:PORT --aria pty:PATH``, then ``vmnav
+    pioneer --aria tcp:127.0.0.1:PORT`` and ``--aria pty:PATH`` (port 0 here: any free)."""
+    from tests.tools.processes import start, wait_for
+
+    link, log = tmp_path / "vmnav_pioneer", tmp_path / "sim.out"
+    sim = start(["sim", "serve", "--aria", "tcp:0", "--aria", f"pty:{link}"], log)
+    try:
+        port = wait_for(r"ARIA on tcp 127\.0\.0\.1:(\d+)", log, sim).group(1)
+        wait_for(r"ARIA on pty ", log, sim)
+        for aria in (f"tcp:127.0.0.1:{port}", f"pty:{link}"):
+            drive(aria, capsys)
+    finally:
+        sim.send_signal(signal.SIGTERM)
+        sim.wait(15)

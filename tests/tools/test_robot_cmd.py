@@ -25,6 +25,7 @@ from shared.key_file import read_key_file
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory, write_memory
+from tests.robot.vehicle.stream_rig import Radios
 from tests.shared.memory.builders import folder_bytes, loop_memory, memory_without_manifest
 from tests.tools.processes import VMNAV, start, wait_for
 
@@ -267,3 +268,37 @@ def test_bad_links_are_one_line_before_anything_starts(tmp_path, args, line) -> 
     last = result.stderr.strip().splitlines()[-1]
     assert last.startswith("vmnav robot: error: ") and line in last, result.stderr
     assert "Traceback" not in result.stderr
+
+
+@pytest.mark.slow
+def test_the_ground_over_a_radio_pair_and_the_pioneer_on_a_serial_port(tmp_path) -> None:
+    """docs/links.md: ``vmnav robot --aria serial:DEVICE --mavlink serial:RADIO:57600`` and
+    ``vmnav ground --connect serial:RADIO:57600 --key KEY status``, the Pioneer being
+    ``vmnav sim serve --aria pty:PATH`` and the radios two ptys joined by a relay."""
+    key = tmp_path / "vmnav.key"
+    assert subprocess.run([*VMNAV, "ground", "keygen", str(key)], timeout=60).returncode == 0
+    pioneer = tmp_path / "pioneer"
+    sim_log, robot_log = tmp_path / "sim.out", tmp_path / "robot.out"
+    sim = start(["sim", "serve", "--aria", f"pty:{pioneer}", "--video", "http:0"], sim_log)
+    radios = Radios(tmp_path)
+    robot = None
+    try:
+        camera = wait_for(r"camera on (http://\S+/stream\.mjpg)", sim_log, sim).group(1)
+        robot = start(["robot", "--aria", f"serial:{pioneer}", "--camera", camera,
+                       "--mavlink", f"serial:{radios.robot_path}:57600", "--key", str(key),
+                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
+                       "--no-log"], robot_log)
+        wait_for(r"MAVLink system 1 on serial:", robot_log, robot)
+        status = subprocess.run([*VMNAV, "ground", "--connect",
+                                 f"serial:{radios.ground_path}:57600", "--key", str(key),
+                                 "--timeout", "20", "status"],
+                                capture_output=True, text=True, timeout=60)
+        assert status.returncode == 0, status.stderr
+        assert status.stdout.startswith("vehicle 1: mode HOLD, "), status.stdout
+    finally:
+        for process in (robot, sim):
+            if process is not None:
+                process.send_signal(signal.SIGTERM)
+                process.wait(15)
+        radios.close()
+    assert "Traceback" not in robot_log.read_text()
