@@ -1,11 +1,13 @@
-"""GroundStation: the operator's end of the MAVLink link, over UDP, with a blocking API.
+"""GroundStation: the operator's end of the MAVLink link, with a blocking API.
 
 Theory of operation
 -------------------
 
 The station owns a :class:`~shared.udp_link.UdpLink` (``udpin:HOST:14550``, where
 QGroundControl listens, or ``udpout:HOST:PORT``; ``vmnav ground`` keeps an unsigned one
-on loopback: ``shared.link_security``), one
+on loopback: ``shared.link_security``) or a :class:`~shared.stream_port.StreamPort`
+(``serial:DEVICE[:BAUD]``, a telemetry radio; ``tcp:HOST:PORT``; ``tcpin:HOST:PORT``,
+where a robot calls in; rule 9), one
 codec, the :class:`~ground.fleet.Fleet` of vehicles it hears, and the sans-I/O client cores
 (missions, parameters, FTP, commands) aimed at the one vehicle it talks to. Each
 blocking call starts an operation on a core and runs :meth:`GroundStation.service`
@@ -46,6 +48,13 @@ Rules:
    leaves unfinished is corrupt, counted in ``codec.bad_packets`` and dropped, so garbage
    that reads as the start of a long packet cannot swallow the packets of the datagrams
    after it.
+9. Streams: a serial device or a ``tcp`` connection is opened by :meth:`open` (a
+   missing device, an unknown host or a refused or unanswered connect: one line at
+   once); a ``tcpin`` listener is bound there and takes the first robot that calls
+   (while the station waits, e.g. :meth:`wait_vehicle`). What arrives is parsed as a
+   byte stream, from the one peer; a stream that ends (the robot's connection closed,
+   the radio unplugged) raises :class:`~shared.byte_link.LinkClosedError` in one line
+   from the call that was waiting. Floods and peers (rule 7) are UDP matters.
 """
 
 from __future__ import annotations
@@ -60,6 +69,7 @@ from ground.mission_watch import MissionWatch
 from shared.clock import NS_PER_S, Clock
 from shared.config import FtpConfig, MavlinkConfig
 from shared.errors import IllegalEventError, InputError, VmnavError
+from shared.link_address import Scheme, parse_link_address
 from shared.mavlink.address import Address, is_for, source_of
 from shared.mavlink.commands.gcs import CommandClient, CommandDone, result_name
 from shared.mavlink.commands.user import GOTO_PHOTO, TEACH_START, TEACH_STOP, params_from_name
@@ -79,7 +89,8 @@ from shared.mavlink.params.gcs import (
     ParamsFetched,
 )
 from shared.mavlink.signing import SigningClock, configure_signing, timestamp_from_unix_ns
-from shared.udp_link import UdpLink
+from shared.stream_port import StreamPort
+from shared.udp_link import Peer, UdpLink
 
 #: This station: system 255, MAV_COMP_ID_MISSIONPLANNER.
 GCS_ADDRESS = Address(255, 190)
@@ -148,10 +159,10 @@ def _command_name(command: int) -> str:
 
 
 class GroundStation:
-    """A MAVLink ground station on one UDP link (module rules).
+    """A MAVLink ground station on one link (module rules).
 
     Args:
-        link: the socket; the station owns it.
+        link: the socket or stream port; the station owns it.
         clock: time for deadlines and waits.
         system_id: the vehicle to talk to; None for the first one heard.
         key: a 32-byte signing key; None for an unsigned link.
@@ -163,7 +174,8 @@ class GroundStation:
         ValueError: a signing key that is not 32 bytes.
     """
 
-    def __init__(self, link: UdpLink, clock: Clock, *, system_id: int | None = None,
+    def __init__(self, link: UdpLink | StreamPort, clock: Clock, *,
+                 system_id: int | None = None,
                  key: bytes | None = None, unix_offset_ns: int = 0,
                  config: MavlinkConfig | None = None, ftp: FtpConfig | None = None) -> None:
         self.link = link
@@ -200,12 +212,25 @@ class GroundStation:
 
     @classmethod
     def open(cls, url: str, clock: Clock, **options: Any) -> GroundStation:
-        """A station on a new link for ``url`` (``udpin:...``, ``udpout:...``).
+        """A station on a new link for ``url`` (``shared.link_address``: ``udpin:...``,
+        ``udpout:...``, ``tcp:...``, ``tcpin:...``, ``serial:...``, ``pty:...``).
 
         Raises:
-            TransportError: a bad connection string or a port in use.
+            InputError: ``url`` is not a link address.
+            TransportError: a port in use, a missing device, an unknown host, a refused
+                or unanswered connect (rule 9).
         """
-        return cls(UdpLink.open(url), clock, **options)
+        address = parse_link_address(url, "--connect")
+        if not address.stream:
+            return cls(UdpLink.open(url), clock, **options)
+        port = StreamPort.open(address)
+        try:
+            if address.scheme is not Scheme.TCPIN:
+                port.connect()
+        except BaseException:
+            port.close()
+            raise
+        return cls(port, clock, **options)
 
     def close(self) -> None:
         """Close the link; idempotent."""
@@ -223,14 +248,9 @@ class GroundStation:
         """One round at the clock's now: the waiting datagrams in (rule 7, each parsed on
         its own, rule 8), everything due out."""
         now_ns = self.clock.now_ns()
-        trusted = {v.peer for v in self.fleet.vehicles.values() if v.peer is not None}
-        drained = self.link.drain(trusted, STRANGER_BUDGET)
-        self.shed += drained.shed
-        received = drained.trusted + drained.others
-        if received and self.link.listening:
-            self.link.peer = received[-1][1]
-        for data, sender in received:
-            for msg in self.codec.parse(data, datagram=True):
+        stream = isinstance(self.link, StreamPort)
+        for data, sender in self._stream_in() if stream else self._datagrams_in():
+            for msg in self.codec.parse(data, datagram=not stream):
                 if self.codec.is_verified(msg):
                     self._tap("in", bytes(msg.get_msgbuf()), msg)
                 self._handle(msg, sender, now_ns)
@@ -248,6 +268,29 @@ class GroundStation:
             self._ftp.handle_timer(now_ns)
         self._send_ftp()
 
+    def _datagrams_in(self) -> list[tuple[bytes, Peer]]:
+        """The datagrams waiting on the UDP link (rule 7)."""
+        assert isinstance(self.link, UdpLink)
+        trusted = {v.peer for v in self.fleet.vehicles.values() if v.peer is not None}
+        drained = self.link.drain(trusted, STRANGER_BUDGET)
+        self.shed += drained.shed
+        received = drained.trusted + drained.others
+        if received and self.link.listening:
+            self.link.peer = received[-1][1]
+        return received
+
+    def _stream_in(self) -> list[tuple[bytes, None]]:
+        """What arrived on the stream, from its one peer (rule 9).
+
+        Raises:
+            LinkClosedError: the stream ended.
+        """
+        assert isinstance(self.link, StreamPort)
+        if not self.link.connect():  # a tcpin listener with no robot yet
+            return []
+        data = self.link.read()
+        return [(data, None)] if data else []
+
     def run_until(self, done: Callable[[], bool], timeout_ns: int) -> bool:
         """Service the link until ``done()`` or ``timeout_ns`` passed (rule 3).
 
@@ -263,7 +306,8 @@ class GroundStation:
             if now_ns >= limit_ns:
                 return False
             deadline_ns = min(limit_ns, self._next_deadline_ns())
-            ready = select.select([self.link], [], [], max(0, deadline_ns - now_ns) / NS_PER_S)[0]
+            ready = select.select([self.link.fileno()], [], [],
+                                  max(0, deadline_ns - now_ns) / NS_PER_S)[0]
             if not ready:
                 self.clock.sleep_until_ns(deadline_ns)
 
@@ -276,7 +320,7 @@ class GroundStation:
             timers.append(self._signing.get_timer())
         return min(t for t in timers if t is not None)
 
-    def _handle(self, msg: Any, sender: tuple[str, int], now_ns: int) -> None:
+    def _handle(self, msg: Any, sender: Peer | None, now_ns: int) -> None:
         vehicle = self.fleet.handle(msg, sender, now_ns)
         if vehicle is None:
             return
@@ -305,6 +349,10 @@ class GroundStation:
                 0, 0, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
                 mavlink.MAVLINK_MSG_ID_HEARTBEAT, 0, 0, 0, 0, 0, 0))
         packets = [(msg, self.codec.pack(msg)) for msg in messages]
+        if isinstance(self.link, StreamPort):
+            for msg, packet in packets:
+                self._transmit(msg, packet)
+            return
         peers = {v.peer for v in self.fleet.vehicles.values() if v.peer is not None}
         if not self.link.listening or not peers:
             peers = {self.link.peer} if self.link.peer is not None else set()
@@ -317,14 +365,19 @@ class GroundStation:
         """Send ``messages`` to the vehicle talked to (its own address when listening)."""
         if not messages:
             return
-        if self.link.listening and self.vehicle is not None and self.vehicle.peer is not None:
+        if (isinstance(self.link, UdpLink) and self.link.listening and self.vehicle is not None
+                and self.vehicle.peer is not None):
             self.link.peer = self.vehicle.peer
         for msg in messages:
             self._transmit(msg, self.codec.pack(msg))
 
     def _transmit(self, msg: Message, packet: bytes) -> None:
         """Send one packet to the link's peer and show it to the taps (rule 6)."""
-        self.link.send(packet)
+        if isinstance(self.link, StreamPort):
+            if not self.link.write(packet):
+                return  # a tcpin listener with no robot yet
+        else:
+            self.link.send(packet)
         self._tap("out", packet, msg)
 
     def _tap(self, direction: str, packet: bytes, msg: Message) -> None:

@@ -4,13 +4,15 @@ The real robot (``vmnav robot``, and so the HIL rig, which runs it), and the loc
 demo (``tools/harness/demo.py``) build the robot here, from parts the caller opened:
 a visual memory and its folder, a :class:`~shared.interfaces.MobileBase`, a frame
 source (:class:`TimedFrameSource`), a :class:`~shared.clock.Clock`, the config, the
-vehicle's files and MAVLink signing, the field log; and a MAVLink link (a pymavlink
-connection string) that :class:`RobotProcess` opens. What it assembles:
+vehicle's files and MAVLink signing, the field log; and a MAVLink link (an address,
+``shared.link_address``, that :class:`RobotProcess` opens, or its transport opened by
+the caller: ``robot.vehicle.vehicle_link``). What it assembles:
 :class:`robot.runtime.RobotRuntime` on the base, as the application of a
 :class:`robot.vehicle.endpoint.VehicleEndpoint` on a
-:class:`robot.vehicle.udp_vehicle.UdpVehicle` (its own I/O thread), whose traffic goes
-to the field log: the MAVLink packets accepted and sent, and the counts of what was
-rejected (``UdpVehicle`` rule 3).
+:class:`robot.vehicle.udp_vehicle.UdpVehicle` or
+:class:`robot.vehicle.stream_vehicle.StreamVehicle` (its own I/O thread), whose traffic
+goes to the field log: the MAVLink packets accepted and sent, and the counts of what was
+rejected (``VehicleIo`` rule 2).
 
 Rules:
 
@@ -63,7 +65,8 @@ from robot.mission_run import CycleRecord
 from robot.runtime import RobotRuntime
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
-from robot.vehicle.udp_vehicle import Rejected, UdpVehicle
+from robot.vehicle.vehicle_io import Rejected
+from robot.vehicle.vehicle_link import VehicleTransport, open_vehicle_transport, vehicle_on
 from robot.video import LiveView, video_stream
 from shared.clock import Clock
 from shared.interfaces import MobileBase
@@ -149,8 +152,9 @@ class RobotProcess:
 
     Args:
         parts: what the robot is made of; the process owns ``parts.log`` from now on.
-        link: the ground link, pymavlink syntax (``udpin:127.0.0.1:14550`` waits for a
-            ground station, ``udpout:HOST:14550`` calls one).
+        link: the ground link: its address (``udpin:127.0.0.1:14550`` waits for a
+            ground station, ``udpout:HOST:14550`` calls one, ``serial:/dev/ttyUSB0:57600``
+            is a telemetry radio...), or its transport, opened; the process owns it.
         link_clock: the link's I/O clock (rule 3); None: ``parts.clock``.
         owned: parts the caller opened and hands over, closed after the runtime
             (rule 4); None: none.
@@ -158,11 +162,12 @@ class RobotProcess:
             finished (rule 4); not called without a log.
 
     Raises:
-        TransportError: ``link`` is a bad connection string or its port is taken (what
-            the process owns is closed first).
+        InputError: ``link`` is not an address (what the process owns is closed first).
+        TransportError: ``link``'s port is taken or its device missing (the same).
     """
 
-    def __init__(self, parts: RobotParts, link: str, *, link_clock: Clock | None = None,
+    def __init__(self, parts: RobotParts, link: str | VehicleTransport, *,
+                 link_clock: Clock | None = None,
                  owned: contextlib.ExitStack | None = None,
                  log_end: Callable[[FieldLog], None] | None = None) -> None:
         self._frames = parts.frames
@@ -186,10 +191,13 @@ class RobotProcess:
             self._video = parts.video
             stream = None if parts.video is None else video_stream(
                 parts.video.server, parts.config.video, parts.memory.camera)
+            transport = open_vehicle_transport(link) if isinstance(link, str) else link
+            undo.callback(transport.close)
             endpoint = VehicleEndpoint(self.runtime, parts.config, parts.files,
                                        signing=parts.signing,
                                        link_warning=parts.link_warning, video=stream)
-            self.vehicle = undo.enter_context(UdpVehicle.open(link, endpoint, self._link_clock))
+            self.vehicle = undo.enter_context(vehicle_on(transport, endpoint,
+                                                         self._link_clock))
             if log is not None:
                 self.vehicle.packet_taps.append(self._mavlink_tap(log))
                 self.vehicle.reject_observers.append(self._reject_observer(log))

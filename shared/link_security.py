@@ -5,10 +5,11 @@ Rules:
 1. Without a signing key the default link listens on loopback only
    (``udpin:127.0.0.1:14550``); with one, on every interface (``udpin:0.0.0.0:14550``,
    where a robot and QGroundControl on the network find each other).
-2. An unsigned link whose socket another machine can reach
-   (:func:`shared.udp_link.reaches_network`) lets anyone on the network arm, drive and
-   upload: it is refused with one line that says how to sign it, unless the user asked
-   for it (``--insecure``); then :func:`check_link` returns the warning line the entry
+2. An unsigned link open to the network (:func:`reaches_network`: a socket another
+   machine can reach, or a connection to another machine; not a serial device or pty,
+   a wire such as a telemetry radio) lets anyone on the network arm, drive and upload:
+   it is refused with one line that says how to sign it, unless the user asked for it
+   (``--insecure``); then :func:`check_link` returns the warning line the entry
    point prints at start (the robot also tells each ground station that connects:
    :data:`INSECURE_NOTICE`).
 3. The unsigned default (no link given) gets one line saying how to open it to the
@@ -20,7 +21,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from shared.errors import InputError
-from shared.udp_link import reaches_network
+from shared.ipv4 import is_loopback, resolve_ipv4
+from shared.link_address import LinkAddress, parse_link_address
 
 #: MAVLink's ground-station UDP port.
 MAVLINK_PORT = 14550
@@ -34,6 +36,22 @@ HOW_TO_SIGN = ("make a key with `vmnav ground keygen FILE` and give it to both e
 def default_url(signed: bool) -> str:
     """The default link (rule 1): every interface when ``signed``, else loopback only."""
     return f"udpin:{'0.0.0.0' if signed else '127.0.0.1'}:{MAVLINK_PORT}"
+
+
+def reaches_network(address: LinkAddress) -> bool:
+    """Whether the link of ``address`` is open to the network: a listening socket
+    (``udpin``, ``tcpin``) bound to an address other than a loopback one, or a link to a
+    host other than this machine (``udpout``, whose socket then listens on every
+    interface, and ``tcp``). A serial device or pty is a wire: never.
+
+    Raises:
+        TransportError: an unknown host.
+    """
+    if address.serial:
+        return False
+    # The address a listener is bound to, or the peer's: either way, a non-loopback one
+    # puts the link on the network.
+    return not is_loopback(resolve_ipv4(address.text, address.host, address.port)[0])
 
 
 class LinkCheck(NamedTuple):
@@ -58,15 +76,17 @@ def check_link(url: str | None, option: str, signed: bool, insecure: bool) -> Li
         open the unsigned default to the network) and whether the link is insecure.
 
     Raises:
-        InputError: an unsigned link open to the network without ``insecure``.
-        TransportError: a bad connection string or an unknown host.
+        InputError: not a link address, or an unsigned link open to the network without
+            ``insecure`` (one line naming ``option``).
+        TransportError: an unknown host.
     """
     if url is None:
         url = default_url(signed)
         if not signed:
             return LinkCheck(url, f"{url} is unsigned, for this machine only; to reach it "
                                   f"from the network, {HOW_TO_SIGN}", False)
-    if signed or not reaches_network(url):
+    address = parse_link_address(url, option)
+    if signed or not reaches_network(address):
         return LinkCheck(url, None, False)
     if not insecure:
         raise InputError(f"{option} {url}", "an unsigned link open to the network lets "

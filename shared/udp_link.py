@@ -12,15 +12,17 @@ Connection strings (pymavlink ``mavutil.mavlink_connection`` spells them the sam
                        who can reach that port
 =====================  ===================================================================
 
-:func:`reaches_network` tells whether a string's socket can be reached from another
-machine (the entry points refuse that unsigned unless asked: ``shared.link_security``).
+The strings are parsed by ``shared.link_address`` (the syntax of every link);
+``shared.link_security.reaches_network`` tells whether a link is open to the network
+(the entry points refuse that unsigned unless asked).
 
 Theory of operation: one datagram carries one or more whole MAVLink packets; the
 link never splits or joins them. ``send``, ``receive`` and ``drain`` never block. UDP loses
 datagrams by nature, so a send that the kernel refuses (no route, buffer full) is
 counted in :attr:`UdpLink.send_errors` and dropped like a lost datagram; only a
 closed socket raises. Bad connection strings, unresolvable hosts and ports in use
-raise :class:`~shared.errors.TransportError` with one line naming the string.
+raise :class:`~shared.errors.TransportError` with one line naming the string (the entry
+points parse it first, for a message naming their option).
 IPv4 only, like pymavlink's UDP links.
 
 Floods: the socket asks for a :data:`RECEIVE_BUFFER_BYTES` receive buffer (the kernel
@@ -35,18 +37,16 @@ sending.
 from __future__ import annotations
 
 import enum
-import ipaddress
 import socket
 from collections.abc import Collection
 from dataclasses import dataclass, field
 
 from shared.byte_link import LinkClosedError
-from shared.errors import TransportError
+from shared.errors import InputError, TransportError
+from shared.ipv4 import Peer, is_loopback, resolve_ipv4
+from shared.link_address import Scheme, parse_link_address
 
-__all__ = ["Drained", "Peer", "UdpLink", "UdpMode", "parse_udp_url", "reaches_network"]
-
-#: An IPv4 address and port, as ``socket`` gives them.
-Peer = tuple[str, int]
+__all__ = ["Drained", "Peer", "UdpLink", "UdpMode", "parse_udp_url"]
 
 #: Largest UDP payload, bytes.
 MAX_DATAGRAM = 65535
@@ -59,8 +59,6 @@ RECEIVE_BUFFER_BYTES = 8 * 1024 * 1024
 #: core), so a round of its owner ends and sends whatever comes in.
 DRAIN_LIMIT = 4096
 
-_FORMS = "udpin:HOST:PORT, udpout:HOST:PORT or udp:HOST:PORT"
-
 
 class UdpMode(enum.Enum):
     """Which end of the conversation the link is."""
@@ -70,33 +68,18 @@ class UdpMode(enum.Enum):
 
 
 def parse_udp_url(url: str) -> tuple[UdpMode, str, int]:
-    """Split a connection string into (mode, host, port).
+    """Split a connection string into (mode, host, port) (``shared.link_address``).
 
     Raises:
-        TransportError: not one of the three forms, an empty host, or a port that is
-            not an integer in 0..65535 (1..65535 for ``udpout``).
+        TransportError: not one of the three forms, or a bad host or port (one line
+            naming ``url``).
     """
-    scheme, _, rest = url.partition(":")
-    modes = {"udpin": UdpMode.IN, "udp": UdpMode.IN, "udpout": UdpMode.OUT}
-    host, sep, port_text = rest.rpartition(":")
-    if scheme not in modes or not sep:
-        raise TransportError(url, f"not a UDP connection string (expected {_FORMS})")
-    if not host:
-        raise TransportError(url, "no host (use 0.0.0.0 to listen on every interface)")
-    mode = modes[scheme]
-    low = 1 if mode is UdpMode.OUT else 0
-    if not port_text.isdigit() or not low <= int(port_text) <= 65535:
-        raise TransportError(url, f"port {port_text!r} is not an integer in {low}..65535")
-    return mode, host, int(port_text)
-
-
-def _resolve(url: str, host: str, port: int) -> Peer:
     try:
-        infos = socket.getaddrinfo(host, port, socket.AF_INET, socket.SOCK_DGRAM)
-    except (socket.gaierror, UnicodeError) as e:
-        raise TransportError(url, f"cannot resolve host {host!r}: {e}") from None
-    address, resolved_port = infos[0][4][:2]
-    return str(address), int(resolved_port)
+        address = parse_link_address(url, url, (Scheme.UDPIN, Scheme.UDPOUT))
+    except InputError as e:
+        raise TransportError(url, e.problem) from None
+    mode = UdpMode.IN if address.scheme is Scheme.UDPIN else UdpMode.OUT
+    return mode, address.host, address.port
 
 
 def _bind_address(mode: UdpMode, address: Peer) -> Peer:
@@ -104,19 +87,7 @@ def _bind_address(mode: UdpMode, address: Peer) -> Peer:
     on loopback (a loopback peer) or on every interface."""
     if mode is UdpMode.IN:
         return address
-    return ("127.0.0.1" if ipaddress.ip_address(address[0]).is_loopback else "0.0.0.0", 0)
-
-
-def reaches_network(url: str) -> bool:
-    """Whether another machine can send to the socket :meth:`UdpLink.open` makes for
-    ``url``: it is bound to an address other than a loopback one.
-
-    Raises:
-        TransportError: a bad string or an unknown host.
-    """
-    mode, host, port = parse_udp_url(url)
-    bound = _bind_address(mode, _resolve(url, host, port))[0]
-    return not ipaddress.ip_address(bound).is_loopback
+    return ("127.0.0.1" if is_loopback(address[0]) else "0.0.0.0", 0)
 
 
 @dataclass(slots=True)
@@ -176,7 +147,7 @@ class UdpLink:
                 naming ``url``).
         """
         mode, host, port = parse_udp_url(url)
-        address = _resolve(url, host, port)
+        address = resolve_ipv4(url, host, port)
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER_BYTES)

@@ -1,6 +1,7 @@
 """``vmnav ground ...``: the ground station at the command line (``ground.station``).
 
-Every subcommand connects (``--connect``, pymavlink connection strings), waits up to
+Every subcommand connects (``--connect ADDRESS``: ``udpin:``, ``udpout:``, ``tcp:``,
+``tcpin:``, ``serial:`` or ``pty:``, ``shared.link_address``), waits up to
 ``--timeout`` for the vehicle (``--system`` picks one by system id; default the first
 heard), does its one thing and exits: 0 on success, 1 with one line on stderr when the
 vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. With
@@ -8,9 +9,11 @@ vehicle is not there, refuses, or (``goto --wait``) does not reach the goal. Wit
 ``DIR/ground-<stamp>.tlog`` (``ground.ground_log``), configured by the ``[log]`` table of
 ``--config FILE`` (retention limits, flushing, rotation; ``shared.config.LogConfig``).
 
-Without ``--key`` the link stays on this machine (``shared.link_security``): the
-default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), and a link
-open to the network is refused unless ``--insecure`` (a warning on stderr).
+Without ``--key`` the link stays on this machine or a wire (``shared.link_security``):
+the default is ``udpin:127.0.0.1:14550`` (``udpin:0.0.0.0:14550`` with a key), a
+telemetry radio (``serial:``) is fine, and a link open to the network is refused unless
+``--insecure`` (a warning on stderr). A stream that ends (the robot's TCP connection, an
+unplugged radio) ends the command with one line.
 
 The subcommands with actions of their own are modules registered here: ``goto``,
 ``memory``, ``teach``, ``params``, ``stop`` (with ``arm``), ``web`` (no wait for a
@@ -56,9 +59,11 @@ def add_parser(subparsers: Subparsers) -> None:
     ground = subparsers.add_parser(
         "ground", help="the MAVLink ground station: status, goals, teaching",
         description="Talk to a vmnav robot (or several, by system id) over MAVLink.")
-    ground.add_argument("--connect", metavar="URL",
-                        help="udpin:HOST:PORT or udpout:HOST:PORT (default "
-                             "udpin:0.0.0.0:14550 with --key, else udpin:127.0.0.1:14550)")
+    ground.add_argument("--connect", metavar="ADDRESS",
+                        help="udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, "
+                             "tcpin:HOST:PORT, serial:DEVICE[:BAUD] (default 57600) or "
+                             "pty:PATH (default udpin:0.0.0.0:14550 with --key, else "
+                             "udpin:127.0.0.1:14550)")
     ground.add_argument("--system", type=SYSTEM_ID, metavar="N",
                         help="the vehicle's system id (default: the first one heard)")
     ground.add_argument("--key", type=Path, metavar="FILE",

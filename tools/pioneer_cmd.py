@@ -1,12 +1,14 @@
 """``vmnav pioneer``: connect to a Pioneer (or ``vmnav sim serve``), report it, optionally drive.
 
 The link check a user runs first with a real robot: it opens the ARIA link through
-:class:`robot.pioneer.driver.PioneerDriver` (serial device, pty or
-``socket://host:port``), waits until the motors are enabled, prints the robot's
+:class:`robot.pioneer.driver.PioneerDriver` (``serial:DEVICE[:BAUD]``, ``pty:PATH`` or
+``tcp:HOST:PORT``; a device path or ``socket://HOST:PORT`` also work), waits until the
+motors are enabled, prints the robot's
 identity and state, optionally drives at a fixed speed and turn rate for a while
 (printing the odometry every second), then stops and closes the link with CLOSE
 (also on Ctrl-C and SIGTERM). Exit status: 0 when connected (and the drive done),
-1 with a one-line error otherwise.
+1 with a one-line error otherwise: a bad address at once, a missing device, an unknown
+host or a refused or unanswered connect in under 2 s (``PioneerDriver.open_transport``).
 """
 
 from __future__ import annotations
@@ -32,9 +34,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "at a fixed speed and turn rate, then stop and close the link.",
     )
     parser.add_argument("--config", metavar="FILE", help="vmnav TOML config file ([pioneer])")
-    parser.add_argument("--aria", metavar="URL",
-                        help="pyserial URL: /dev/ttyUSB0, a pty path, socket://HOST:8101 "
-                             "[default: the config's pioneer.url]")
+    parser.add_argument("--aria", metavar="ADDRESS",
+                        help="the Pioneer: serial:DEVICE[:BAUD], pty:PATH or tcp:HOST:PORT "
+                             "(a device path or socket://HOST:PORT also work) [default: the "
+                             "config's pioneer.url]")
     parser.add_argument("--baud", type=POSITIVE_COUNT, metavar="N",
                         help="serial rate after the 9600 baud attempt [default: 38400]")
     parser.add_argument("--drive", nargs=2, type=FINITE, metavar=("V_M_S", "OMEGA_DEG_S"),
@@ -49,6 +52,7 @@ def run_pioneer(args: argparse.Namespace) -> int:
     from robot.config import load_config
     from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
+    from robot.pioneer.serial_link import aria_address
     from robot.pioneer.shutdown import close_on_sigterm
     from shared.clock import WallClock
 
@@ -59,12 +63,18 @@ def run_pioneer(args: argparse.Namespace) -> int:
     if args.baud is not None:
         overrides["baud"] = args.baud
     config = dataclasses.replace(config, **overrides)
+    option = "--aria" if args.aria is not None else "[pioneer] url"
+    aria_address(config.url, option)
     if args.drive is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
     clock = WallClock()
     driver = PioneerDriver.from_config(config, clock)
     restore = close_on_sigterm(driver)
     try:
+        try:
+            driver.open_transport()
+        except TransportError as e:
+            raise TransportError(f"{option} {config.url}", e.problem) from None
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
             raise TransportError(config.url, why_not_connected(driver))

@@ -2,24 +2,19 @@
 
 It wires the parts the field runs, each on its own thread, around one loop:
 
-* the base: :class:`robot.pioneer.driver.PioneerDriver` on ``--aria URL`` (a serial
-  device, a pty, or ``socket://HOST:8101``: a robot's serial bridge or ``vmnav sim serve``);
-* the camera: :class:`robot.camera.VideoCaptureSource` on ``--camera SOURCE`` (a device
-  index, a file, or a URL such as ``vmnav sim serve``'s MJPEG stream);
-* the ground link: :class:`robot.vehicle.udp_vehicle.UdpVehicle` on ``--mavlink URL``
-  (pymavlink connection strings: ``udpin:0.0.0.0:14550`` waits for a ground station,
-  ``udpout:HOST:14550`` calls one); signed with ``--key FILE``, whose timestamps are
-  kept in ``--state DIR``. Without a key the link stays on loopback
-  (``shared.link_security``): the default is ``udpin:127.0.0.1:14550``, and a link open
-  to the network is refused unless ``--insecure``;
-* the application: :class:`robot.runtime.RobotRuntime` over the memory in ``--memory DIR``;
-* with ``--video http:[HOST:]PORT`` (loopback unless a host is given), the live view: the
-  camera's frames as MJPEG over HTTP (:mod:`robot.video`, ``[video]`` sizes and rate),
-  advertised through the MAVLink camera protocol.
+the Pioneer (:class:`robot.pioneer.driver.PioneerDriver` on ``--aria ADDRESS``), the
+camera (:class:`robot.camera.VideoCaptureSource` on ``--camera SOURCE``), the ground link
+(``robot.vehicle.vehicle_link`` on ``--mavlink ADDRESS``, signed with ``--key FILE``; on
+this machine only without a key: ``shared.link_security``; addresses: docs/links.md),
+the application (:class:`robot.runtime.RobotRuntime` over ``--memory DIR``) and, with
+``--video``, the live view (:mod:`robot.video`, advertised by the MAVLink camera protocol).
 
 :class:`robot.process.RobotProcess` assembles them and runs the loop: it hands each
 frame to the runtime and, when no frame comes within ``TeleopConfig.frame_timeout_ns``,
-tells it the camera stalled (the base stops). Parameters set from the ground and goal
+tells it the camera stalled (the base stops). Start-up checks come first: both addresses,
+the ground link's transport (a port in use, a missing radio) and the Pioneer's (a missing
+device, a refused or unanswered connect: one line in under 2 s), before the Pioneer's
+motors are enabled. Parameters set from the ground and goal
 photos live in ``--state DIR``. Ctrl-C and SIGTERM stop the base, send the Pioneer its
 CLOSE, and close the link and the camera; the field log records all that (ending with
 how the Pioneer link ended) and is finished last.
@@ -49,16 +44,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "camera, and be a MAVLink vehicle that teaches routes by teleoperation and follows "
         "them to goals sent by a ground station (vmnav ground, MAVProxy, QGroundControl).",
     )
-    parser.add_argument("--aria", metavar="URL",
-                        help="the Pioneer: /dev/ttyUSB0, a pty path, socket://HOST:8101 "
-                             "[default: the config's pioneer.url]")
+    parser.add_argument("--aria", metavar="ADDRESS",
+                        help="the Pioneer: serial:DEVICE[:BAUD], pty:PATH or tcp:HOST:PORT "
+                             "(a device path or socket://HOST:PORT also work) [default: the "
+                             "config's pioneer.url]")
     parser.add_argument("--camera", metavar="SOURCE",
                         help="cv2.VideoCapture source: device index, file or URL "
                              "(http://127.0.0.1:8080/stream.mjpg) [default: the config's "
                              "camera.source]")
-    parser.add_argument("--mavlink", metavar="URL",
-                        help="ground link, pymavlink syntax [default: udpin:0.0.0.0:14550 "
-                             "with --key, else udpin:127.0.0.1:14550, this machine only]")
+    parser.add_argument("--mavlink", metavar="ADDRESS",
+                        help="ground link: udpin:HOST:PORT, udpout:HOST:PORT, tcpin:HOST:PORT, "
+                             "tcp:HOST:PORT, serial:DEVICE[:BAUD] (default 57600) or pty:PATH "
+                             "[default: udpin:0.0.0.0:14550 with --key, else "
+                             "udpin:127.0.0.1:14550, this machine only]")
     parser.add_argument("--memory", required=True, type=Path, metavar="DIR",
                         help="the visual memory (created when teaching into an empty folder)")
     parser.add_argument("--calibration", type=Path, metavar="FILE",
@@ -103,8 +101,10 @@ def run(args: argparse.Namespace) -> int:
     from robot.field_log import FieldLog
     from robot.pioneer.connection import CONNECT_TIMEOUT_S, why_not_connected
     from robot.pioneer.driver import PioneerDriver
+    from robot.pioneer.serial_link import aria_address
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
+    from robot.vehicle.vehicle_link import open_vehicle_transport
     from robot.video import LiveView
     from shared.calibration import read_camera
     from shared.clock import WallClock, unix_offset_ns
@@ -126,6 +126,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
     video = None if args.video is None else parse_http_spec(args.video, "--video",
                                                             DEFAULT_VIDEO_PORT)
+    aria_option = "--aria" if args.aria is not None else "[pioneer] url"
+    aria_address(config.pioneer.url, aria_option)
     key = read_key_file(args.key) if args.key is not None else None
     link_check = check_link(args.mavlink, "--mavlink", key is not None, args.insecure)
     url = link_check.url
@@ -141,6 +143,8 @@ def run(args: argparse.Namespace) -> int:
     # the field log record how the Pioneer link ended, and finishes the log last
     # (robot.process, rule 4).
     with contextlib.ExitStack() as owned:
+        transport = open_vehicle_transport(url)
+        owned.callback(transport.close)  # until the process owns it
         camera = owned.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
         view = None
         if video is not None:
@@ -149,6 +153,10 @@ def run(args: argparse.Namespace) -> int:
                 width_px=config.video.width_px, max_clients=config.video.max_clients)),
                 config.video)
         driver = owned.enter_context(PioneerDriver.from_config(config.pioneer, clock))
+        try:
+            driver.open_transport()
+        except TransportError as e:
+            raise TransportError(f"{aria_option} {config.pioneer.url}", e.problem) from None
         driver.start_thread()
         if not driver.wait_connected(round(CONNECT_TIMEOUT_S * 1e9)):
             raise TransportError(config.pioneer.url, why_not_connected(driver))
@@ -169,13 +177,13 @@ def run(args: argparse.Namespace) -> int:
                            log=log, signing=signing,
                            link_warning=INSECURE_NOTICE if link_check.insecure else None,
                            video=view)
-        with RobotProcess(parts, url, owned=owned.pop_all(),
+        with RobotProcess(parts, transport, owned=owned.pop_all(),
                           log_end=pioneer_closed) as process:
             identity = driver.status().identity
             width, height = camera.size_wh
             print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
                   f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
-                  f"MAVLink system {config.mavlink.system_id} on {url}"
+                  f"MAVLink system {config.mavlink.system_id} on {link_name(transport)}"
                   f"{' (signed)' if signing else ''}; memory {args.memory}: "
                   f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
             if view is not None:
@@ -188,3 +196,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def link_name(transport: object) -> str:
+    """The ground link's address as opened: a listener given port 0 shows the port it got."""
+    from shared.stream_port import StreamPort
+
+    if isinstance(transport, StreamPort):
+        return transport.url
+    from shared.udp_link import UdpLink
+
+    assert isinstance(transport, UdpLink)
+    if not transport.listening:
+        return transport.url
+    return f"udpin:{transport.url.split(':')[-2]}:{transport.local_port}"

@@ -24,12 +24,18 @@ class PioneerDriverConfig:
     """
 
     url: str = "/dev/ttyUSB0"
-    """pyserial URL of the robot: a device or pty path, ``socket://host:8101`` or ``loop://``."""
+    """The robot's address (``shared.link_address``): ``serial:DEVICE[:BAUD]`` or a device
+    path, ``pty:PATH``, ``tcp:HOST:PORT``; also pyserial URLs (``socket://HOST:8101``,
+    ``loop://``)."""
     baud: int = 38400
-    """Configured serial rate, baud. Connect attempts on a device alternate 9600 (ARCOS
-    after power-up) and this rate (aria-protocol.md §9); URLs with a scheme ignore it."""
+    """Configured serial rate, baud, unless ``url`` gives one. Connect attempts on a device
+    alternate 9600 (ARCOS after power-up) and this rate (aria-protocol.md §9); TCP and
+    URLs with a scheme ignore it."""
     write_timeout_s: float = 0.5
     """A write that cannot finish in this long means the link is gone, s."""
+    connect_timeout_s: float = 1.5
+    """A TCP host that has not answered a connect in this long is unreachable, s (a host
+    on the LAN answers in milliseconds)."""
     link: AriaLinkConfig = field(default_factory=AriaLinkConfig)
     """Session timers: SYNC retries, PULSE, link-loss timeout."""
     service_period_ns: int = 10_000_000
@@ -73,7 +79,8 @@ class PioneerDriverConfig:
     def __post_init__(self) -> None:
         require(bool(self.url.strip()), "url must not be empty")
         for name in (
-            "baud", "write_timeout_s", "service_period_ns", "config_retry_ns", "config_wait_ns",
+            "baud", "write_timeout_s", "connect_timeout_s", "service_period_ns", "config_retry_ns",
+            "config_wait_ns",
             "command_refresh_ns", "command_timeout_ns", "reconnect_initial_ns", "reconnect_max_ns",
             "noise_report_period_ns", "report_timeout_ns", "max_speed_m_s", "max_omega_rad_s",
             "accel_m_s2", "decel_m_s2", "rot_accel_rad_s2", "rot_decel_rad_s2",

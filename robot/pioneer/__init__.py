@@ -4,8 +4,10 @@
   keep-alive, commands, odometry, link-loss detection, events);
 * ``driver``: :class:`PioneerDriver`, a :class:`~shared.interfaces.MobileBase` over a
   byte link and a clock, with its own I/O thread and automatic reconnection;
-* ``serial_link``: :class:`SerialLink`, the pyserial adapter (devices, ptys,
-  ``socket://``), and :func:`serial_link_factory`;
+* ``serial_link``: :func:`serial_link_factory`, the Pioneer's link from its address
+  (``tcp:``, ``serial:``, ``pty:``, a device path, ``socket://``; the adapters are
+  ``shared.serial_port.SerialLink`` and ``shared.stream_link``), and
+  :func:`aria_address`;
 * ``odometry``, ``events``, ``status``: the pieces they report with;
 * ``shutdown``: :func:`close_on_sigterm`; ``connection``: the time allowed to connect at
   start-up and why a driver did not connect.

@@ -28,6 +28,10 @@ Rules:
    (:attr:`PioneerDriver.faults`), and the link is treated as lost: closed, and
    re-opened with a fresh session after the backoff of rule 2. Meanwhile the robot's
    own watchdog stops it (ARCOS stops after 2 s without a packet).
+6. Start-up: :meth:`open_transport` opens the transport once and raises if it cannot
+   (the entry points call it first, so a wrong address is one line in about a second,
+   not a stream of retries until their connect timeout). Once a transport is open, the
+   handshake's retries and the reconnection of rule 2 are as above.
 """
 
 from __future__ import annotations
@@ -109,8 +113,8 @@ class PioneerDriver:
     @classmethod
     def from_config(cls, config: PioneerDriverConfig, clock: Clock) -> PioneerDriver:
         """A driver on ``config.url`` through :class:`~robot.pioneer.serial_link.SerialLink`."""
-        return cls(serial_link_factory(config.url, config.baud, config.write_timeout_s), clock,
-                   config)
+        return cls(serial_link_factory(config.url, config.baud, config.write_timeout_s,
+                                       config.connect_timeout_s), clock, config)
 
     # -- MobileBase -------------------------------------------------------------------
 
@@ -174,6 +178,24 @@ class PioneerDriver:
             return self._events.popleft() if self._events else None
 
     # -- I/O ------------------------------------------------------------------------------
+
+    def open_transport(self) -> None:
+        """Open the transport now, once, before the first service round (rule 6): a missing
+        device, an unknown host or a refused or unanswered connect is an error at once,
+        not retried. Does nothing when the transport is open.
+
+        Raises:
+            TransportError: the transport cannot be opened (one line naming it).
+            IllegalEventError: the driver is closed.
+        """
+        with self._io_lock:
+            if self._closed:
+                raise IllegalEventError("PioneerDriver", "CLOSED", "open_transport")
+            if self._link is None:
+                link = self._link_factory()
+                with self._lock:
+                    self._link = link
+                    self._client.start(self._clock.now_ns())
 
     def service(self, now_ns: int) -> None:
         """One round of I/O at ``now_ns``: open if due, read, timers, write."""

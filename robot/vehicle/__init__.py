@@ -10,12 +10,15 @@
   parameters (the memory and upload area it serves, its parameters bound to the
   config, the file they persist in);
 * ``options``: its files and signing setup;
-* ``udp_vehicle``: :class:`UdpVehicle`, the endpoint on a UDP socket.
+* ``udp_vehicle``: :class:`UdpVehicle`, the endpoint on a UDP socket;
+  ``stream_vehicle``: :class:`StreamVehicle`, on a serial or TCP stream; ``vehicle_io``:
+  what both share; ``vehicle_link``: the transport of an address, and the endpoint on it.
 """
 
 from robot.vehicle.app_port import GcsLostAction, ServoTelemetry, VehicleApp, VehicleTelemetry
 from robot.vehicle.endpoint import LinkStats, VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
+from robot.vehicle.stream_vehicle import StreamVehicle
 from robot.vehicle.udp_vehicle import UdpVehicle
 
 __all__ = [
@@ -23,6 +26,7 @@ __all__ = [
     "LinkStats",
     "ServoTelemetry",
     "SigningSetup",
+    "StreamVehicle",
     "UdpVehicle",
     "VehicleApp",
     "VehicleEndpoint",

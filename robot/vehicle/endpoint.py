@@ -305,10 +305,19 @@ class VehicleEndpoint:
 
     # -- the I/O surface ----------------------------------------------------------------
 
-    def receive(self, data: bytes, now_ns: int, datagram: bool = False) -> int:
+    def receive(self, data: bytes, now_ns: int, datagram: bool = False,
+                verified: list[bytes] | None = None) -> int:
         """Handle every packet in ``data``: a chunk of a byte stream, or with ``datagram``
         one whole datagram (a packet it leaves unfinished is corrupt, not continued by
         the next one: :meth:`~shared.mavlink.dialect.MavlinkCodec.parse`).
+
+        Args:
+            data: the bytes received.
+            now_ns: the time, ns.
+            datagram: ``data`` is one whole datagram.
+            verified: when given, the bytes of each verified packet in ``data``
+                (:meth:`~shared.mavlink.dialect.MavlinkCodec.is_verified`) are appended,
+                whole: what a stream transport logs (its chunks split packets).
 
         Returns:
             How many messages were accepted (0 when all were corrupt or unsigned).
@@ -316,6 +325,8 @@ class VehicleEndpoint:
         self._tick(now_ns)
         self._keep_signing(now_ns)
         messages = self.codec.parse(data, datagram)
+        if verified is not None:
+            verified += [bytes(m.get_msgbuf()) for m in messages if self.codec.is_verified(m)]
         for msg in messages:
             try:
                 replies = self._handle(msg, now_ns)

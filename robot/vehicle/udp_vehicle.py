@@ -1,14 +1,14 @@
 """UdpVehicle: a :class:`~robot.vehicle.endpoint.VehicleEndpoint` on a UDP socket.
 
+Threads, taps, reject reports and errors are :class:`~robot.vehicle.vehicle_io.VehicleIo`'s
+(its rules); serial and TCP links are ``stream_vehicle``'s.
+
 Rules:
 
 1. :meth:`UdpVehicle.service` does one round of I/O at ``now_ns``: the socket drained
    (:meth:`~shared.udp_link.UdpLink.drain`), the datagrams into the endpoint (each
    parsed on its own: garbage in one cannot swallow the packets of the next), then
-   every packet of ``endpoint.poll`` out, one datagram each. Either the robot's loop
-   calls it, or the vehicle's own thread (:meth:`start_thread`, every
-   ``MavlinkConfig.service_period_ns`` on the injected clock); never both. The
-   application's callbacks run in that thread.
+   every packet of ``endpoint.poll`` out, one datagram each (``VehicleIo`` rule 1).
 2. A listening link (``udpin``) replies to the last sender whose datagram held a
    verified message (:meth:`~shared.mavlink.dialect.MavlinkCodec.is_verified`: of our
    dialect, so its CRC was checked, and on a signed link validly signed; the codec
@@ -49,39 +49,18 @@ Rules:
 
 from __future__ import annotations
 
-import threading
-from collections.abc import Callable
-from dataclasses import dataclass
-
 from robot.vehicle.endpoint import VehicleEndpoint
-from shared.byte_link import LinkClosedError
-from shared.clock import NS_PER_S, Clock, service_loop
-from shared.errors import IllegalEventError
+from robot.vehicle.vehicle_io import REJECT_REPORT_PERIOD_NS, Rejected, VehicleIo
+from shared.clock import Clock
 from shared.udp_link import Peer, UdpLink
+
+__all__ = ["REJECT_REPORT_PERIOD_NS", "STRANGER_BUDGET", "Rejected", "UdpVehicle"]
 
 #: Datagrams from anyone but the trusted peer handled per round at most (rule 5).
 STRANGER_BUDGET = 16
-#: Rejected traffic is reported at most this often, ns (rule 3).
-REJECT_REPORT_PERIOD_NS = 10 * NS_PER_S
 
 
-@dataclass(frozen=True, slots=True)
-class Rejected:
-    """Datagrams received and not accepted over a report period (rule 3).
-
-    Attributes:
-        unverified: handled, but held no verified message (corrupt, unknown message ids,
-            unsigned or wrongly signed on a signed link).
-        shed: from strangers past the round's budget: read and dropped unparsed.
-        period_ns: the time they came in, ns (from the previous report, or the first round).
-    """
-
-    unverified: int
-    shed: int
-    period_ns: int
-
-
-class UdpVehicle:
+class UdpVehicle(VehicleIo):
     """The vehicle's UDP I/O (module rules).
 
     Args:
@@ -91,27 +70,9 @@ class UdpVehicle:
     """
 
     def __init__(self, endpoint: VehicleEndpoint, link: UdpLink, clock: Clock) -> None:
-        self.endpoint = endpoint
-        self.link = link
-        self._clock = clock
+        super().__init__(endpoint, link, clock)
+        self.link: UdpLink = link
         self._reply_to: Peer | None = link.peer
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self._closed = False
-        self.packet_taps: list[Callable[[str, bytes, int], None]] = []
-        """Called with every accepted datagram in and packet out (rule 3)."""
-        self.reject_observers: list[Callable[[Rejected, int], None]] = []
-        """Called with the rejected traffic of a period and the time, ns (rule 3)."""
-        self.unverified = 0
-        """Datagrams handled that held no verified message so far (rule 3)."""
-        self._reported = (0, 0)  # (unverified, shed) at the last report
-        self._report_ns: int | None = None
-
-    @property
-    def shed(self) -> int:
-        """Datagrams from strangers dropped unparsed so far (rule 5)."""
-        return self.endpoint.shed_datagrams
 
     @classmethod
     def open(cls, url: str, endpoint: VehicleEndpoint, clock: Clock) -> UdpVehicle:
@@ -122,89 +83,22 @@ class UdpVehicle:
         """
         return cls(endpoint, UdpLink.open(url), clock)
 
-    def service(self, now_ns: int) -> None:
-        """One round of I/O at ``now_ns`` (rules 1, 4 and 5).
-
-        Raises:
-            LinkClosedError: the socket is closed or failed.
-        """
-        try:
-            self._exchange(now_ns)
-        except LinkClosedError:
-            raise
-        except Exception as e:  # a bug; it must not end the link (rule 4)
-            self.endpoint.faults.record("I/O round", e)
-
     def _exchange(self, now_ns: int) -> None:
         """Datagrams in, packets out (rules 1 and 5)."""
-        with self._lock:
-            if self._closed:
-                return
-            codec = self.endpoint.codec
-            trusted = () if self._reply_to is None else (self._reply_to,)
-            drained = self.link.drain(trusted, STRANGER_BUDGET)
-            self.endpoint.shed_datagrams += drained.shed
-            for data, sender in drained.trusted + drained.others:
-                verified = codec.verified_packets
-                self.endpoint.receive(data, now_ns, datagram=True)
-                if codec.verified_packets == verified:
-                    self.unverified += 1
-                    continue
-                for tap in self.packet_taps:
-                    tap("in", data, now_ns)
-                if self.link.listening:
-                    self._reply_to = sender
-            self.link.peer = self._reply_to
-            for packet in self.endpoint.poll(now_ns):
-                for tap in self.packet_taps:
-                    tap("out", packet, now_ns)
-                self.link.send(packet)
-            self._report_rejects(now_ns)
-
-    def _report_rejects(self, now_ns: int) -> None:
-        """Rule 3: the counts of the period, once it is over and if it had any."""
-        if self._report_ns is None:
-            self._report_ns = now_ns
-        if now_ns - self._report_ns < REJECT_REPORT_PERIOD_NS:
-            return
-        unverified, shed = self.unverified - self._reported[0], self.shed - self._reported[1]
-        if unverified or shed:
-            rejected = Rejected(unverified, shed, now_ns - self._report_ns)
-            for observer in self.reject_observers:
-                observer(rejected, now_ns)
-        self._reported, self._report_ns = (self.unverified, self.shed), now_ns
-
-    def start_thread(self) -> None:
-        """Service the link from a daemon thread; idempotent.
-
-        Raises:
-            IllegalEventError: the vehicle is closed.
-        """
-        with self._lock:
-            if self._closed:
-                raise IllegalEventError("UdpVehicle", "CLOSED", "start_thread")
-            if self._thread is None:
-                self._thread = threading.Thread(
-                    target=service_loop, name="mavlink-io", daemon=True,
-                    args=(self.service, self._clock, self.endpoint.config.mavlink.service_period_ns,
-                          self._stop, "vehicle"))
-                self._thread.start()
-
-    def close(self) -> None:
-        """Stop the thread, close the endpoint and the socket; idempotent."""
-        self._stop.set()
-        thread = self._thread
-        if thread is not None and thread is not threading.current_thread():
-            thread.join()
-        with self._lock:
-            if self._closed:
-                return
-            self._closed = True
-            self.endpoint.close()
-            self.link.close()
-
-    def __enter__(self) -> UdpVehicle:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+        codec = self.endpoint.codec
+        trusted = () if self._reply_to is None else (self._reply_to,)
+        drained = self.link.drain(trusted, STRANGER_BUDGET)
+        self.endpoint.shed_datagrams += drained.shed
+        for data, sender in drained.trusted + drained.others:
+            verified = codec.verified_packets
+            self.endpoint.receive(data, now_ns, datagram=True)
+            if codec.verified_packets == verified:
+                self.unverified += 1
+                continue
+            self._tap("in", data, now_ns)
+            if self.link.listening:
+                self._reply_to = sender
+        self.link.peer = self._reply_to
+        for packet in self.endpoint.poll(now_ns):
+            self._tap("out", packet, now_ns)
+            self.link.send(packet)

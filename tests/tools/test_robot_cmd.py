@@ -25,6 +25,7 @@ from shared.key_file import read_key_file
 from shared.logs.reader import log_info, read_messages
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory, write_memory
+from tests.robot.vehicle.stream_rig import Radios
 from tests.shared.memory.builders import folder_bytes, loop_memory, memory_without_manifest
 from tests.tools.processes import VMNAV, start, wait_for
 
@@ -36,7 +37,7 @@ def sim_serve(tmp_path):
     try:
         aria = wait_for(r"ARIA on tcp 127\.0\.0\.1:(\d+)", log, process).group(1)
         camera = wait_for(r"camera on (http://\S+/stream\.mjpg)", log, process).group(1)
-        yield f"socket://127.0.0.1:{aria}", camera
+        yield f"tcp:127.0.0.1:{aria}", camera
     finally:
         process.send_signal(signal.SIGTERM)
         process.wait(10)
@@ -172,9 +173,11 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
     assert "nothing.mjpg: cannot open with OpenCV" in bad_camera.stderr.splitlines()[-1]
     assert bad_camera.stderr.count("\n") == 1, bad_camera.stderr  # no OpenCV/FFmpeg warnings
     started = time.monotonic()
-    no_robot = run_robot("--aria", "socket://127.0.0.1:9", "--camera", camera, *memory)
+    no_robot = run_robot("--aria", "tcp:127.0.0.1:9", "--camera", camera, *memory)
     assert no_robot.returncode == 1 and time.monotonic() - started < 30
-    assert "socket://127.0.0.1:9: no Pioneer ready within 10 s" in no_robot.stderr
+    assert no_robot.stderr.splitlines()[-1] == (
+        "vmnav robot: error: --aria tcp:127.0.0.1:9: cannot connect to 127.0.0.1:9: "
+        "Connection refused")
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))
         port = taken.getsockname()[1]
@@ -242,3 +245,79 @@ def test_a_signed_robot_talks_only_to_its_key_and_keeps_its_timestamps(
     assert station.codec.signing.badsig_count == 0 and station.codec.signing.goodsig_count > 0
     kept = json.loads((tmp_path / "state" / "signing-timestamps.json").read_text())
     assert [stream[:3] for stream in kept["streams"]] == [[1, 255, 190]]  # ours, link 1
+
+
+@pytest.mark.slow
+def test_the_ground_over_tcp_and_the_old_aria_url(sim_serve, tmp_path) -> None:
+    """``vmnav robot --aria socket://... --mavlink tcpin:...``, ``vmnav ground --connect
+    tcp:...``: the robot takes the old ARIA form and a ground station over TCP."""
+    aria, camera = sim_serve
+    log = tmp_path / "robot.out"
+    robot = start(["robot", "--aria", aria.replace("tcp:", "socket://"), "--camera", camera,
+                   "--mavlink", "tcpin:127.0.0.1:0", "--memory", str(tmp_path / "memory"),
+                   "--state", str(tmp_path / "state"), "--no-log"], log)
+    try:
+        port = wait_for(r"MAVLink system 1 on tcpin:127\.0\.0\.1:(\d+)", log, robot).group(1)
+        status = subprocess.run([*VMNAV, "ground", "--connect", f"tcp:127.0.0.1:{port}",
+                                 "--timeout", "20", "status"],
+                                capture_output=True, text=True, timeout=60)
+        assert status.returncode == 0, status.stderr
+        assert status.stdout.startswith("vehicle 1: mode HOLD, "), status.stdout
+    finally:
+        robot.send_signal(signal.SIGTERM)
+        robot.wait(15)
+    assert "Traceback" not in log.read_text()
+
+
+@pytest.mark.parametrize(("args", "line"), [
+    (["--mavlink", "tcp:5760"],
+     "--mavlink: 'tcp:5760': expected tcp:HOST:PORT (a host and a port)"),
+    (["--mavlink", "tcpin:0.0.0.0:5760"],
+     "--mavlink tcpin:0.0.0.0:5760: an unsigned link open to the network"),
+    (["--mavlink", "serial:/dev/ttyNOPE:57600"], "/dev/ttyNOPE: no such device"),
+    (["--aria", "udpin:127.0.0.1:8101"], "--aria: 'udpin:127.0.0.1:8101': udpin:HOST:PORT "
+                                         "cannot be used here"),
+])
+def test_bad_links_are_one_line_before_anything_starts(tmp_path, args, line) -> None:
+    memory = tmp_path / "memory"
+    result = run_robot("--camera", str(tmp_path / "none.mp4"), "--memory", str(memory),
+                       "--no-log", *(["--aria", "tcp:127.0.0.1:9"] if "--aria" not in args
+                                     else []), *args)
+    assert result.returncode == 1, result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("vmnav robot: error: ") and line in last, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.slow
+def test_the_ground_over_a_radio_pair_and_the_pioneer_on_a_serial_port(tmp_path) -> None:
+    """docs/links.md: ``vmnav robot --aria serial:DEVICE --mavlink serial:RADIO:57600`` and
+    ``vmnav ground --connect serial:RADIO:57600 --key KEY status``, the Pioneer being
+    ``vmnav sim serve --aria pty:PATH`` and the radios two ptys joined by a relay."""
+    key = tmp_path / "vmnav.key"
+    assert subprocess.run([*VMNAV, "ground", "keygen", str(key)], timeout=60).returncode == 0
+    pioneer = tmp_path / "pioneer"
+    sim_log, robot_log = tmp_path / "sim.out", tmp_path / "robot.out"
+    sim = start(["sim", "serve", "--aria", f"pty:{pioneer}", "--video", "http:0"], sim_log)
+    radios = Radios(tmp_path)
+    robot = None
+    try:
+        camera = wait_for(r"camera on (http://\S+/stream\.mjpg)", sim_log, sim).group(1)
+        robot = start(["robot", "--aria", f"serial:{pioneer}", "--camera", camera,
+                       "--mavlink", f"serial:{radios.robot_path}:57600", "--key", str(key),
+                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
+                       "--no-log"], robot_log)
+        wait_for(r"MAVLink system 1 on serial:", robot_log, robot)
+        status = subprocess.run([*VMNAV, "ground", "--connect",
+                                 f"serial:{radios.ground_path}:57600", "--key", str(key),
+                                 "--timeout", "20", "status"],
+                                capture_output=True, text=True, timeout=60)
+        assert status.returncode == 0, status.stderr
+        assert status.stdout.startswith("vehicle 1: mode HOLD, "), status.stdout
+    finally:
+        for process in (robot, sim):
+            if process is not None:
+                process.send_signal(signal.SIGTERM)
+                process.wait(15)
+        radios.close()
+    assert "Traceback" not in robot_log.read_text()

@@ -6,6 +6,7 @@ import contextlib
 import os
 import socket
 import termios
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -29,7 +30,7 @@ def test_is_device() -> None:
     assert not is_device("socket://127.0.0.1:8101") and not is_device("loop://")
 
 
-@pytest.mark.parametrize("url", ["/dev/vmnav-no-such-port", "bogus://robot", "socket://robot"])
+@pytest.mark.parametrize("url", ["bogus://robot", "socket://robot"])
 def test_open_failure_is_one_line_naming_the_url(url: str) -> None:
     with pytest.raises(TransportError) as info:
         SerialLink.open(url, 9600)
@@ -37,6 +38,43 @@ def test_open_failure_is_one_line_naming_the_url(url: str) -> None:
     assert message.startswith(f"{url}: cannot open at 9600 baud: ")
     assert "\n" not in message
     assert info.value.where == url
+
+
+def test_a_missing_device_is_named_at_once() -> None:
+    with pytest.raises(TransportError, match=r"^/dev/vmnav-no-such-port: no such device "):
+        SerialLink.open("/dev/vmnav-no-such-port", 9600)
+
+
+@pytest.mark.parametrize("url", ["tcp:127.0.0.1:PORT", "socket://127.0.0.1:PORT"])
+def test_the_factory_connects_tcp_with_a_timeout(url: str) -> None:
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        url = url.replace("PORT", str(server.getsockname()[1]))
+        link = serial_link_factory(url, 38400)()
+        conn, _ = server.accept()
+        with conn:
+            link.write(b"\xfa\xfb")
+            assert conn.recv(16) == b"\xfa\xfb"
+            conn.sendall(b"back")
+            deadline = time.monotonic() + 5.0
+            got = b""
+            while got != b"back" and time.monotonic() < deadline:
+                got += link.read_available()
+            assert got == b"back"
+        link.close()
+
+
+def test_the_factory_takes_the_rate_of_a_serial_address(pty: tuple[int, int, str]) -> None:
+    _, _, path = pty
+    open_next = serial_link_factory(f"serial:{path}:57600", 38400)
+    rates = []
+    for _ in range(3):
+        link = open_next()
+        assert isinstance(link, SerialLink)
+        rates.append(link.baud)
+        link.close()
+    assert rates == [9600, 57600, 9600]
 
 
 def test_refused_tcp_connection() -> None:

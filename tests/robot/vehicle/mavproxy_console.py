@@ -34,11 +34,12 @@ class MavproxyConsole:
         master: MAVProxy's ``--master`` connection string (``udpout:127.0.0.1:<port>``).
         home: an empty directory: MAVProxy's working directory and ``$HOME`` (so no
             startup script of the machine's user runs and nothing is written there).
+        options: more of MAVProxy's options (``--baudrate=57600``).
     """
 
-    def __init__(self, master: str, home: Path) -> None:
+    def __init__(self, master: str, home: Path, *options: str) -> None:
         self.argv = [sys.executable, "-m", "MAVProxy.mavproxy", f"--master={master}",
-                     "--no-state"]
+                     "--no-state", *options]
         self.lines: list[str] = []
         """Every line MAVProxy printed so far (stdout and stderr, prompt prefixes kept)."""
         self._changed = threading.Condition()
