@@ -117,6 +117,7 @@ def serve(station: GroundStation, clock: Clock, config: WebConfig,
           announce: Callable[[str], None]) -> None:
     """Serve the web app until Ctrl-C or SIGTERM; ``announce`` gets the line with its URL."""
     server = WebServer(station, clock, config)
-    announce(f"serving {server.url} (MAVLink on {station.link.url}, port "
-             f"{station.link.local_port}); Ctrl-C stops")
+    port = getattr(station.link, "local_port", None)  # a serial radio has none
+    where = station.link.url if port is None else f"{station.link.url}, port {port}"
+    announce(f"serving {server.url} (MAVLink on {where}); Ctrl-C stops")
     server.run()
