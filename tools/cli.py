@@ -66,7 +66,21 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in COMMANDS:
         module.add_parser(sub)
+    _describe(parser)
     return parser
+
+
+def _describe(parser: argparse.ArgumentParser) -> None:
+    """Give every subcommand without a description its one-line help as one, so that each
+    ``--help`` says what the command does."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            helps = {choice.dest: choice.help for choice in action._choices_actions}
+            for name, subparser in action.choices.items():
+                text = str(helps.get(name) or "")
+                if not subparser.description and text:
+                    subparser.description = text[:1].upper() + text[1:] + "."
+                _describe(subparser)
 
 
 #: Environment that keeps OpenCV's and FFmpeg's own warnings off the output (a camera URL

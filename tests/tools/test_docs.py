@@ -3,8 +3,10 @@ they show is one the command line takes (its options exist and its values parse)
 
 from __future__ import annotations
 
+import argparse
 import re
 import shlex
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -62,3 +64,15 @@ def test_every_command_shown_parses(doc: str, command: str,
         build_parser().parse_args(argv)
     except SystemExit as exited:  # --help and --version exit 0; a usage error exits 2
         assert exited.code == 0, capsys.readouterr().err
+
+
+def test_every_subcommand_says_what_it_does() -> None:
+    def walk(parser: argparse.ArgumentParser, path: str) -> Iterator[str]:
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, subparser in action.choices.items():
+                    if not subparser.description:
+                        yield f"{path} {name}"
+                    yield from walk(subparser, f"{path} {name}")
+
+    assert list(walk(build_parser(), "vmnav")) == []
