@@ -5,8 +5,17 @@ from __future__ import annotations
 import io
 import os
 import pty
+import select
 
 from tools.harness.progress import Progress
+
+
+def read_all(leader: int) -> str:
+    """Everything written to the terminal so far (rich writes in several chunks)."""
+    chunks = []
+    while select.select([leader], [], [], 0.5)[0]:
+        chunks.append(os.read(leader, 65536))
+    return b"".join(chunks).decode("utf-8", "replace")
 
 
 def test_nothing_is_drawn_when_the_stream_is_not_a_terminal() -> None:
@@ -25,7 +34,7 @@ def test_a_bar_is_drawn_on_a_terminal_and_cleared_after() -> None:
                 assert bar.shown
                 bar.update(1, "seed 2: repeating")
             terminal.flush()
-        drawn = os.read(leader, 65536).decode("utf-8", "replace")
+        drawn = read_all(leader)
     finally:
         os.close(leader)
         os.close(follower)
@@ -39,7 +48,7 @@ def test_a_status_line_without_a_total() -> None:
             with Progress("vehicle 1", None, terminal) as bar:
                 bar.update(detail="FOLLOWING: key 4 -> 5 (goal 9)")
             terminal.flush()
-        drawn = os.read(leader, 65536).decode("utf-8", "replace")
+        drawn = read_all(leader)
     finally:
         os.close(leader)
         os.close(follower)
