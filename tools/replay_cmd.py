@@ -15,14 +15,18 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from shared.errors import InputError, VmnavError
 from tools.harness.arg_types import NON_NEGATIVE
+from tools.harness.progress import Progress
 
 if TYPE_CHECKING:
     from robot.replay import ReplayReport
+
+T = TypeVar("T")
 
 #: Exit statuses.
 IDENTICAL, DIFFERENT, BAD_INPUT = 0, 1, 2
@@ -73,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
                                  f"the mission started at {start.t_ns / 1e9:.3f} s: replay "
                                  f"needs the memory the robot used")
         config = None if args.config is None else load_config(args.config)
-        report = replay(read_missions(files), memory, config=config, tolerance=args.tolerance)
+        with Progress("replay") as bar:
+            items = counted(read_missions(files), bar) if bar.shown else read_missions(files)
+            report = replay(items, memory, config=config, tolerance=args.tolerance)
         if not report.cycles:
             raise InputError(series_name(files), f"no cycle could be replayed ({report.skipped} "
                              f"without a logged frame or base state)")
@@ -87,6 +93,14 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(summary_text(report, series_name(files)))
     return IDENTICAL if report.identical else DIFFERENT
+
+
+def counted(items: Iterable[T], bar: Progress) -> Iterator[T]:
+    """``items``, counting them on ``bar`` (every 15th: the terminal need not see each)."""
+    for n, item in enumerate(items, 1):
+        if n % 15 == 0:
+            bar.update(detail=f"{n} log records")
+        yield item
 
 
 def warnings(report: ReplayReport) -> list[str]:
