@@ -43,6 +43,7 @@ import json
 import math
 import operator
 import os
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -275,8 +276,11 @@ def bench_front_end(
     """
     world = load_world(sim_config.world)
     names = list(plan.routes) if plan.routes else [r.name for r in world.routes]
+    _say(config, f"teaching {', '.join(names)} in {world.name}")
     taught = teach_memory(world, names, config, sim_config, camera, join=False)
+    _say(config, f"{plan.state_queries} state queries")
     run = run_state_queries(taught, world, config, sim_config, camera, plan)
+    _say(config, f"{plan.localize_queries} localization queries")
     localization = measure_localization(taught, world, config, sim_config, camera,
                                         plan.localize_queries, plan.seed, plan.exhaustive_queries)
     localization["localize_failures"] = localization.pop("failures")
@@ -333,6 +337,11 @@ def memory_summary(taught: TaughtMemory) -> dict[str, Any]:
         "key_spacing_m_max": _round(spacings.max()),
         "teach_tracks_per_key_image_median": float(np.median(tracks)) if tracks else None,
     }
+
+
+def _say(config: VmnavConfig, step: str) -> None:
+    """A progress line on stderr: which front end, which step."""
+    print(f"vmnav bench vision: {config.features.method}: {step}", file=sys.stderr, flush=True)
 
 
 def run_state_queries(
