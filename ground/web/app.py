@@ -53,6 +53,8 @@ from ground.web.camera_proxy import CameraProxy, StreamUnavailableError
 from ground.web.requests import parse_request, request_id_of
 from ground.web.station_loop import StationLoop
 from shared.errors import InputError, VmnavError
+from shared.image_decode import check_image
+from shared.image_header import ImageFormat
 
 _log = logging.getLogger(__name__)
 
@@ -65,6 +67,8 @@ HISTORY_SAMPLES = 1200
 HISTORY_NOTICES = 50
 #: WebSocket close code of a refused origin (RFC 6455 policy violation).
 POLICY_VIOLATION = 1008
+#: A goal photo larger than this is refused before all of it is read, bytes.
+MAX_PHOTO_BYTES = 16 << 20
 
 
 class Hub:
@@ -241,6 +245,36 @@ async def _camera(request: HttpRequest) -> Response:
         return JSONResponse({"error": str(e)}, status_code=502)
 
 
+async def _goto_photo(request: HttpRequest) -> Response:
+    """``POST /api/vehicles/SYS/goto-photo`` with a PNG or JPEG body: upload it and send the
+    vehicle where it was taken; the answer names the key image found (or why not)."""
+    station_loop: StationLoop = request.app.state.station_loop
+    system = request.path_params["system"]
+    origin, host = request.headers.get("origin"), request.headers.get("host")
+    if origin is not None and origin not in (f"http://{host}", f"https://{host}"):
+        return JSONResponse({"error": "a goal photo from another site's page"}, status_code=403)
+    declared = int(request.headers.get("content-length") or 0)
+    if declared > MAX_PHOTO_BYTES:
+        return JSONResponse({"error": f"photo: {declared} bytes, at most {MAX_PHOTO_BYTES}"},
+                            status_code=413)
+    body = bytearray()
+    async for chunk in request.stream():
+        body += chunk
+        if len(body) > MAX_PHOTO_BYTES:
+            return JSONResponse({"error": f"photo: more than {MAX_PHOTO_BYTES} bytes"},
+                                status_code=413)
+    try:
+        header = check_image(bytes(body), "photo")
+        found = await asyncio.wrap_future(station_loop.goto_photo(
+            system, bytes(body), ".png" if header.format is ImageFormat.PNG else ".jpg"))
+    except VmnavError as e:
+        _log.warning("goal photo for vehicle %d: %s", system, e)
+        return JSONResponse({"error": str(e)}, status_code=400 if isinstance(e, InputError)
+                            else 502)
+    return JSONResponse({"photo_id": found.photo_id, "keyframe_id": found.keyframe_id,
+                         "said": found.said})
+
+
 def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
     """The app around a (not yet started) station loop: the loop runs while the app does."""
 
@@ -258,6 +292,7 @@ def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
         Route("/api/vehicles/{system:int}/memory/{kind}/{key:int}.png", _memory_file),
         Route("/api/vehicles/{system:int}/camera.mjpg", _camera),
+        Route("/api/vehicles/{system:int}/goto-photo", _goto_photo, methods=["POST"]),
         WebSocketRoute("/ws", _websocket),
     ], lifespan=lifespan)
     app.state.station_loop = station_loop

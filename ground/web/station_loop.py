@@ -44,7 +44,7 @@ from typing import Any, TypeVar
 
 from ground.camera_stream import find_video_stream
 from ground.fleet import VehicleState
-from ground.station import GroundError, GroundStation
+from ground.station import GroundError, GroundStation, PhotoGoal
 from ground.teleop import PERIOD_NS, DeadMan
 from ground.web.link_quality import LinkQuality
 from ground.web.memory_index import (
@@ -172,6 +172,12 @@ class StationLoop:
                      refresh: bool = False) -> concurrent.futures.Future[VideoStream]:
         """Vehicle ``system_id``'s video stream (rule 6)."""
         return self.submit(lambda station: self._video_stream(system_id, refresh))
+
+    def goto_photo(self, system_id: int, photo: bytes,
+                   suffix: str) -> concurrent.futures.Future[PhotoGoal]:
+        """Send vehicle ``system_id`` to where ``photo`` (checked, ``suffix`` ``.png`` or
+        ``.jpg``) was taken; the answer names the key image it was found at."""
+        return self.submit(lambda station: self._goto_photo(system_id, photo, suffix))
 
     def forget_video_stream(self, system_id: int) -> None:
         """The stream of ``system_id`` did not open: ask its camera again next time (rule 6)."""
@@ -334,6 +340,10 @@ class StationLoop:
                                "name": stream.name,
                                "url": f"/api/vehicles/{vehicle.system_id}/camera.mjpg"}}
         raise InputError("cmd", f"unknown command {command!r}")  # parse_request stops these
+
+    def _goto_photo(self, system_id: int, photo: bytes, suffix: str) -> PhotoGoal:
+        self._aim(system_id)
+        return self.station.goto_photo(photo, suffix)
 
     def _goto(self, vehicle: VehicleState, key: int) -> dict[str, Any]:
         index = self._indexes.get(vehicle.system_id)

@@ -18,6 +18,19 @@ export class MemoryBrowser {
       event.preventDefault();
       this.goto(Number($("goal-key").value));
     };
+    $("goal-photo-go").onclick = () => this.gotoPhoto($("goal-photo").files[0]);
+  }
+
+  // Upload a photo; the robot finds it in its memory (or says why not) and goes there.
+  async gotoPhoto(file) {
+    if (!file) { showMessage("choose a photo first", true); return; }
+    showMessage(`${file.name}: looking it up in the robot's memory...`);
+    const response = await fetch(`/api/vehicles/${this.app.selected}/goto-photo`,
+                                 { method: "POST", body: file });
+    const body = await response.json().catch(() => ({ error: response.statusText }));
+    if (!response.ok) { showMessage(`${file.name}: ${body.error}`, true); return; }
+    showMessage(`${file.name}: found at key image ${body.keyframe_id}; going there`);
+    this.highlight(body.keyframe_id, body.keyframe_id);
   }
 
   url(kind, key) {

@@ -10,6 +10,7 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 from websockets.exceptions import InvalidStatus
@@ -19,6 +20,7 @@ from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory.store import read_memory, thumbnail_path, write_memory
+from tests.ground.test_ground_cmd import PhotoApp
 from tests.ground.web.conftest import Page, RunningWeb, wait_for
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.shared.memory.builders import loop_memory
@@ -215,3 +217,35 @@ def test_a_failed_link_fails_requests_in_one_line_instead_of_hanging(
     reply = page.ask("arm")
     assert reply["error"] == \
         "the ground station's loop has ended (its error is in the server's log)"
+
+
+def post(url: str, data: bytes, headers: dict[str, str] | None = None) -> tuple[int, dict]:
+    request = urllib.request.Request(url, data=data, method="POST", headers=headers or {})
+    try:
+        with urllib.request.urlopen(request, timeout=60) as response:
+            return response.status, json.loads(response.read())
+    except urllib.error.HTTPError as e:
+        return e.code, json.loads(e.read())
+
+
+@pytest.mark.parametrize("app", [PhotoApp()], ids=["photo"])
+def test_a_goal_photo_is_uploaded_and_answered_with_the_key_image(
+        app: FakeApp, web: RunningWeb, page: Page, tmp_path: Path) -> None:
+    photo = cv2.imencode(".png", np.full((60, 80), 128, np.uint8))[1].tobytes()
+    wait_for(lambda: 1 in web.station.fleet.vehicles, "vehicle 1 heard")
+    status, answer = post(web.url + "api/vehicles/1/goto-photo", photo)
+    assert status == 200 and (answer["photo_id"], answer["keyframe_id"]) == (1, 12)
+    assert answer["said"].startswith("photo 1.png: key image 12: 40 matches")
+    assert [(path.name, data) for path, data in app.called("goto_image")] == [("1.png", photo)]
+
+
+@pytest.mark.parametrize(("body", "headers", "code", "error"), [
+    (b"not an image", {}, 400, "photo: not a PNG or JPEG image"),
+    (b"\x89PNG", {"Origin": "http://evil.example"}, 403, "a goal photo from another site"),
+])
+def test_a_bad_goal_photo_is_refused_in_one_line(
+        app: FakeApp, web: RunningWeb, page: Page, body: bytes, headers: dict[str, str],
+        code: int, error: str) -> None:
+    status, answer = post(web.url + "api/vehicles/1/goto-photo", body, headers)
+    assert status == code and answer["error"].startswith(error)
+    assert app.called("goto_image") == []

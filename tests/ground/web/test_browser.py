@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -12,6 +13,7 @@ from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory.store import write_memory
+from tests.ground.test_ground_cmd import PhotoApp
 from tests.ground.web.conftest import RunningWeb, console_errors, wait_for
 from tests.robot.vehicle.fake_app import FakeApp
 from tests.shared.memory.builders import loop_memory
@@ -111,4 +113,22 @@ def test_teach_a_path_driving_with_keys_and_a_gamepad(
     chromium.find_element("id", "teach-stop").click()
     wait_for(lambda: app.called("teach_stop") == [()], "TEACH_STOP at the vehicle")
     wait_for(lambda: text_of(chromium, "message") == "vehicle 1: teaching stopped", "the reply")
+    assert console_errors(chromium) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("app", [PhotoApp()], ids=["photo"])
+def test_a_photo_chosen_in_the_page_is_the_goal(
+        vehicle: UdpVehicle, app: FakeApp, web: RunningWeb, chromium, tmp_path: Path) -> None:
+    photo = tmp_path / "door.png"
+    cv2.imwrite(str(photo), np.full((60, 80), 128, np.uint8))
+    chromium.get(web.url)
+    wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"),
+             "the vehicle in the fleet view")
+    chromium.find_element("id", "goal-photo").send_keys(str(photo))
+    chromium.find_element("id", "goal-photo-go").click()
+    wait_for(lambda: text_of(chromium, "message") ==
+             "door.png: found at key image 12; going there", "the key image found")
+    assert [(path.name, data) for path, data in app.called("goto_image")] == [
+        ("1.png", photo.read_bytes())]
     assert console_errors(chromium) == []
