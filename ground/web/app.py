@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from starlette.applications import Starlette
+from starlette.requests import HTTPConnection
 from starlette.requests import Request as HttpRequest
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
@@ -120,10 +121,10 @@ class Hub:
         self._clients.pop(number, None)
 
 
-def same_origin(websocket: WebSocket) -> bool:
-    """Whether the WebSocket's ``Origin`` is this server, or absent (rule 2)."""
-    origin = websocket.headers.get("origin")
-    host = websocket.headers.get("host")
+def same_origin(connection: HTTPConnection) -> bool:
+    """Whether the WebSocket's (or request's) ``Origin`` is this server, or absent (rule 2)."""
+    origin = connection.headers.get("origin")
+    host = connection.headers.get("host")
     return origin is None or origin in (f"http://{host}", f"https://{host}")
 
 
@@ -250,8 +251,7 @@ async def _goto_photo(request: HttpRequest) -> Response:
     vehicle where it was taken; the answer names the key image found (or why not)."""
     station_loop: StationLoop = request.app.state.station_loop
     system = request.path_params["system"]
-    origin, host = request.headers.get("origin"), request.headers.get("host")
-    if origin is not None and origin not in (f"http://{host}", f"https://{host}"):
+    if not same_origin(request):
         return JSONResponse({"error": "a goal photo from another site's page"}, status_code=403)
     declared = int(request.headers.get("content-length") or 0)
     if declared > MAX_PHOTO_BYTES:

@@ -161,7 +161,7 @@ class VideoWriter:
         self._writer: Generator[None, bytes, None] | None = None
         self._size: tuple[int, int] | None = None
         self._trail: list[tuple[float, float]] = []
-        self._key_images: dict[int, npt.NDArray[np.uint8]] = {}
+        self._key_image_shown: tuple[int, npt.NDArray[np.uint8]] | None = None
         self._count = 0
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
@@ -220,9 +220,11 @@ class VideoWriter:
         return out
 
     def _key_image(self, keyframe_id: int) -> npt.NDArray[np.uint8]:
-        if keyframe_id not in self._key_images:
-            self._key_images[keyframe_id] = self._taught.memory.keyframe(keyframe_id).image
-        return self._key_images[keyframe_id]
+        """The target's image, read once while it stays the target (one kept, not all)."""
+        if self._key_image_shown is None or self._key_image_shown[0] != keyframe_id:
+            self._key_image_shown = (keyframe_id,
+                                     self._taught.memory.keyframe(keyframe_id).image)
+        return self._key_image_shown[1]
 
     def _write(self, image: npt.NDArray[np.uint8]) -> None:
         import imageio_ffmpeg
