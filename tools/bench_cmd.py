@@ -12,9 +12,8 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
-from tools import bench_safety_cmd
-from tools.harness.arg_types import KEY_IMAGE, POSITIVE, POSITIVE_COUNT, SEED
-from tools.harness.scene_args import add_change_arguments
+from tools import bench_safety_cmd, bench_sweep_cmd
+from tools.harness.arg_types import POSITIVE_COUNT, SEED
 from tools.harness.sim_args import add_sim_arguments
 
 
@@ -50,26 +49,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                         help="views for the localization rate [default: 200]")
     vision.add_argument("--query-seed", type=SEED, default=0, help="seed of the query poses")
     vision.set_defaults(run=runner("vision"))
-    follow = bench_sub.add_parser(
-        "follow",
-        help="route following: seeded demos without video, laws side by side",
-        description="For each seed, teach the demo's routes (cached in OUT/seed<N>) and repeat "
-        "the demo's mission once per control law; print per-seed rows and an aggregate per "
-        "law (goal reached, final position error, lateral and heading errors on ground truth).",
-    )
-    add_sim_arguments(follow)
-    follow.add_argument("--seeds", type=int, default=20, metavar="N",
-                        help="number of seeds, from --seed on [default: 20]")
-    follow.add_argument("--laws", nargs="+", default=["paper", "paper+ff"], metavar="LAW",
-                        help="control laws to compare [default: paper paper+ff]")
-    follow.add_argument("--max-omega-deg", type=POSITIVE, default=None, metavar="DEG",
-                        help="turn-rate bound, deg/s [default: the config's, 25]")
-    follow.add_argument("--routes", nargs="+", metavar="NAME", help="routes [default: the demo's]")
-    follow.add_argument("--goal", type=KEY_IMAGE, metavar="ID", help="goal [default: the demo's]")
-    add_change_arguments(follow)
-    follow.add_argument("--out", type=Path, default=Path("out/bench_follow"), metavar="DIR",
-                        help="where the seeds' memories are cached [default: out/bench_follow]")
-    follow.set_defaults(run=runner("follow"))
+    bench_sweep_cmd.add_parsers(bench_sub, runner("follow"), runner("sweep"))
     log = bench_sub.add_parser(
         "log",
         help="field logging: CPU cost of 15 frames/s of 800x600 JPEG plus telemetry",

@@ -16,16 +16,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from robot.config import CONTROL_LAWS
 from shared.errors import InputError
-from tools.harness.arg_types import KEY_IMAGE, POSITIVE
 from tools.harness.progress import Progress
-from tools.harness.scene_args import (
-    add_change_arguments,
-    check_change_fits,
-    scene_change_from_args,
-)
-from tools.harness.sim_args import add_sim_arguments, sim_config_from_args
+from tools.harness.repeat_args import add_repeat_arguments, repeat_setup_from_args
+from tools.harness.scene_args import add_change_arguments
+from tools.harness.sim_args import add_sim_arguments
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig
@@ -56,16 +51,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       "station as separate processes on TCP, HTTP and UDP; teach one route (the "
                       "world's first, or --routes NAME) by teleoperation, then repeat it from "
                       "the usual offset")
-    demo.add_argument("--routes", default=None, metavar="A,B,...",
-                      help="routes to teach, in order [default: all the world's, in its order]")
-    demo.add_argument("--goal", type=KEY_IMAGE, default=None, metavar="ID",
-                      help="goal key image [default: the middle of the second route]")
-    demo.add_argument("--max-omega-deg", type=POSITIVE, default=None, metavar="DEG",
-                      help="bound on the turn rate, deg/s [default: the config's, 25; the "
-                      "paper's 10 cannot follow the lab's 0.8 m radius turns at 0.2 m/s]")
-    demo.add_argument("--law", choices=CONTROL_LAWS, default=None,
-                      help="control law: the paper's eq. (2), or with the teach path's "
-                      "curvature fed forward [default: the config's, paper+ff]")
+    add_repeat_arguments(demo)
     add_change_arguments(demo)
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
     demo.add_argument("--no-log", action="store_true",
@@ -76,26 +62,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     """Teach (or reuse), repeat, write the outputs and print the summary."""
-    from robot.config import load_config
     from tools.figures.demo_plots import VideoWriter, write_plots
     from tools.figures.demo_report import build_report, dispatch_text, log_text, summary_text
-    from tools.harness.demo import (
-        default_goal,
-        follow_config,
-        repeat_in_sim,
-        taught_memory,
-    )
+    from tools.harness.demo import START_OFFSET_M, default_goal, repeat_in_sim, taught_memory
     from tools.harness.demo_log import DemoLog
 
-    change = scene_change_from_args(args)
-    routes = None if args.routes is None else tuple(
-        name.strip() for name in args.routes.split(",") if name.strip())
-    if routes is not None and not routes:
-        raise InputError("--routes", "names no route")
-    sim_config, camera = sim_config_from_args(args)
-    check_change_fits(change, sim_config)
-    config = load_config(args.config)
-    config = follow_config(config, args.law, args.max_omega_deg)
+    setup = repeat_setup_from_args(args)
+    config, sim_config, change, routes = setup.config, setup.sim_config, setup.change, setup.routes
     out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
     if out.exists() and not out.is_dir():
         raise InputError(out, "is not a folder")
@@ -103,12 +76,13 @@ def run(args: argparse.Namespace) -> int:
     if args.hil:
         if routes is not None and len(routes) != 1:
             raise InputError("--routes", "--hil teaches one route")
-        if not change.is_none:
-            raise InputError("--hil", "repeats in the taught world: --lighting, --moved, "
-                             "--removed and --doors are for the lock-step demo")
+        if not change.is_none or setup.start_offset_m != START_OFFSET_M:
+            raise InputError("--hil", "repeats in the taught world from the usual offset: "
+                             "--lighting, --moved, --removed, --doors and --start-offset are "
+                             "for the lock-step demo")
         return run_hil_demo(out, config, sim_config, None if routes is None else routes[0])
     started = time.perf_counter()
-    taught = taught_memory(out, routes, config, sim_config, camera)
+    taught = taught_memory(out, routes, config, sim_config, setup.camera)
     teach_s = time.perf_counter() - started
     goal = default_goal(taught) if args.goal is None else args.goal
     video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config, goal)
@@ -127,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
                 consumers.append(lambda sim, frame, sample: bar.update(detail=_status(sample)))
             repeat = repeat_in_sim(taught, goal, config, sim_config, change, out,
                                    _chain(consumers), robot_log,
-                                   None if args.no_log else out / "logs")
+                                   None if args.no_log else out / "logs",
+                                   start_offset_m=setup.start_offset_m)
     finally:
         if video is not None:
             video.close()

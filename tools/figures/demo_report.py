@@ -26,7 +26,7 @@ from robot.config import ControlConfig
 from robot.control_law import settling_distance_m
 from robot.mission import MissionState
 from shared.pose import Pose2
-from tools.harness.demo import START_OFFSET_M, RepeatRun
+from tools.harness.demo import RepeatRun
 from tools.harness.teach import TaughtMemory
 
 if TYPE_CHECKING:
@@ -137,7 +137,7 @@ def build_report(run: RepeatRun, taught: TaughtMemory, control: ControlConfig,
                  wall_time_s: float) -> dict[str, object]:
     """The ``report.json`` content (issue 4, item 7)."""
     result = run.result
-    settle_m = settling_distance_m(control.pole_1_m, START_OFFSET_M, SETTLED_M)
+    settle_m = settling_distance_m(control.pole_1_m, run.start_offset_m, SETTLED_M)
     follow = [s.record for s in run.samples if s.record.follow is not None]
     matches = [r.follow.vision.matches for r in follow
                if r.follow is not None and r.follow.vision is not None]

@@ -95,10 +95,12 @@ class RepeatRun:
     sim_time_s: float
     dispatch: DispatchResult
     changed: ChangedWorld
+    start_offset_m: float = START_OFFSET_M
 
 
 def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig,
-                  sim_config: SimConfig, camera: CameraModel) -> TaughtMemory:
+                  sim_config: SimConfig, camera: CameraModel,
+                  processes: int | None = None) -> TaughtMemory:
     """Teach ``routes``, joined, into ``out/memory`` (or reuse the memory taught there
     before: :func:`tools.harness.teach.teach_memory` with ``folder=out``).
 
@@ -110,6 +112,8 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
         config: teach, features and localization settings.
         sim_config: the world and seed (people are left out while teaching).
         camera: the simulated camera.
+        processes: processes the routes are driven in (None: one per CPU, see
+            :func:`tools.harness.teach.teach_memory`).
 
     Raises:
         InputError: an unknown route, a route the teach driver could not finish, or a
@@ -122,21 +126,24 @@ def taught_memory(out: Path, routes: tuple[str, ...] | None, config: VmnavConfig
 
     teach_config = replace(sim_config, people=replace(sim_config.people, count=0))
     return teach_memory(load_world(sim_config.world), routes, config, teach_config, camera,
-                        join=True, folder=out)
+                        join=True, folder=out, processes=processes)
 
 
 def follow_config(config: VmnavConfig, law: str | None = None,
-                  max_omega_deg: float | None = None) -> VmnavConfig:
-    """``config`` with another control law and turn-rate bound (deg/s); None keeps the
-    config's (the robot's defaults, ``robot.config.ControlConfig``).
+                  max_omega_deg: float | None = None,
+                  speed_m_s: float | None = None) -> VmnavConfig:
+    """``config`` with another control law, turn-rate bound (deg/s) and servo speed (m/s);
+    None keeps the config's (the robot's defaults, ``robot.config.ControlConfig``).
 
     Raises:
         InputError: ``max_omega_deg`` is not > 0.
-        ConfigError: an unknown law.
+        ConfigError: an unknown law, a speed out of the config's range.
     """
     control = config.control
     if law is not None:
         control = replace(control, law=law)
+    if speed_m_s is not None:
+        control = replace(control, speed_m_s=speed_m_s)
     if max_omega_deg is not None:
         if not max_omega_deg > 0:
             raise InputError("--max-omega-deg", f"must be > 0, got {max_omega_deg}")
@@ -153,11 +160,12 @@ def default_goal(taught: TaughtMemory) -> int:
     return ids[len(ids) // 2]
 
 
-def start_pose(taught: TaughtMemory) -> Pose2:
-    """Off the first path at its key image ``START_KEY_INDEX``: shifted left and turned."""
+def start_pose(taught: TaughtMemory, offset_m: float = START_OFFSET_M) -> Pose2:
+    """Off the first path at its key image ``START_KEY_INDEX``: shifted ``offset_m`` to the
+    left (negative: right) and turned ``START_OFFSET_DEG``."""
     ids = taught.memory.paths[taught.path_ids[0]].keyframe_ids
     x, y, yaw = taught.true_poses[ids[min(START_KEY_INDEX, len(ids) - 1)]]
-    return Pose2(x - START_OFFSET_M * math.sin(yaw), y + START_OFFSET_M * math.cos(yaw),
+    return Pose2(x - offset_m * math.sin(yaw), y + offset_m * math.cos(yaw),
                  yaw + math.radians(START_OFFSET_DEG))
 
 
@@ -165,7 +173,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                   sim_config: SimConfig, change: SceneChange, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
                   robot_log: FieldLog | None = None, ground_log: Path | None = None,
-                  on_sim: Callable[[Simulation], None] | None = None) -> RepeatRun:
+                  on_sim: Callable[[Simulation], None] | None = None,
+                  start_offset_m: float = START_OFFSET_M,
+                  vehicle_dir: Path | None = None) -> RepeatRun:
     """Place the robot, dispatch the goal from the ground station, and let the robot
     localize, plan and follow (see the module docstring).
 
@@ -176,8 +186,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         sim_config: the repeat's simulation (people, seed, world).
         change: what changed since the teach (light, objects moved); the people are
             ``sim_config.people``.
-        out: the output folder; the vehicle keeps its parameters and uploads in
-            ``out/vehicle`` (parameters start from ``config`` on every run).
+        out: the output folder (the memory is ``out/memory``); the vehicle keeps its
+            parameters and uploads in ``out/vehicle`` (parameters start from ``config`` on
+            every run).
         on_cycle: called after each mission cycle with the simulation and the frame (video).
         robot_log: the robot's field log (missions, cycles, events, notes, its MAVLink
             traffic stamped on the simulation clock), finished when the repeat ends;
@@ -185,6 +196,9 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         ground_log: the ground station's log folder; None: no ground log.
         on_sim: called with the repeat's simulation once the robot is placed (a
             benchmark's truth: step hooks).
+        start_offset_m: the start's shift left of the first path, m (:func:`start_pose`).
+        vehicle_dir: the vehicle's folder instead of ``out/vehicle`` (repeats of one
+            memory running at once each need their own).
 
     Raises:
         InputError: ``goal_id`` is not a key image of the memory, the start
@@ -208,7 +222,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
         raise InputError("--goal", f"key image {goal_id} is not in the memory "
                                    f"(ids 0..{max(memory.keyframes)})")
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
-    start = start_pose(taught)
+    start = start_pose(taught, start_offset_m)
     taught_world = load_world(sim_config.world)
     changed = changed_world(taught_world, change, sim_config.seed, (start.x_m, start.y_m))
     sim = Simulation(changed.world, sim_config, landmark_world=taught_world)
@@ -219,8 +233,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     clock = SimClock(sim)
     base, _ = lockstep_pioneer(clock, config.pioneer, rng)
     frames = SimFrameSource(sim, memory.camera, clock)
-    files = VehicleFiles(out / "memory", out / "vehicle" / "upload",
-                         out / "vehicle" / "params.parm")
+    vehicle = out / "vehicle" if vehicle_dir is None else vehicle_dir
+    files = VehicleFiles(out / "memory", vehicle / "upload", vehicle / "params.parm")
     files.param_file.unlink(missing_ok=True)
     taught_m = sum(memory.keyframes[p.keyframe_ids[-1]].distance_m
                    for p in memory.paths.values())
@@ -241,7 +255,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                                             f"{_DISPATCH_TIMEOUT_S:.0f} s")
     return RepeatRun(result=result, start_pose=start, goal_id=goal_id,
                      samples=tuple(watch.samples), sim_time_s=sim.now_ns / 1e9,
-                     dispatch=dispatch, changed=changed)
+                     dispatch=dispatch, changed=changed, start_offset_m=start_offset_m)
 
 
 def changed_world(world: World, change: SceneChange, seed: int,

@@ -181,6 +181,7 @@ def teach_memory(
     *,
     join: bool,
     folder: Path | None = None,
+    processes: int | None = None,
 ) -> TaughtMemory:
     """Teach routes of ``world`` (:func:`teach_in_sim`, each from its start pose) into one
     memory, one path per route, keeping the true pose of every key image.
@@ -200,6 +201,8 @@ def teach_memory(
             there with the same key is read instead of taught; a memory there taught
             otherwise (or without ``teach.json``) is an error, never overwritten; a
             folder :func:`shared.memory.open_or_create` refuses is refused before driving.
+        processes: at most this many processes drive the routes (None: one per CPU this
+            process may use; 1: in this process, e.g. a sweep's worker).
 
     Raises:
         InputError: an unknown route, a world without routes, a drive that does not reach
@@ -227,7 +230,7 @@ def teach_memory(
     true_poses: dict[int, Pose2] = {}
     path_ids: list[int] = []
     taught_routes: list[TaughtRoute] = []
-    for taught in _drive_routes(world, routes, config, sim_config, camera):
+    for taught in _drive_routes(world, routes, config, sim_config, camera, processes):
         route = taught.route
         path = memory.add_path(route.name, [k.record for k in taught.key_images])
         if join:
@@ -246,18 +249,20 @@ def teach_memory(
 
 
 def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
-                  sim_config: SimConfig, camera: CameraModel) -> list[TaughtRoute]:
+                  sim_config: SimConfig, camera: CameraModel,
+                  processes: int | None) -> list[TaughtRoute]:
     """:func:`teach_in_sim` for each of ``routes``, in their order: in this process when
     one route or one CPU, else in a pool of processes (spawned: this process may hold
-    threads), one per CPU this process may use, at most one per route, the longest
-    routes first so that the pool ends together; each renders on one thread.
+    threads), one per CPU this process may use (at most ``processes``), at most one per
+    route, the longest routes first so that the pool ends together; each renders on one
+    thread.
 
     Each drive's end is logged as it comes (:func:`_announce`).
 
     Raises:
         InputError: a drive did not reach its route's end (the first to end so).
     """
-    workers = min(len(routes), len(os.sched_getaffinity(0)))
+    workers = min(len(routes), len(os.sched_getaffinity(0)), processes or len(routes))
     started = time.monotonic()
     if workers <= 1:
         return [_announce(teach_in_sim(world, route, config, sim_config, camera), started)
