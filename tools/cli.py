@@ -37,12 +37,13 @@ from tools import (
     replay_cmd,
     robot_cmd,
     sim_cmd,
+    sweep_cmd,
     teach_cmd,
     vision_cmd,
 )
 
 COMMANDS = (sim_cmd, calibrate, bench_cmd, memory_cmd, teach_cmd, demo_cmd, pioneer_cmd, robot_cmd,
-            log_cmd, replay_cmd, ground_cmd, vision_cmd)
+            log_cmd, replay_cmd, ground_cmd, vision_cmd, sweep_cmd)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -38,6 +38,7 @@ def check_plan(plan: SweepPlan) -> None:
     from sim.world import load_world
     from tools.harness.demo import follow_config
     from tools.harness.repeat_args import parse_repeat_options, repeat_setup_from_args
+    from tools.harness.scene_args import scene_change_from_args
     from tools.harness.teach import find_route
 
     shared = plan.shared_argv()
@@ -58,6 +59,8 @@ def check_plan(plan: SweepPlan) -> None:
                         find_route(world, route)
                 elif name == "calibration":
                     load_camera(str(value))
+                elif name in CHANGE_AXES:
+                    scene_change_from_args(args)
                 elif name in ("law", "speed_m_s"):
                     follow_config(config, args.law, plan.max_omega_deg, args.speed)
     names = [name for name in CHANGE_AXES if name in axes]

@@ -84,7 +84,7 @@ class ResultsTable:
         if folder.exists() and not folder.is_dir():
             raise InputError(folder, "is not a folder")
         if meta.exists():
-            stored = _read_json(meta)
+            stored = read_json(meta)
             if stored.get("plan") != plan:
                 raise InputError(folder, "holds the results of another plan (sweep.json): "
                                  "choose another --out")
@@ -157,7 +157,7 @@ def read_rows(path: Path) -> list[dict[str, Any]]:
     return rows
 
 
-def _read_json(path: Path) -> dict[str, Any]:
+def read_json(path: Path) -> dict[str, Any]:
     try:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as e:
