@@ -59,7 +59,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     from tools.sweep.executors import Executor, PoolExecutor, RayExecutor, cpu_count
     from tools.sweep.plan import Case, read_plan
     from tools.sweep.plan_check import check_plan
-    from tools.sweep.results import ResultsTable, code_version
+    from tools.sweep.results import MEMORIES_NAME, ResultsTable, code_version
     from tools.sweep.runner import outcome_text, run_sweep
 
     plan = read_plan(args.plan)
@@ -67,13 +67,17 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     cases = plan.cases()[:args.cases]
     out: Path = args.out or Path("out/sweep") / args.plan.stem
     version = code_version()
-    table = ResultsTable(out, plan.to_dict(), version)
+    executor: Executor = (RayExecutor(args.ray, args.workers) if args.ray is not None
+                          else PoolExecutor(args.workers or cpu_count()))
+    try:
+        table = ResultsTable(out, plan.to_dict(), version)
+    except InputError:
+        executor.close()
+        raise
     varying = [name for name, values in plan.axes if len(values) > 1]
     before = len(table.done)
     print(f"vmnav sweep: {len(cases)} cases, {before} done before; results in {table.path}",
           file=sys.stderr, flush=True)
-    executor: Executor = (RayExecutor(args.ray, args.workers) if args.ray is not None
-                          else PoolExecutor(args.workers or cpu_count()))
     count = before
 
     def line(case: Case, row: dict[str, object]) -> None:
@@ -84,7 +88,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
               f"{outcome_text(row)}", file=sys.stderr, flush=True)
 
     try:
-        rows = run_sweep(cases, lambda case: out / "memories" / case.memory_name, executor,
+        rows = run_sweep(cases, lambda case: out / MEMORIES_NAME / case.memory_name, executor,
                          table, version, line)
     finally:
         executor.close()

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import socket
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any, Protocol
@@ -104,6 +105,23 @@ class PoolExecutor:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def check_reachable(address: str) -> None:
+    """Refuse at once a Ray address where nothing answers (Ray itself retries for minutes).
+
+    Raises:
+        InputError: not ``HOST:PORT`` or ``ray://HOST:PORT``, or no TCP connection in 5 s.
+    """
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        raise InputError("--ray", f"{address!r} is not local, auto, HOST:PORT or "
+                         "ray://HOST:PORT")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5.0).close()
+    except OSError as e:
+        raise InputError("--ray", f"no Ray cluster answers at {address}: "
+                         f"{e.strerror or e}") from None
+
+
 class RayExecutor:
     """Tasks on Ray: ``local`` starts Ray on this machine with ``workers`` CPUs; ``auto``
     joins the cluster started here (``ray start``); anything else is a cluster's address.
@@ -121,6 +139,8 @@ class RayExecutor:
                              "pip install 'ray>=2.40')") from None
         self._ray = ray
         local = address == "local"
+        if address not in ("local", "auto"):
+            check_reachable(address)
         options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
         if local:
             options.update(num_cpus=workers or cpu_count(),

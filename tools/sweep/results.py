@@ -5,8 +5,10 @@ and a finished one is not run again.
 Rules:
 
 1. A folder is a sweep's when it holds ``sweep.json``; a sweep writes into a new or empty
-   folder, or into its own with the same plan (resuming). Another plan's folder, or a folder
-   holding other files, is refused.
+   folder, or into its own with the same plan (resuming), or into a folder holding only
+   ``memories/`` (memories taught by another sweep, copied to be reused: each is checked
+   against what it was taught from). Another plan's folder, or a folder holding other
+   files, is refused.
 2. A row is written, flushed and synced when its case ends; an interrupted write leaves at
    most the last line cut short, which is dropped (and its case run again) on resumption.
 3. Text columns (:data:`TEXT_COLUMNS`) are stored as they are (empty: None); every other
@@ -31,6 +33,8 @@ from tools.sweep.plan import AXES
 
 PLAN_NAME = "sweep.json"
 RESULTS_NAME = "results.csv"
+#: The taught memories' folder in a sweep's folder, one folder per memory.
+MEMORIES_NAME = "memories"
 #: The figures of a case (``tools.figures.demo_report.build_report``'s keys).
 FIGURES = ("goal_key_image", "reached_goal", "reason", "final_position_error_m",
            "lateral_rms_m", "lateral_max_m", "heading_rms_deg", "key_images_route",
@@ -88,7 +92,7 @@ class ResultsTable:
             if stored.get("plan") != plan:
                 raise InputError(folder, "holds the results of another plan (sweep.json): "
                                  "choose another --out")
-        elif folder.exists() and any(folder.iterdir()):
+        elif folder.exists() and any(p.name != MEMORIES_NAME for p in folder.iterdir()):
             raise InputError(folder, "holds files of no sweep: choose a new or empty --out")
         else:
             folder.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,106 @@
+"""A tiny sweep end to end on real processes: the lab's 2.5 m route ``east_a`` taught by the
+sweep, three cases repeating it of which one crashes (a start 40 m off the route, outside
+the lab); interrupted with SIGINT after its first row, then resumed; the same cases on a
+local Ray, on the memory the pool taught, give the same figures as on the pool."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tools.cli import main
+from tools.harness.short_routes import write_short_routes_world
+from tools.sweep.results import FIGURES, TIMING, read_rows
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def write_plan(folder: Path, world: Path, offsets: list[float]) -> Path:
+    """``east_a`` of the short routes' world, goal 4 (two key images past the start), one
+    seed, ``offsets``."""
+    path = folder / "plan.toml"
+    path.write_text(f'[sweep]\nroutes = ["east_a"]\ngoal = 4\n\n[axes]\n'
+                    f'world = ["{world}"]\nseed = [1]\nstart_offset_m = {offsets}\n')
+    return path
+
+
+@pytest.fixture(scope="module")
+def interrupted_sweep(tmp_path_factory) -> tuple[Path, str, str, str]:
+    """The sweep run as a process, SIGINT after its first row, then resumed in another.
+    Returns (its folder, the results' text after the interruption, the resumed run's
+    stderr, stdout)."""
+    folder = tmp_path_factory.mktemp("sweep")
+    plan = write_plan(folder, write_short_routes_world(folder), [0.3, 0.2, 40.0])
+    out = folder / "out"
+    command = [sys.executable, "-m", "tools.cli", "sweep", "run", str(plan), "--out", str(out),
+               "--workers", "1"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(command, cwd=folder, env=env, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE, text=True)
+    results = out / "results.csv"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and process.poll() is None:
+        if results.exists() and read_rows(results):
+            process.send_signal(signal.SIGINT)
+            break
+        time.sleep(0.1)
+    _, first_err = process.communicate(timeout=120)
+    assert process.returncode == 130, first_err
+    before = results.read_text()
+    resumed = subprocess.run(  # resumed: a fresh process, as after a crash or Ctrl-C
+        command, cwd=folder, env=env, capture_output=True, text=True, timeout=300, check=False)
+    assert resumed.returncode == 0, resumed.stderr
+    return out, before, resumed.stderr, resumed.stdout
+
+
+@pytest.mark.slow
+def test_an_interrupted_sweep_resumes_where_it_stopped(interrupted_sweep, tmp_path) -> None:
+    out, before, err, summary = interrupted_sweep
+    (tmp_path / "before.csv").write_text(before)
+    done = len(read_rows(tmp_path / "before.csv"))
+    assert 1 <= done <= 2  # the rows written when interrupted
+    assert (out / "results.csv").read_text().startswith(before)
+    assert f"3 cases, {done} done before" in err
+    rows = read_rows(out / "results.csv")
+    assert len(rows) == len({row["case_id"] for row in rows}) == 3
+    assert "3 cases: 2 reached the goal, 0 did not, 1 crashed" in summary
+    ok = [row for row in rows if row["status"] == "ok"]
+    assert all(row["goal_key_image"] == 4 and row["worker_peak_rss_mb"] < 1500 for row in ok)
+    assert all(row["code_version"].startswith("vmnav ") for row in rows)
+
+
+@pytest.mark.slow
+def test_a_crashing_case_is_a_row_with_its_traceback(interrupted_sweep) -> None:
+    out, _, err, _ = interrupted_sweep
+    (crashed,) = [row for row in read_rows(out / "results.csv") if row["status"] == "crashed"]
+    assert crashed["start_offset_m"] == 40.0 and crashed["reached_goal"] is None
+    assert crashed["error"].startswith("Traceback (most recent call last)")
+    assert "--start-offset 40.0" in crashed["options"]
+    assert f"{crashed['case_id']} start_offset_m=40.0: crashed (" in err
+
+
+@pytest.mark.slow
+def test_ray_gives_the_pool_s_figures(interrupted_sweep, tmp_path, capsys) -> None:
+    """Two cases as Ray tasks (a local Ray of 2 CPUs), on the memory the pool's sweep
+    taught (copied: a folder holding only memories is a sweep's to start): each case's
+    figures are those its pool process gave, the wall-clock ones aside."""
+    pool_out, _, _, _ = interrupted_sweep
+    plan = write_plan(tmp_path, pool_out.parent / "lab_short.toml", [0.3, 0.2])
+    shutil.copytree(pool_out / "memories", tmp_path / "out" / "memories")
+    assert main(["sweep", "run", str(plan), "--out", str(tmp_path / "out"),
+                 "--ray", "local", "--workers", "2"]) == 0
+    assert "2 cases: 2 reached the goal" in capsys.readouterr().out
+    on_pool = {row["case_id"]: row for row in read_rows(pool_out / "results.csv")}
+    on_ray = read_rows(tmp_path / "out" / "results.csv")
+    assert len(on_ray) == 2
+    for row in on_ray:
+        for key in FIGURES:
+            if key not in TIMING:
+                assert row[key] == on_pool[row["case_id"]][key], key
