@@ -24,6 +24,8 @@ FILES = {
     "notjson.json": "{",
     "notimg.png": "xx",
     "empty.mcap": "",
+    "plan.toml": "[axes]\nseed = [1]\n",
+    "windplan.toml": "[axes]\nwind = [1]\n",
 }
 SNAP = ["sim", "snapshot", "--out", "o"]
 SERVE = ["sim", "serve", "--aria", "tcp:0", "--duration", "0.1"]
@@ -93,6 +95,14 @@ CASES: list[tuple[list[str], int, str]] = [
     (["demo", "--config", "badsafety.toml"], 1, "badsafety.toml: safety: stop_distance_m"),
     (["demo", "--config", "badretain.toml"], 1, "badretain.toml: log: retain_max_age_days"),
     # files
+    (["sweep", "run", "windplan.toml"], 1, "windplan.toml: [axes] wind: unknown axis"),
+    (["sweep", "run", "nothere.toml"], 1, "nothere.toml: cannot read: No such file"),
+    (["sweep", "run", "plan.toml", "--ray", "nohost"], 1,
+     "--ray: 'nohost' is not local, auto, HOST:PORT or ray://HOST:PORT"),
+    (["sweep", "run", "plan.toml", "--ray", "127.0.0.1:1"], 1,
+     "--ray: no Ray cluster answers at 127.0.0.1:1: Connection refused"),
+    (["sweep", "report", "nowhere"], 1, "nowhere: is not a sweep's folder (no sweep.json)"),
+    (["bench", "sweep", "--cases", "3"], 1, "--cases: must be a multiple of 4, got 3"),
     ([*SNAP, "--world", "moon"], 1, "moon: unknown world (built-in: building, campus, lab"),
     ([*SNAP, "--calibration", "badcam.json"], 1, "badcam.json: missing field 'format_version'"),
     ([*SNAP, "--calibration", "notjson.json"], 1, "notjson.json: not valid JSON"),

@@ -51,6 +51,7 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "fuzz": ("--inputs", "1000"),
     "real": ("--repeats", "3"),
     "safety": ("--seeds", "1", "--worlds", "lab", "--estops", "4"),
+    "sweep": ("--cases", "4"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).
 EXIT_BENCH_FAILED = 1
@@ -95,11 +96,13 @@ class BenchRun:
 
 def bench_arguments(name: str, quick: bool, out_dir: Path) -> list[str]:
     """The arguments ``bench all`` gives benchmark ``name``: the quick sizes, and for
-    ``follow`` its memory cache under ``out_dir`` (one per size: the cache is keyed
-    by routes and refuses others)."""
+    ``follow`` and ``sweep`` their memory caches under ``out_dir`` (follow's one per size:
+    the cache is keyed by routes and refuses others)."""
     arguments = list(QUICK_ARGS.get(name, ())) if quick else []
     if name == "follow":
         arguments += ["--out", str(out_dir / ("follow-quick" if quick else "follow"))]
+    if name == "sweep":
+        arguments += ["--out", str(out_dir / "sweep")]
     return arguments
 
 

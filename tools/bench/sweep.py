@@ -29,6 +29,15 @@ if TYPE_CHECKING:
 
 #: What marks a folder as this benchmark's (it writes only into its own or a new one).
 MARK = "bench_sweep.json"
+#: Issue 20's numbers: figure -> (comparison, bound). Ray "within 15 %" of the pool: no
+#: slower than 1.15 times its wall time (faster is fine).
+TARGETS: dict[str, tuple[str, float]] = {
+    "runs.pool_2.speedup_vs_pool_1": (">=", 1.7),
+    "runs.ray_local_2.wall_vs_pool_2": ("<=", 1.15),
+    "identical_figures": (">=", 1),
+    "runs.pool_2.worker_peak_rss_mb_max": ("<", 1536),
+    "runs.ray_local_2.worker_peak_rss_mb_max": ("<", 1536),
+}
 
 
 def short_plan(world_file: Path, cases: int) -> SweepPlan:

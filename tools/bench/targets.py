@@ -4,7 +4,8 @@ The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
 6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
 input crashes or hangs a decoder, and every attack of ``bench hostile`` is met, 16: real
 images in ``bench real``, and unrelated real images never pass localization's acceptance
-test in ``bench chance``; DESIGN.md sec. 6 gathers them). The simulator's, the vision
+test in ``bench chance``, 20: a sweep's speed-up on 2 workers, Ray, memory per worker;
+DESIGN.md sec. 6 gathers them). The simulator's, the vision
 benchmark's, the real images' and the hostile parts' own modules hold theirs (their JSON
 prints them) and are read from there, not copied.
 
@@ -35,6 +36,7 @@ from tools.bench.hostile_traffic import MAX_FTP_CACHE_MB, MAX_REJECTED_LOG_MB
 from tools.bench.real import TARGETS as REAL_TARGETS
 from tools.bench.safety import TARGETS as SAFETY_TARGETS
 from tools.bench.sim import CORNER_ERROR_TARGET_PX, RENDER_FPS_TARGET
+from tools.bench.sweep import TARGETS as SWEEP_TARGETS
 from tools.bench.vision import TARGETS as VISION_TARGETS
 
 #: The law the route-following targets apply to: the robot's default.
@@ -128,6 +130,8 @@ TARGETS: tuple[Target, ...] = (
       for figure, (comparison, bound) in REAL_TARGETS.items()),
     *(Target("safety", f"summary.{figure}", comparison, bound, "issue 17")
       for figure, (comparison, bound) in SAFETY_TARGETS.items()),
+    *(Target("sweep", figure, comparison, bound, "issue 20")
+      for figure, (comparison, bound) in SWEEP_TARGETS.items()),
 )
 
 

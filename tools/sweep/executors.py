@@ -85,7 +85,7 @@ class PoolExecutor:
     def __init__(self, workers: int) -> None:
         if workers < 1:
             raise InputError("--workers", f"must be >= 1, got {workers}")
-        self.description = f"pool of {workers} processes"
+        self.description = f"pool of {workers} process{'es' if workers > 1 else ''}"
         self.workers = workers
         self.render_threads: int | None = None
         self._pool = ProcessPoolExecutor(
