@@ -77,7 +77,7 @@ def test_a_failed_benchmark_is_reported_and_the_others_still_run(
 @pytest.mark.parametrize("argv, message", [
     (["--only", "link,nope"],
      "--only: unknown benchmark nope "
-     "(known: sim, vision, follow, log, link, faults, fuzz, hostile, real, safety, chance)"),
+     "(known: sim, vision, follow, sweep, log, link, faults, fuzz, hostile, real, safety, chance)"),
     (["--only", ","], "--only: no benchmark"),
     (["--bench-args", "nope=--x"], "--bench-args: 'nope=--x' is not NAME=ARGS"),
     (["--timeout-s", "0"], "--timeout-s: must be > 0"),
@@ -96,12 +96,14 @@ def test_a_hung_benchmark_times_out() -> None:
 
 def test_quick_arguments_parse_for_every_benchmark(tmp_path: Path) -> None:
     parser = build_parser()
-    for name in ("sim", "vision", "follow", "log", "link", "faults", "real"):
+    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real"):
         arguments = bench_arguments(name, quick=True, out_dir=tmp_path)
         assert arguments[:len(QUICK_ARGS[name])] == list(QUICK_ARGS[name])
         parser.parse_args(["bench", name, *arguments])
     assert bench_arguments("follow", quick=False, out_dir=tmp_path) == [
         "--out", str(tmp_path / "follow")]
+    assert bench_arguments("sweep", quick=False, out_dir=tmp_path) == [
+        "--out", str(tmp_path / "sweep")]
     assert bench_arguments("later", quick=True, out_dir=tmp_path) == []
 
 
@@ -156,12 +158,13 @@ def test_figures_are_finite_numbers_at_a_dotted_path() -> None:
 
 
 def test_every_benchmark_has_targets_from_the_issues() -> None:
-    for name in ("sim", "vision", "follow", "log", "link", "faults", "real"):
+    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real"):
         assert targets_of(name), name
     figures = {(t.benchmark, t.figure): t.text for t in TARGETS}
     assert figures[("link", "dispatch_ack_ms_p95")] == "< 50"
     assert figures[("link", "ground_cpu_fraction_20_vehicles")] == "< 0.3"
     assert figures[("log", "log_overhead_core_fraction")] == "< 0.1"
     assert figures[("follow", "aggregate.paper+ff.lateral_rms_m_max")] == "<= 0.03"
+    assert figures[("sweep", "runs.pool_2.speedup_vs_pool_1")] == ">= 1.7"
     assert figures[("follow", "aggregate.paper+ff.loop_ms_p50_median")] == "< 20"
     assert figures[("sim", "render_fps_median")] == ">= 60"
