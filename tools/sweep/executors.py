@@ -15,6 +15,7 @@ import os
 import socket
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 from shared.errors import InputError
@@ -78,6 +79,10 @@ class InlineExecutor:
 class PoolExecutor:
     """``workers`` spawned processes of this machine, each rendering on its share of the CPUs.
 
+    A worker that dies (killed, out of memory) breaks the pool: the tasks it held fail
+    (:class:`~concurrent.futures.process.BrokenProcessPool`), and the next task submitted
+    starts a new pool, so the sweep goes on.
+
     Raises:
         InputError: ``workers`` below 1.
     """
@@ -88,9 +93,12 @@ class PoolExecutor:
         self.description = f"pool of {workers} process{'es' if workers > 1 else ''}"
         self.workers = workers
         self.render_threads: int | None = None
-        self._pool = ProcessPoolExecutor(
-            workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=set_worker_threads, initargs=(max(1, cpu_count() // workers),))
+        self._pool = self._start()
+
+    def _start(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
+            self.workers, mp_context=multiprocessing.get_context("spawn"),
+            initializer=set_worker_threads, initargs=(max(1, cpu_count() // self.workers),))
 
     def teach_processes(self, memories: int) -> int | None:
         """The workers shared out: fewer memories than workers each drive routes in
@@ -98,7 +106,12 @@ class PoolExecutor:
         return max(1, self.workers // max(1, memories))
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Future[Any]:
-        return self._pool.submit(fn, *args)
+        try:
+            return self._pool.submit(fn, *args)
+        except BrokenProcessPool:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._start()
+            return self._pool.submit(fn, *args)
 
     def close(self) -> None:
         """Stop the processes (tasks not started are cancelled)."""

@@ -9,7 +9,8 @@ The loop (the only code here that waits):
 3. When a memory's teach ends, its cases are submitted; a teach that fails fails each of
    its cases with the teach's traceback.
 4. Each case's row is appended to the table as it ends (whatever the order), with the
-   code version and the case's options; a case that crashed (or whose worker died) is a
+   code version, the case's options and its memory's teach time (the time to find it
+   when it was taught before); a case that crashed (or whose worker died) is a
    row with status ``crashed`` and its traceback, and the sweep goes on.
 """
 
@@ -69,7 +70,7 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
 
     processes = executor.teach_processes(len(groups))
     teaches: dict[Future[Any], Path] = {}
-    running: dict[Future[Any], Case] = {}
+    running: dict[Future[Any], tuple[Case, float | None]] = {}
     with Progress(f"{description} on {executor.description}", len(todo)) as bar:
         for folder, group in groups.items():
             teaches[_submit(executor, teach_task, group[0].memory_argv, folder, processes,
@@ -81,7 +82,8 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
             for future in finished:
                 result = _result(future)
                 if future in running:
-                    record(running.pop(future), result)
+                    case, teach_s = running.pop(future)
+                    record(case, {**result, "teach_wall_time_s": teach_s})
                     bar.update(len(rows) - (len(cases) - len(todo)),
                                f"{failed} failed" if failed else "")
                     continue
@@ -93,7 +95,7 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
                         continue
                     submitted = _submit(executor, case_task, case.argv, folder,
                                         executor.render_threads)
-                    running[submitted] = case
+                    running[submitted] = (case, result["teach_wall_time_s"])
                     pending.add(submitted)
     return [rows[case.case_id] for case in cases]
 
