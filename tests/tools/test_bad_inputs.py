@@ -42,6 +42,8 @@ CASES: list[tuple[list[str], int, str]] = [
     (["demo", "--goal", "-5"], 2, "argument --goal: must be an integer in [0, 2147483647]"),
     (["demo", "--max-omega-deg", "0"], 2, "argument --max-omega-deg: must be a finite number > 0"),
     (["demo", "--law", "pid"], 2, "argument --law: invalid choice: 'pid'"),
+    (["demo", "--speed", "0"], 2, "argument --speed: must be a finite number > 0"),
+    (["demo", "--start-offset", "nan"], 2, "argument --start-offset: must be a finite number"),
     (["bench", "sim", "--frames", "0"], 2, "argument --frames: must be an integer >= 1"),
     (["memory", "route", "--memory", "m", "1", "-2"], 2, "argument GOAL: must be an integer"),
     (["ground", "--system", "300", "status"], 2, "argument --system: must be an integer in"),

@@ -22,7 +22,9 @@ repetition of its cases: one with ``--quick``, ten in the full run (measured 20 
 ``fuzz`` (issue 15) adds about 30 s with ``--quick`` (1,000 inputs per target) and
 about 16 min in the full run (100,000 per target; docs/fuzzing.md); ``hostile``
 about 2 min in both (it has no reduced size); ``real`` (issue 16) about 20 s (15 s with
-``--quick``: 3 timed pairs instead of 10).
+``--quick``: 3 timed pairs instead of 10); ``sweep`` (issue 20) about 7.5 min measured
+(20 cases on 1 and 2 workers and Ray, 5 memories taught) and about 2 min with ``--quick``
+(4 cases, 1 memory; estimated).
 """
 
 from __future__ import annotations
