@@ -98,15 +98,21 @@ class FoxgloveClient:
                                     zip(subscriptions, sorted(wanted), strict=True)})
         self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
 
-    def receive_until(self, done: Callable[[list[Message]], bool],
-                      timeout_s: float = 20.0) -> list[Message]:
+    def receive_until(self, done: Callable[[list[Message]], bool], timeout_s: float = 20.0,
+                      into: list[Message] | None = None) -> list[Message]:
         """Every message received until ``done(messages so far)``, which is asked before
         each message and at least every :data:`POLL_S` (it may feed the server).
+
+        Args:
+            done: when to stop.
+            timeout_s: fail after this long.
+            into: the list the messages are appended to as they come (another thread
+                may read it); None: a new one.
 
         Raises:
             AssertionError: not done within ``timeout_s``.
         """
-        received: list[Message] = []
+        received: list[Message] = [] if into is None else into
         limit = time.monotonic() + timeout_s
         while not done(received):
             left = limit - time.monotonic()
