@@ -382,10 +382,9 @@ class Hil:
 
 
 @contextmanager
-def open_hil(taught: Taught, folder: Path, extra: Sequence[str] = ()) -> Iterator[Hil]:
+def open_hil(taught: Taught, folder: Path) -> Iterator[Hil]:
     """The rig on a copy of ``taught``'s memory in ``folder/memory``: the robot started
-    (:func:`start_robot`, with ``extra`` options), its output in ``folder/robot.out``, and
-    answering.
+    (:func:`start_robot`), its output in ``folder/robot.out``, and answering.
     Everything is stopped after, however the block ends (the robot by SIGTERM).
 
     Raises:
@@ -395,7 +394,7 @@ def open_hil(taught: Taught, folder: Path, extra: Sequence[str] = ()) -> Iterato
     with ExitStack() as stack:
         sim = stack.enter_context(SimSide(taught.world_file))
         station = stack.enter_context(GroundStation.open("udpin:127.0.0.1:0", WallClock()))
-        robot = start_robot(sim, station, folder, "robot.out", extra)
+        robot = start_robot(sim, station, folder, "robot.out")
         hil = Hil(sim, station, robot, folder)
         stack.callback(lambda: hil.robot.stop())
         hil.wait_robot()
