@@ -1,10 +1,12 @@
 """The robot's live topics over the Foxglove WebSocket protocol: a real server (the SDK's)
 on loopback and a client written from the protocol's spec (tests/robot/foxglove_client.py),
-fed as the robot's loop feeds it; a port in use; bad config values."""
+fed as the robot's loop feeds it; a port in use; bad config values; the layout shipped for
+Foxglove and Lichtblick."""
 
 from __future__ import annotations
 
 import base64
+import json
 import logging
 import math
 import socket
@@ -26,6 +28,7 @@ from shared.mavlink.modes import Mode
 from tests.robot.foxglove_client import FoxgloveClient, Message, by_topic
 from tests.robot.test_field_log import EPOCH_NS, MOUNT, PERIOD_NS, record
 
+LAYOUT = Path(__file__).parents[2] / "docs" / "foxglove" / "vmnav-layout.json"
 #: One image per two frames.
 CONFIG = FoxgloveConfig(frame_period_ns=2 * PERIOD_NS)
 
@@ -133,3 +136,34 @@ def test_bad_config_values_are_refused(tmp_path: Path) -> None:
         from_mapping(VmnavConfig, {"foxglove": {"jpeg_quality": 0}}, "robot.toml")
     assert from_mapping(VmnavConfig, {"foxglove": {"address": "9000"}},
                         "robot.toml").foxglove.address == "9000"
+
+
+def panels(node: str | dict) -> list[str]:
+    """The panel ids of a layout's mosaic tree, left to right."""
+    return [node] if isinstance(node, str) else panels(node["first"]) + panels(node["second"])
+
+
+def test_the_shipped_layout_shows_the_bridges_topics_and_fields() -> None:
+    """docs/foxglove/vmnav-layout.json (Foxglove's and Lichtblick's layout file): every
+    panel placed and configured, every topic and plotted field one the bridge serves, and
+    the servo plots the issue asks for."""
+    layout = json.loads(LAYOUT.read_text())
+    configs = layout["configById"]
+    assert sorted(panels(layout["layout"])) == sorted(configs)
+    assert {panel.split("!")[0] for panel in configs} == {"Image", "3D", "Plot", "RosOut"}
+    (camera,) = [c["imageMode"] for p, c in configs.items() if p.startswith("Image!")]
+    assert camera["imageTopic"] == topics.CAMERA_IMAGE
+    assert set(camera["annotations"]) == {topics.CAMERA_ANNOTATIONS}
+    (scene,) = [c for p, c in configs.items() if p.startswith("3D!")]
+    assert {scene["followTf"], *(f.removeprefix("frame:") for f in scene["transforms"])} == {
+        topics.FRAME_ODOM, topics.FRAME_BASE, topics.FRAME_CAMERA}
+    (log_panel,) = [c for p, c in configs.items() if p.startswith("RosOut!")]
+    assert log_panel["topicToRender"] == topics.LOG
+    plotted = [path["value"] for p, c in configs.items() if p.startswith("Plot!")
+               for path in c["paths"]]
+    for value in plotted:
+        topic, _, field = value.partition(".")
+        assert field in CHANNELS[topic]["properties"], value
+    assert {v.partition(".")[2] for v in plotted} >= {
+        "matched_points", "lateral_error_m", "angular_error_rad", "err_image_max_px", "v_m_s",
+        "omega_rad_s"}
