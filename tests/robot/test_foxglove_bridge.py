@@ -1,5 +1,5 @@
 """The robot's live topics over the Foxglove WebSocket protocol: a real server (the SDK's)
-on loopback and a client written from the protocol's spec (tests/robot/foxglove_client.py),
+on loopback and a client written from the protocol's spec (tools/harness/foxglove_client.py),
 fed as the robot's loop feeds it; a port in use; bad config values; the layout shipped for
 Foxglove and Lichtblick."""
 
@@ -25,8 +25,9 @@ from shared.config import from_mapping
 from shared.errors import ConfigError, TransportError
 from shared.logs import topics
 from shared.mavlink.modes import Mode
-from tests.robot.foxglove_client import FoxgloveClient, Message, by_topic
 from tests.robot.test_field_log import EPOCH_NS, MOUNT, PERIOD_NS, record
+from tests.shared.logs.test_schemas import conforms
+from tools.harness.foxglove_client import FoxgloveClient, Message, by_topic
 
 LAYOUT = Path(__file__).parents[2] / "docs" / "foxglove" / "vmnav-layout.json"
 #: One image per two frames.
@@ -77,6 +78,8 @@ def test_a_client_sees_the_loops_frames_cycles_and_lines_live() -> None:
         live.event(AppEvent(record(4, True).t_ns, "lost", "no_estimate", "no estimate for 2 s"))
         live.note(record(4, True).t_ns, logging.ERROR, "memory not written")
         received += client.receive_until(lambda got: len(by_topic(got, topics.LOG)) == 2)
+    for message in received:  # each decodes under the schema its channel advertised
+        conforms(message.data, message.schema, message.topic)
     states = [m.data for m in by_topic(received, topics.SERVO_STATE)]
     # Live: each cycle's own numbers, in order.
     assert [s["lateral_error_m"] for s in states[-3:]] == pytest.approx([0.02, 0.03, 0.04])

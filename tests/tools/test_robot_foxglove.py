@@ -4,7 +4,7 @@ tests/tools/test_bad_inputs.py).
 The case runs the hardware-in-the-loop rig (tools/harness/hil_rig.py: the simulator's
 Pioneer and camera, ``vmnav robot`` as a subprocess on the session's taught ``east_a``, a
 ground station here) with ``--foxglove 127.0.0.1:0``; a client written from the protocol's spec
-(tests/robot/foxglove_client.py) subscribes to the camera, the servo state, the
+(tools/harness/foxglove_client.py) subscribes to the camera, the servo state, the
 transforms and the commands while the robot drives to a key image, and checks that each
 decodes under its advertised schema and changes as the robot goes.
 """
@@ -25,7 +25,8 @@ from ground.station import GroundStation
 from shared.clock import WallClock
 from shared.logs import topics
 from shared.memory import read_memory
-from tests.robot.foxglove_client import FoxgloveClient, Message, by_topic
+from tests.shared.logs.test_schemas import conforms
+from tools.harness.foxglove_client import FoxgloveClient, Message, by_topic
 from tools.harness.hil_rig import Hil, SimSide, start_robot
 
 LIVE = [topics.CAMERA_IMAGE, topics.CAMERA_ANNOTATIONS, topics.SERVO_STATE, topics.TF,
@@ -78,6 +79,8 @@ def test_foxglove_sees_the_robot_drive_to_a_key_image(east_a, tmp_path: Path) ->
             code = hil.robot.stop()
     output = hil.robot.output()
     assert code == 143 and "Traceback" not in output, output  # SIGTERM, a clean stop
+    for message in received:  # each decodes under the schema its channel advertised
+        conforms(message.data, message.schema, message.topic)
     states = following(received)
     assert len({s["stamp_ns"] for s in states}) == len(states)  # one per cycle
     assert len({s["lateral_error_m"] for s in states}) > 1  # live: changes as it drives

@@ -1,7 +1,8 @@
-"""A Foxglove WebSocket protocol client for the tests, written from the protocol's spec
-(foxglove/ws-protocol, docs/spec.md) on the ``websockets`` package, independent of the SDK
-that serves: ``serverInfo`` and ``advertise`` in, ``subscribe`` out, binary ``MessageData``
-(opcode 0x01: subscription id u32, log time u64, payload; little-endian) in.
+"""A Foxglove WebSocket protocol client, written from the protocol's spec (foxglove/ws-protocol,
+docs/spec.md) on the ``websockets`` package, independent of the SDK that serves: for the
+tests and ``vmnav bench foxglove``. ``serverInfo`` and ``advertise`` in, ``subscribe`` out,
+binary ``MessageData`` (opcode 0x01: subscription id u32, log time u64, payload;
+little-endian) in; JSON channels only (what :mod:`robot.foxglove_bridge` serves).
 
 The SDK's server (foxglove-sdk 0.30) speaks the protocol under the subprotocol name
 ``foxglove.sdk.v1`` only: it answers ``foxglove.websocket.v1``, the name of the same
@@ -21,8 +22,6 @@ from typing import Any
 from websockets.sync.client import ClientConnection, connect
 from websockets.typing import Subprotocol
 
-from tests.shared.logs.test_schemas import conforms
-
 SUBPROTOCOL = Subprotocol("foxglove.sdk.v1")
 MESSAGE_DATA = 0x01
 #: :meth:`FoxgloveClient.receive_until` asks its ``done`` at least this often, s.
@@ -32,12 +31,13 @@ _HEADER = struct.Struct("<BIQ")
 
 @dataclass(frozen=True)
 class Message:
-    """One message received: its topic, log time (ns) and JSON, checked against the schema
-    its channel advertised."""
+    """One message received: its topic, log time (ns), JSON, and the JSON Schema its channel
+    advertised."""
 
     topic: str
     log_time_ns: int
     data: dict[str, Any]
+    schema: dict[str, Any]
 
 
 class FoxgloveClient:
@@ -48,7 +48,8 @@ class FoxgloveClient:
         self.ws: ClientConnection = self._stack.enter_context(connect(
             url, subprotocols=[SUBPROTOCOL], open_timeout=timeout_s, max_size=None))
         self.server_info = self._json()
-        assert self.server_info["op"] == "serverInfo", self.server_info
+        if self.server_info.get("op") != "serverInfo":
+            raise ValueError(f"expected serverInfo first, got {self.server_info}")
         self.channels: dict[str, dict[str, Any]] = {}
         self._subscriptions: dict[int, str] = {}
 
@@ -63,8 +64,9 @@ class FoxgloveClient:
 
     def _json(self, timeout_s: float = 10.0) -> dict[str, Any]:
         frame = self.ws.recv(timeout_s)
-        assert isinstance(frame, str), f"expected a JSON operation, got {len(frame)} bytes"
-        return json.loads(frame)
+        if not isinstance(frame, str):
+            raise ValueError(f"expected a JSON operation, got {len(frame)} bytes")
+        return dict(json.loads(frame))
 
     def _take(self, frame: str | bytes) -> Message | None:
         """A message of a subscription, or None after taking an operation."""
@@ -79,17 +81,23 @@ class FoxgloveClient:
             return None
         topic = self._subscriptions[subscription]
         channel = self.channels[topic]
-        assert (channel["encoding"], channel["schemaEncoding"]) == ("json", "jsonschema")
-        data = json.loads(frame[_HEADER.size:])
-        conforms(data, json.loads(channel["schema"]), topic)
-        return Message(topic, log_time_ns, data)
+        if (channel["encoding"], channel["schemaEncoding"]) != ("json", "jsonschema"):
+            raise ValueError(f"{topic}: not a JSON channel: {channel['encoding']}")
+        return Message(topic, log_time_ns, json.loads(frame[_HEADER.size:]),
+                       json.loads(channel["schema"]))
 
     def subscribe(self, topics: Iterable[str], timeout_s: float = 10.0) -> None:
-        """Wait until ``topics`` are advertised, then subscribe to them."""
+        """Wait until ``topics`` are advertised, then subscribe to them.
+
+        Raises:
+            TimeoutError: not all advertised within ``timeout_s``.
+        """
         wanted = set(topics)
         limit = time.monotonic() + timeout_s
         while not wanted <= set(self.channels):
-            assert time.monotonic() < limit, f"not advertised: {wanted - set(self.channels)}"
+            if time.monotonic() >= limit:
+                raise TimeoutError(f"not advertised in {timeout_s} s: "
+                                   f"{sorted(wanted - set(self.channels))}")
             self._take(self.ws.recv(max(0.0, limit - time.monotonic())))
         first = len(self._subscriptions)
         subscriptions = [{"id": first + i, "channelId": self.channels[topic]["id"]}
@@ -110,14 +118,15 @@ class FoxgloveClient:
                 may read it); None: a new one.
 
         Raises:
-            AssertionError: not done within ``timeout_s``.
+            TimeoutError: not done within ``timeout_s``.
         """
         received: list[Message] = [] if into is None else into
         limit = time.monotonic() + timeout_s
         while not done(received):
             left = limit - time.monotonic()
-            assert left > 0, f"not done in {timeout_s} s: {len(received)} messages, topics " \
-                             f"{sorted({m.topic for m in received})}"
+            if left <= 0:
+                raise TimeoutError(f"not done in {timeout_s} s: {len(received)} messages, "
+                                   f"topics {sorted({m.topic for m in received})}")
             try:  # done() is asked again at least every POLL_S
                 message = self._take(self.ws.recv(min(left, POLL_S)))
             except TimeoutError:
