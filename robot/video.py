@@ -41,6 +41,27 @@ def matched_points(record: CycleRecord | None) -> tuple[npt.NDArray[np.float64] 
     return vision.matched_xy, inliers if len(inliers) == len(vision.matched_xy) else None
 
 
+class FramePacer:
+    """At most one frame per ``period_ns`` of frame time: the first frame is due, then one
+    each period after it; after a gap, the next frame is due at once.
+
+    Args:
+        period_ns: the shortest time between two frames let through, ns.
+    """
+
+    def __init__(self, period_ns: int) -> None:
+        self._period_ns = period_ns
+        self._next_ns: int | None = None
+
+    def due(self, t_ns: int) -> bool:
+        """Whether the frame at ``t_ns`` goes out (then the next is due a period later)."""
+        if self._next_ns is not None and t_ns < self._next_ns:
+            return False
+        next_ns = (t_ns if self._next_ns is None else self._next_ns) + self._period_ns
+        self._next_ns = next_ns if next_ns > t_ns else t_ns + self._period_ns
+        return True
+
+
 class LiveView:
     """The robot loop's side of the live view (rule 1).
 
@@ -51,17 +72,13 @@ class LiveView:
 
     def __init__(self, server: MjpegServer, config: VideoConfig) -> None:
         self.server = server
-        self._period_ns = config.frame_period_ns
-        self._next_ns: int | None = None
+        self._pacer = FramePacer(config.frame_period_ns)
 
     def offer(self, t_ns: int, image: npt.NDArray[np.uint8], record: CycleRecord | None) -> None:
         """The loop's frame at ``t_ns`` (H, W) uint8 grey, and the cycle it ran (None: no
         mission run): published if a period has passed since the last one."""
-        if self._next_ns is not None and t_ns < self._next_ns:
-            return
-        next_ns = (t_ns if self._next_ns is None else self._next_ns) + self._period_ns
-        self._next_ns = next_ns if next_ns > t_ns else t_ns + self._period_ns
-        self.server.publish(t_ns, image, *matched_points(record))
+        if self._pacer.due(t_ns):
+            self.server.publish(t_ns, image, *matched_points(record))
 
 
 def video_stream(server: MjpegServer, config: VideoConfig, camera: CameraModel) -> VideoStream:

@@ -12,7 +12,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
-from tools import bench_safety_cmd
+from tools import bench_foxglove_cmd, bench_safety_cmd
 from tools.harness.arg_types import KEY_IMAGE, POSITIVE, POSITIVE_COUNT, SEED
 from tools.harness.scene_args import add_change_arguments
 from tools.harness.sim_args import add_sim_arguments
@@ -23,8 +23,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     bench = subparsers.add_parser("bench", help="benchmarks printing JSON")
     bench_sub = bench.add_subparsers(dest="bench_command", metavar="BENCHMARK", required=True)
     sim = bench_sub.add_parser(
-        "sim",
-        help="simulator: physics + rendering frames/s, camera-model accuracy",
+        "sim", help="simulator: physics + rendering frames/s, camera-model accuracy",
         description="Drive the simulated robot along a route and time physics + rendering per "
         "frame on one core; check the camera model's round trip and agreement with cv2.omnidir.",
     )
@@ -169,6 +168,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="timed runs of each front end on the pair [default: 10]")
     real.set_defaults(run=runner("real"))
     bench_safety_cmd.add_parser(bench_sub, runner("safety"))
+    bench_foxglove_cmd.add_parser(bench_sub, runner("foxglove"))
     chance = bench_sub.add_parser("chance", help="issue 16: pairs of unrelated real images "
                                   "through localization's acceptance test (target: none pass)")
     chance.add_argument("--realdata", type=Path, metavar="DIR", help="real image sets' folder")
