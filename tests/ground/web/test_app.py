@@ -40,7 +40,7 @@ def test_the_page_and_its_modules_are_served_locally(web: RunningWeb) -> None:
     assert status == 200 and b'<script type="module" src="/static/main.js">' in html
     assert b"http" not in html.replace(b"http-equiv", b"")  # no CDN, nothing remote
     for name in ("main.js", "plot.js", "memory.js", "params.js", "teleop.js", "message.js",
-                 "camera.js", "graph.js", "style.css"):
+                 "camera.js", "graph.js", "logs.js", "style.css"):
         status, body = get(web.url + "static/" + name)
         assert status == 200 and b"https://" not in body and b"http://" not in body, name
 
