@@ -38,9 +38,9 @@ class TestReadOnlyMemory:
         assert fs.list_directory("/teaching") == []
         taken += [(7, b"\x89PNG seven"), (8, b"\x89PNG eight")]
         assert fs.list_directory("/teaching/") == [DirEntry("7.png", False, 10),
-                                                   DirEntry("8.png", False, 11)]
+                                                   DirEntry("8.png", False, 10)]
         reader = fs.open_read("/teaching/8.png")
-        assert (reader.size, reader.read(5, 100)) == (11, b"eight")
+        assert (reader.size, reader.read(5, 100)) == (10, b"eight")
         for path in ("/teaching/9.png", "/teaching/8.png/x", "/teaching"):
             with pytest.raises(OSError):
                 fs.open_read(path)
