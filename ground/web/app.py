@@ -5,6 +5,8 @@ Routes:
 * ``GET /``: the page (``static/index.html``); ``/static/...``: its modules and style;
 * ``GET /api/vehicles/{system}/memory/{thumbnails|images}/{key}.png``: a key image file
   fetched from the robot over MAVLink FTP (cached by the station loop);
+* ``GET /api/vehicles/{system}/teaching/{key}.png``: the thumbnail of a key image of the
+  path being taught, over MAVLink FTP (not cached);
 * ``GET /api/vehicles/{system}/camera.mjpg`` (``?matches=1``): the robot's camera, relayed
   (``ground.web.camera_proxy``);
 * ``POST /api/vehicles/{system}/goto-photo``: a photo as the goal;
@@ -220,12 +222,15 @@ async def _index(request: HttpRequest) -> Response:
 
 async def _memory_file(request: HttpRequest) -> Response:
     station_loop: StationLoop = request.app.state.station_loop
-    system, kind, key = (request.path_params["system"], request.path_params["kind"],
+    system, kind, key = (request.path_params["system"], request.path_params.get("kind"),
                          request.path_params["key"])
     try:
+        if kind is None:  # the path being taught: its ids are freed if it is dropped
+            data = await asyncio.wrap_future(station_loop.teaching_file(system, key))
+            return Response(data, media_type="image/png", headers={"Cache-Control": "no-store"})
         data = await asyncio.wrap_future(station_loop.memory_file(system, kind, key))
     except VmnavError as e:
-        _log.warning("key image %s/%d of vehicle %d: %s", kind, key, system, e)
+        _log.warning("key image %s/%d of vehicle %d: %s", kind or "teaching", key, system, e)
         # 400: the page asked for something that cannot be; 502: the robot refused or failed.
         return JSONResponse({"error": str(e)}, status_code=400 if isinstance(e, InputError)
                             else 502)
@@ -323,6 +328,7 @@ def build_app(station_loop: StationLoop, hub: Hub, log_dir: Path | None = None) 
         Route("/", _index),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
         Route("/api/vehicles/{system:int}/memory/{kind}/{key:int}.png", _memory_file),
+        Route("/api/vehicles/{system:int}/teaching/{key:int}.png", _memory_file),
         Route("/api/vehicles/{system:int}/camera.mjpg", _camera),
         Route("/api/vehicles/{system:int}/goto-photo", _goto_photo, methods=["POST"]),
         Route("/api/logs", _logs),

@@ -82,6 +82,8 @@ CACHE_BYTES = 64 * 2**20
 PLOT_INTERVAL_US = 100_000
 _ENDED = "the ground station's loop has ended (its error is in the server's log)"
 _PLOTTED = (mavlink.MAVLINK_MSG_ID_ODOMETRY, mavlink.MAVLINK_MSG_ID_VISUAL_SERVO_STATUS)
+#: Where the robot serves the thumbnails of the path it is teaching (``robot.vehicle.ftp_memory``).
+TEACHING_ROOT = "/teaching"
 #: The files the page may ask for (rule 5), under ``/memory``.
 MEMORY_FILES = frozenset({"thumbnails", "images"})
 
@@ -173,6 +175,11 @@ class StationLoop:
     def memory_file(self, system_id: int, kind: str, key: int) -> concurrent.futures.Future[bytes]:
         """The bytes of ``/memory/<kind>/<key>.png`` of vehicle ``system_id`` (rule 5)."""
         return self.submit(lambda station: self._memory_file(system_id, kind, key))
+
+    def teaching_file(self, system_id: int, key: int) -> concurrent.futures.Future[bytes]:
+        """The thumbnail of key image ``key`` of the path vehicle ``system_id`` is teaching
+        (``/teaching/<key>.png``; not cached: a path dropped frees its ids)."""
+        return self.submit(lambda station: self._teaching_file(system_id, key))
 
     def video_stream(self, system_id: int,
                      refresh: bool = False) -> concurrent.futures.Future[VideoStream]:
@@ -435,6 +442,10 @@ class StationLoop:
             self._aim(system_id)
             stream = self._streams[system_id] = find_video_stream(self.station)
         return stream
+
+    def _teaching_file(self, system_id: int, key: int) -> bytes:
+        self._aim(system_id)
+        return self.station.ftp_get(f"{TEACHING_ROOT}/{key}.png")
 
     def _memory_file(self, system_id: int, kind: str, key: int) -> bytes:
         if kind not in MEMORY_FILES:

@@ -154,6 +154,7 @@ class App {
       this.plots.err.push(s.t, s.err_max);
       this.memory.highlight(s.next, s.goal);
       this.camera.setTarget(s.next);
+      if (s.state === "teaching") this.memory.teaching(s.current);
     }
   }
 

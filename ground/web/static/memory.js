@@ -15,6 +15,7 @@ export class MemoryBrowser {
     this.largeKey = null;
     this.largeUrl = null;
     this.mission = [];
+    this.taught = null;  // the last key image of the path being taught shown; null: none
     this.graph = new MemoryGraph($("memory-graph"), key => this.showLarge(key));
     $("memory-refresh").onclick = () => this.load(true);
     $("large-go").onclick = () => this.goto(this.largeKey);
@@ -69,6 +70,8 @@ export class MemoryBrowser {
     });
     if (strips.length === 0) strips.push(document.createTextNode("the memory is empty"));
     $("memory-paths").replaceChildren(...strips);
+    this.taught = null;
+    $("teach-strip").replaceChildren();
     this.graph.setIndex(this.index);
   }
 
@@ -139,6 +142,29 @@ export class MemoryBrowser {
     const where = path ? `key image ${info.index + 1} of ${path.keyframe_ids.length} on '${path.name}'`
       : "no key image";
     return `${where} (key ${current} → ${next}, goal ${goal})`;
+  }
+
+  // While teaching, VISUAL_SERVO_STATUS current_key is the last key image taken (the id it
+  // gets when stored): show every one up to it, fetched from the robot's /teaching/.
+  teaching(current) {
+    if (current < 0 || current === this.taught) return;
+    const known = Object.keys(this.index?.keyframes ?? {}).map(Number);
+    let key = this.taught === null ? (known.length ? Math.max(...known) + 1 : current)
+      : this.taught + 1;
+    if (this.taught !== null && current < this.taught) {  // another path: start again
+      $("teach-strip").replaceChildren();
+      key = current;
+    }
+    for (; key <= current; key++) {
+      const img = document.createElement("img");
+      img.alt = img.title = `key image ${key} (being taught)`;
+      img.dataset.key = key;
+      img.onerror = () => { img.classList.add("broken"); };
+      img.src = `/api/vehicles/${this.app.selected}/teaching/${key}.png`;
+      $("teach-strip").append(img);
+    }
+    this.taught = current;
+    $("teach-count").textContent = `${$("teach-strip").children.length} key images taken`;
   }
 
   highlight(next, goal) {

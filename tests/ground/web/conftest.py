@@ -69,9 +69,10 @@ class RunningWeb:
 
 
 @pytest.fixture
-def web(vehicle: UdpVehicle) -> Iterator[RunningWeb]:
+def web(vehicle: UdpVehicle, tmp_path: Path) -> Iterator[RunningWeb]:
+    """The app on a free port; its ground log folder (``--log``) is ``tmp_path / "logs"``."""
     station = GroundStation.open(f"udpout:127.0.0.1:{vehicle.link.local_port}", WallClock())
-    running = RunningWeb(station)
+    running = RunningWeb(station, log_dir=tmp_path / "logs")
     try:
         yield running
     finally:

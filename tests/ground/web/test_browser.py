@@ -105,11 +105,31 @@ def test_teach_a_path_driving_with_keys_and_a_gamepad(
     from selenium.webdriver.common.action_chains import ActionChains
 
     write_memory(tmp_path / "memory", loop_memory(rng))  # reloaded after teaching stops
+    (tmp_path / "logs").mkdir()
+    (tmp_path / "logs" / "ground-0001.mcap").write_bytes(bytes(2048))
     chromium.get(web.url)
     wait_for(lambda: chromium.find_elements("css selector", "tr[data-system='1']"), "vehicle 1")
+    # The ground logs, to download.
+    link = wait_for(lambda: chromium.find_elements("css selector", "#log-rows a"), "the logs")[0]
+    assert (link.text, link.get_attribute("href")) == (
+        "ground-0001.mcap", web.url + "api/logs/ground-0001.mcap")
+    assert "2.0 kB" in chromium.find_element("id", "log-rows").text
+    wait_for(lambda: chromium.find_elements("css selector", ".strip img"), "the memory")
     chromium.find_element("id", "teach-name").send_keys("hall")
     chromium.find_element("id", "teach-start").click()
     wait_for(lambda: app.called("teach_start") == [("hall",)], "TEACH_START at the vehicle")
+    # The key images taken so far (the robot names the last, served over FTP) show as they
+    # come; the memory holds 0..6, so the new path's are 7, 8, ...
+    thumbnail = cv2.imencode(".png", np.full((60, 80), 90, np.uint8))[1].tobytes()
+    app.update(teaching=True, teach_thumbnails=((7, thumbnail),))
+    wait_for(lambda: len(chromium.find_elements("css selector", "#teach-strip img")) == 1,
+             "the first key image taken")
+    app.update(teach_thumbnails=((7, thumbnail), (8, thumbnail), (9, thumbnail)))
+    taken = wait_for(lambda: (lambda imgs: len(imgs) == 3 and imgs)(
+        chromium.find_elements("css selector", "#teach-strip img")), "three key images taken")
+    assert [int(t.get_attribute("data-key")) for t in taken] == [7, 8, 9]
+    wait_for(lambda: all(chromium.execute_script("return arguments[0].naturalWidth", t) == 80
+                         for t in taken), "their thumbnails loaded")
 
     chromium.find_element("id", "teleop").click()
     wait_for(lambda: (Mode.MANUAL,) in app.called("set_mode"), "MANUAL at the vehicle")
