@@ -51,6 +51,7 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "fuzz": ("--inputs", "1000"),
     "real": ("--repeats", "3"),
     "safety": ("--seeds", "1", "--worlds", "lab", "--estops", "4"),
+    "web": ("--changes", "10", "--dispatches", "10"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).
 EXIT_BENCH_FAILED = 1
