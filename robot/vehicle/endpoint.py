@@ -242,7 +242,8 @@ class VehicleEndpoint:
                                       admit=self._admit_upload)
         ftp = ftp if ftp is not None else config.ftp
         self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes,
-                                    ftp.upload_total_bytes)
+                                    ftp.upload_total_bytes,
+                                    teaching=lambda: self._app.telemetry().teach_thumbnails)
         self._ftp = FtpServer(self._fs, ftp)
         self._intervals = MessageIntervals(default_periods_ns(link), link.min_stream_period_ns)
         builders: dict[int, Builder] = {

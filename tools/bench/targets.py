@@ -37,6 +37,7 @@ from tools.bench.real import TARGETS as REAL_TARGETS
 from tools.bench.safety import TARGETS as SAFETY_TARGETS
 from tools.bench.sim import CORNER_ERROR_TARGET_PX, RENDER_FPS_TARGET
 from tools.bench.vision import TARGETS as VISION_TARGETS
+from tools.bench.web import TARGETS as WEB_TARGETS
 
 #: The law the route-following targets apply to: the robot's default.
 DEFAULT_LAW = ControlConfig().law
@@ -131,6 +132,8 @@ TARGETS: tuple[Target, ...] = (
       for figure, (comparison, bound) in REAL_TARGETS.items()),
     *(Target("safety", f"summary.{figure}", comparison, bound, "issue 17")
       for figure, (comparison, bound) in SAFETY_TARGETS.items()),
+    *(Target("web", figure, comparison, bound, "issue 18")
+      for figure, (comparison, bound) in WEB_TARGETS.items()),
 )
 
 

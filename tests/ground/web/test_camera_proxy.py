@@ -104,7 +104,7 @@ def test_the_page_finds_the_stream_and_the_frames_come_through(web: RunningWeb,
 
 
 def page_viewers(web: RunningWeb) -> int:
-    proxy = web.server._server.config.app.state.camera_proxy  # type: ignore[attr-defined]
+    proxy = web.server._server.config.app.app.state.camera_proxy  # type: ignore[attr-defined]
     return int(proxy.viewers)
 
 

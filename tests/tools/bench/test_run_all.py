@@ -77,7 +77,7 @@ def test_a_failed_benchmark_is_reported_and_the_others_still_run(
 @pytest.mark.parametrize("argv, message", [
     (["--only", "link,nope"],
      "--only: unknown benchmark nope (known: sim, vision, follow, log, link, faults, fuzz, "
-     "hostile, real, safety, foxglove, chance)"),
+     "hostile, real, safety, foxglove, web, chance)"),
     (["--only", ","], "--only: no benchmark"),
     (["--bench-args", "nope=--x"], "--bench-args: 'nope=--x' is not NAME=ARGS"),
     (["--timeout-s", "0"], "--timeout-s: must be > 0"),
