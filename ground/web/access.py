@@ -139,7 +139,9 @@ class AccessGate:
         assert self.token is not None
         rest = urllib.parse.urlencode({k: v for k, v in query.items() if k != "token"},
                                       doseq=True)
-        location = urllib.parse.quote(scope["path"]) + (f"?{rest}" if rest else "")
+        # One leading slash: "//host/..." would send the browser to another site.
+        location = "/" + urllib.parse.quote(scope["path"]).lstrip("/") + (
+            f"?{rest}" if rest else "")
         cookie = f"{COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict"
         await send({"type": "http.response.start", "status": 303, "headers": [
             (b"location", location.encode("latin-1")), (b"set-cookie", cookie.encode()),

@@ -82,6 +82,9 @@ def test_with_a_token_every_request_and_websocket_carries_it(guarded: RunningWeb
     status, headers, _ = fetch(url + "?token=" + TOKEN)
     assert status == 303 and headers["location"] == "/"
     assert headers["set-cookie"] == f"vmnav_token={TOKEN}; Path=/; HttpOnly; SameSite=Strict"
+    # ... to this site only: a path of two slashes is not another host.
+    status, headers, _ = fetch(url + "/evil.example/x?token=" + TOKEN)
+    assert status == 303 and headers["location"] == "/evil.example/x"
     cookie = {"Cookie": f"vmnav_token={TOKEN}"}
     assert fetch(url, headers=cookie)[0] == 200
     assert fetch(url + "api/logs", headers={"Authorization": f"Bearer {TOKEN}"})[0] == 200
