@@ -31,7 +31,6 @@ from shared.clock import NS_PER_S
 from shared.mavlink.camera import VideoStream
 from shared.mjpeg_server import MjpegServer, scaled_size
 
-
 MatchedPoints = tuple[npt.NDArray[np.float64] | None, npt.NDArray[np.bool_] | None,
                       npt.NDArray[np.float64] | None]
 """(frame corners (N, 2) px, which are inliers (N,) bool, key image corners (N, 2) px)."""

@@ -128,7 +128,7 @@ def test_the_matches_of_the_newest_frame_come_through_with_the_key_images(
 class Garbage(http.server.BaseHTTPRequestHandler):
     """A robot's server that answers anything with HTML."""
 
-    def do_GET(self) -> None:  # noqa: N802 - http.server names the method
+    def do_GET(self) -> None:
         self.send_response(200)
         self.end_headers()
         self.wfile.write(b"<html>not the matches</html>")
