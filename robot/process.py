@@ -260,7 +260,8 @@ class RobotProcess:
         """Step ``frame``, again while ``on_step`` holds the clock (rule 2); what then."""
         record = self.runtime.step(*frame)
         if self._video is not None:
-            self._video.offer(*frame, record)
+            servo = self.runtime.telemetry().servo
+            self._video.offer(*frame, record, None if servo is None else servo.next_key)
         if self._foxglove is not None:
             self._foxglove.offer(*frame, self.runtime.telemetry())
         if on_step is None:

@@ -8,7 +8,8 @@ Routes:
 * ``GET /api/vehicles/{system}/teaching/{key}.png``: the thumbnail of a key image of the
   path being taught, over MAVLink FTP (not cached);
 * ``GET /api/vehicles/{system}/camera.mjpg`` (``?matches=1``): the robot's camera, relayed
-  (``ground.web.camera_proxy``);
+  (``ground.web.camera_proxy``); ``GET /api/vehicles/{system}/camera-matches.json``: the
+  matches of its newest frame, with the key image's points;
 * ``POST /api/vehicles/{system}/goto-photo``: a photo as the goal;
 * ``GET /api/logs``: the ground log's files (``--log``); ``GET /api/logs/{name}``: one,
   downloaded (``ground.web.log_files``);
@@ -55,7 +56,7 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from ground.web.camera_proxy import CameraProxy, StreamUnavailableError
+from ground.web.camera_proxy import CameraProxy, StreamUnavailableError, fetch_matches
 from ground.web.log_files import list_logs, open_log
 from ground.web.requests import parse_request, request_id_of
 from ground.web.station_loop import StationLoop
@@ -239,11 +240,14 @@ async def _memory_file(request: HttpRequest) -> Response:
 
 
 async def _camera(request: HttpRequest) -> Response:
+    """The camera's stream, or (``camera-matches.json``) its newest frame's matches."""
     station_loop: StationLoop = request.app.state.station_loop
     proxy: CameraProxy = request.app.state.camera_proxy
     system = request.path_params["system"]
     try:
         stream = await asyncio.wrap_future(station_loop.video_stream(system))
+        if request.url.path.endswith(".json"):
+            return await fetch_matches(stream)
         return await proxy.relay(system, stream, request.query_params.get("matches") == "1")
     except VmnavError as e:
         _log.warning("camera of vehicle %d: %s", system, e)
@@ -330,6 +334,7 @@ def build_app(station_loop: StationLoop, hub: Hub, log_dir: Path | None = None) 
         Route("/api/vehicles/{system:int}/memory/{kind}/{key:int}.png", _memory_file),
         Route("/api/vehicles/{system:int}/teaching/{key:int}.png", _memory_file),
         Route("/api/vehicles/{system:int}/camera.mjpg", _camera),
+        Route("/api/vehicles/{system:int}/camera-matches.json", _camera),
         Route("/api/vehicles/{system:int}/goto-photo", _goto_photo, methods=["POST"]),
         Route("/api/logs", _logs),
         Route("/api/logs/{name}", _log_file),

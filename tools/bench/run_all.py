@@ -23,7 +23,7 @@ repetition of its cases: one with ``--quick``, ten in the full run (measured 20 
 about 16 min in the full run (100,000 per target; docs/fuzzing.md); ``hostile``
 about 2 min in both (it has no reduced size); ``real`` (issue 16) about 20 s (15 s with
 ``--quick``: 3 timed pairs instead of 10); ``foxglove`` (issue 18) 4 x 5 s (4 x 2 s with
-``--quick``); ``web`` (issue 18) about 30 s.
+``--quick``); ``web`` (issue 18) about 45 s.
 """
 
 from __future__ import annotations

@@ -18,19 +18,24 @@ through ChromeDriver, opens the page with a fresh profile. Measured:
   and this process's CPU over the window (the ground station, vehicle 1's I/O thread and
   the Selenium client, so an upper bound of the ground's).
 
-The camera stream is not measured here (it needs a robot serving ``--video``).
+* ``camera``: vehicle 1 serves the robot's live view at 640x480 (``--camera-hz``), the
+  page shows it through the ground's relay: frames/s shown and latency, read back from
+  numbers drawn into the frames (:mod:`tools.bench.web_camera`). It runs from the start
+  and is measured right after the first load, then closed before the other figures.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import tempfile
 import threading
 import time
 from pathlib import Path
 from typing import Any
+
+from tools.bench.percentiles import percentile_summary
+from tools.bench.web_camera import TARGETS as CAMERA_TARGETS
 
 #: The issue's targets (figure -> comparison, bound), for ``bench all``.
 TARGETS: dict[str, tuple[str, float]] = {
@@ -38,16 +43,8 @@ TARGETS: dict[str, tuple[str, float]] = {
     "goto_reply_ms.refused": ("<=", 0), "fleet.update_main_thread_ms.max": ("<", 16.0),
     "fleet.process_cpu_share": ("<", 0.30), "first_load.bytes": ("<", 1_000_000),
     "first_load.interactive_ms": ("<", 1000.0)}
+TARGETS.update(CAMERA_TARGETS)
 _WAIT_S = 60.0
-
-
-def _stats(values: list[float]) -> dict[str, float | int | None]:
-    if not values:
-        return {"n": 0, "median": None, "p95": None, "max": None}
-    ordered = sorted(values)
-    return {"n": len(values), "median": round(statistics.median(ordered), 2),
-            "p95": round(ordered[min(len(ordered) - 1, int(0.95 * len(ordered)))], 2),
-            "max": round(ordered[-1], 2)}
 
 
 def _wait(done: Any, what: str) -> Any:
@@ -81,6 +78,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     from shared.mavlink.modes import Mode
     from tools.bench.link_load import make_load_app
     from tools.bench.link_vehicles import AppContext, VehicleProcesses, serve_vehicles
+    from tools.bench.web_camera import CameraRobot
 
     station = GroundStation.open("udpin:127.0.0.1:0", WallClock())
     server = WebServer(station, station.clock, WebConfig(port=0))
@@ -93,11 +91,13 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
         apps.append(make_load_app(context))
         return apps[-1]
 
+    robot = CameraRobot(args.camera_hz)
     vehicle1 = threading.Thread(target=serve_vehicles, daemon=True, args=(
-        [1], station.link.local_port, range(args.key_images), factory, stop.wait))
+        [1], station.link.local_port, range(args.key_images), factory, stop.wait),
+        kwargs={"video": robot.stream})
     with tempfile.TemporaryDirectory(prefix="vmnav-bench-web-") as tmp, VehicleProcesses(
             list(range(2, args.vehicles + 1)), 2, station.link.local_port, args.key_images,
-            make_load_app):
+            make_load_app), robot.running():
         vehicle1.start()
         _wait(lambda: server.started and apps, "the server and vehicle 1")
         driver = _chromium(Path(tmp) / "profile")
@@ -114,6 +114,8 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
                 " nav.domInteractive];")
             _wait(lambda: len(driver.find_elements("css selector", "tr[data-system]"))
                   >= args.vehicles, "every vehicle in the fleet")
+            camera = _watch_camera(driver, robot, args.camera_s)
+            robot.server.close()
             driver.execute_script(
                 "window.benchHandled = []; const app = window.vmnav, handle = app.handle.bind(app);"
                 "app.handle = m => { const t0 = performance.now(); handle(m);"
@@ -155,16 +157,33 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
         "vehicles": args.vehicles,
         "first_load": {"bytes": load[0], "interactive_ms": round(load[1], 1),
                        "first_fleet_row_ms": round(first_row_ms, 1)},
-        "telemetry_to_dom_ms": _stats(latencies),
-        "goto_reply_ms": {**_stats([r for r in replies if r >= 0]),
+        "telemetry_to_dom_ms": percentile_summary(latencies),
+        "goto_reply_ms": {**percentile_summary([r for r in replies if r >= 0]),
                           "refused": sum(r < 0 for r in replies)},
         "fleet": {"updates": len(handled),
-                  "update_main_thread_ms": _stats(handled),
+                  "update_main_thread_ms": percentile_summary(handled),
                   "process_cpu_share": round(cpu_share, 3)},
-        "camera": None,
+        "camera": camera,
         "targets": {figure: f"{comparison} {bound:g}"
                     for figure, (comparison, bound) in TARGETS.items()},
     }
+
+
+def _watch_camera(driver: Any, robot: Any, window_s: float) -> dict[str, Any]:
+    """Select vehicle 1, show its camera and read the frames back for ``window_s``
+    (:mod:`tools.bench.web_camera`); its figures."""
+    from tools.bench.web_camera import SAMPLER_JS, camera_figures
+
+    driver.find_element("css selector", "tr[data-system='1']").click()
+    _wait(lambda: "640x480" in driver.find_element("id", "camera-caption").text,
+          "vehicle 1's camera in the page")
+    driver.execute_script(SAMPLER_JS)
+    _wait(lambda: driver.execute_script("return window.benchFrames.length"),
+          "a numbered frame in the page")
+    time.sleep(window_s)
+    shown = driver.execute_script("clearInterval(window.benchSampler);"
+                                  "return window.benchFrames")
+    return camera_figures(shown, dict(robot.sent_ms), window_s)
 
 
 def run(args: argparse.Namespace) -> int:
