@@ -117,10 +117,12 @@ def drive(station: GroundStation, read_keys: Callable[[], str], clock: Clock,
         station: a station talking to a vehicle (``wait_vehicle`` done).
         read_keys: the keys pressed since the last call, without blocking ("" if none).
         clock: paces the loop.
-        show: called after each key but a quit key, e.g. to print the held command.
+        show: called once keys are read (the command held, zero: the operator may type)
+            and after each key but a quit key, e.g. to print the held command.
         period_ns: MANUAL_CONTROL period, ns.
     """
     teleop = KeyboardTeleop()
+    show(teleop)
     deadline_ns = clock.now_ns()
     try:
         while True:

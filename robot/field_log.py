@@ -134,6 +134,16 @@ def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]
     }
 
 
+def event_line(event: AppEvent) -> tuple[str, str]:
+    """The ``foxglove.Log`` level and text of a mission event."""
+    return _EVENT_LEVELS.get(event.kind, "INFO"), f"{event.kind} {event.reason}: {event.detail}"
+
+
+def note_level(level: int) -> str:
+    """The ``foxglove.Log`` level of a ``logging`` level (CRITICAL becomes FATAL)."""
+    return next((name for floor, name in _NOTE_LEVELS if level >= floor), "DEBUG")
+
+
 def key_image_id(record: CycleRecord, targets: Sequence[int]) -> int | None:
     """The key image a following cycle heads for, from the route's ``targets``
     (:attr:`robot.follower.RouteFollower.targets`); None when not following or not known."""
@@ -194,7 +204,7 @@ class FieldLog:
             # OpenCV's pixel centres are at integers, Foxglove's at +0.5 (messages.image_points).
             corners = np.zeros((0, 2)) if follow is None else follow.corners_xy + 0.5
             writer.log_points(t_ns, topics.CAMERA_ANNOTATIONS, corners,
-                              label=_label(record.state.value, state["key_image_id"],
+                              label=frame_label(record.state.value, state["key_image_id"],
                                            state["matched_points"]))
         writer.log_json(t_ns, topics.SERVO_STATE, "vmnav.ServoState", state)
         writer.log_json(t_ns, topics.BASE_STATE, "vmnav.BaseState",
@@ -207,14 +217,12 @@ class FieldLog:
 
     def event(self, event: AppEvent) -> None:
         """A mission event, as a ``foxglove.Log`` line at its time."""
-        self._writer.log_text(event.t_ns, _EVENT_LEVELS.get(event.kind, "INFO"),
-                              f"{event.kind} {event.reason}: {event.detail}", EVENT_SOURCE)
+        self._writer.log_text(event.t_ns, *event_line(event), EVENT_SOURCE)
 
     def note(self, t_ns: int, level: int, text: str) -> None:
         """A line for the operator (mode changes, paths saved, ...); ``level`` is a
         ``logging`` level (DEBUG ... CRITICAL, which becomes FATAL)."""
-        name = next((name for floor, name in _NOTE_LEVELS if level >= floor), "DEBUG")
-        self._writer.log_text(t_ns, name, text, NOTE_SOURCE)
+        self._writer.log_text(t_ns, note_level(level), text, NOTE_SOURCE)
 
     def pioneer_closed(self, t_ns: int, status: PioneerStatus, counters: LinkCounters) -> None:
         """How the Pioneer link ended, once the driver closed (stop and CLOSE sent), as a
@@ -285,6 +293,8 @@ class FieldLog:
             self._camera])
 
 
-def _label(state: str, key_id: int | None, matches: int) -> str:
+def frame_label(state: str, key_id: int | None, matches: int) -> str:
+    """The label drawn on a mission cycle's frame: the key image headed for (or the
+    mission state) and the matches."""
     return (f"{state}: {matches} matches" if key_id is None
             else f"key {key_id}: {matches} matches")

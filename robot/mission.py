@@ -124,7 +124,8 @@ class Lost:
 
 @dataclass(frozen=True, slots=True)
 class Arrived:
-    """The goal key image was reached (the final :class:`robot.switching.KeyImageSwitch`)."""
+    """The goal key image was reached (the final :class:`robot.switching.KeyImageSwitch`),
+    or a localization found the robot at the goal key image itself."""
 
     t_ns: int
     keyframe_id: int
@@ -282,6 +283,7 @@ _TRANSITIONS: dict[MissionState, dict[type, _Edge | None]] = {
     },
     MissionState.LOCALIZING: {
         Localized: _Edge(MissionState.FOLLOWING, "localized"),
+        Arrived: _Edge(MissionState.ARRIVED, "arrived"),
         NoRoute: _Edge(MissionState.FAILED, "no_route"),
         LocalizationFailed: _Edge(MissionState.FAILED, "localization_failed", _Guard.ATTEMPTS),
         Tick: _Edge(MissionState.FAILED, "localization_timeout", _Guard.TIMEOUT),
@@ -303,6 +305,7 @@ _TRANSITIONS: dict[MissionState, dict[type, _Edge | None]] = {
     },
     MissionState.LOST: {
         Localized: _Edge(MissionState.FOLLOWING, "relocalized"),
+        Arrived: _Edge(MissionState.ARRIVED, "arrived"),
         NoRoute: _Edge(MissionState.FAILED, "no_route"),
         LocalizationFailed: _Edge(MissionState.FAILED, "relocalization_failed", _Guard.ATTEMPTS),
         Tick: _Edge(MissionState.FAILED, "relocalization_timeout", _Guard.TIMEOUT),

@@ -18,8 +18,10 @@ Rules of a cycle (:meth:`MissionRun.cycle`):
    it stood, the time spent waiting not counted against its LOST timer).
 2. LOCALIZING or LOST: localize the frame in the memory
    (:class:`robot.memory.localize.Localizer`); a localization plans the route to
-   the goal and starts (or restarts) the follower. A goal the memory does not
-   reach from there fails the mission (``no_route``).
+   the goal and starts (or restarts) the follower. Found at the goal key image itself,
+   the robot has arrived (a goal a few centimetres behind it on its path, which no
+   route reaches, is where it stands). A goal the memory does not reach from there
+   fails the mission (``no_route``).
 3. FOLLOWING: one servo cycle, its command to the base; the estimator's LOST, each
    key image reached and the final key image switch go to the mission.
 4. A ``Tick`` drives the give-up timers. A transition whose commands include STOP
@@ -311,6 +313,9 @@ class MissionRun:
         assert goal_id is not None  # set by Start
         start = found.ahead_id  # the first key image ahead: the route's first target
         assert start is not None  # set with keyframe_id
+        if found.keyframe_id == goal_id != start:  # at the goal, just past it
+            self._feed(ArrivedInput(t_ns, goal_id))
+            return found
         route = self._memory.plan_route(start, goal_id)
         if not route:
             self._feed(NoRoute(t_ns, f"no route from key image {start} to "

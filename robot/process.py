@@ -18,7 +18,8 @@ Rules:
 
 1. **The loop** (:meth:`RobotProcess.run`) hands each frame to
    :meth:`RobotRuntime.step` (then, with a live view, to :meth:`robot.video.LiveView.offer`,
-   which never waits) and, when no frame comes within
+   and with live topics to :meth:`robot.foxglove_bridge.FoxgloveBridge.offer`, neither of
+   which waits) and, when no frame comes within
    ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled
    (:meth:`RobotRuntime.stall`: the base stops), until the camera ends, the loop's
    clock reaches ``end_ns``, or the caller's ``on_step`` says :attr:`AfterStep.STOP`.
@@ -54,7 +55,7 @@ import contextlib
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -63,6 +64,7 @@ from robot.config import VmnavConfig
 from robot.field_log import FieldLog
 from robot.mission_run import CycleRecord
 from robot.runtime import RobotRuntime
+from robot.runtime_log import RuntimeLog, RuntimeLogs
 from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import SigningSetup, VehicleFiles
 from robot.vehicle.vehicle_io import Rejected
@@ -71,6 +73,9 @@ from robot.video import LiveView, video_stream
 from shared.clock import Clock
 from shared.interfaces import MobileBase
 from shared.memory import VisualMemory
+
+if TYPE_CHECKING:  # the SDK is imported only by a robot that serves Foxglove
+    from robot.foxglove_bridge import FoxgloveBridge
 
 #: While the loop holds the clock (rule 2), it steps the same frame again this often on
 #: the link's clock, ns.
@@ -130,6 +135,9 @@ class RobotParts:
         video: the live view (``vmnav robot --video``): offered every frame (rule 1) and
             advertised by the vehicle's camera component; None: no live view, no camera
             component.
+        foxglove: the live topics (``vmnav robot --foxglove``): offered every frame with
+            the telemetry (rule 1), and the runtime records to it as to the field log;
+            None: not served.
     """
 
     memory: VisualMemory
@@ -144,6 +152,7 @@ class RobotParts:
     link_warning: str | None = None
     lockstep: bool = False
     video: LiveView | None = None
+    foxglove: FoxgloveBridge | None = None
 
 
 class RobotProcess:
@@ -184,8 +193,11 @@ class RobotProcess:
                     undo.callback(log_end, log)
             if owned is not None:
                 undo.push(owned)
+            self._foxglove = parts.foxglove
+            records: list[RuntimeLog] = [r for r in (log, parts.foxglove) if r is not None]
             self.runtime = RobotRuntime(parts.memory, parts.files.memory_dir, parts.config,
-                                        parts.base, parts.clock, parts.rng, log=log,
+                                        parts.base, parts.clock, parts.rng,
+                                        log=RuntimeLogs(*records) if records else None,
                                         lockstep=parts.lockstep)
             undo.callback(self.runtime.close)
             self._video = parts.video
@@ -248,7 +260,10 @@ class RobotProcess:
         """Step ``frame``, again while ``on_step`` holds the clock (rule 2); what then."""
         record = self.runtime.step(*frame)
         if self._video is not None:
-            self._video.offer(*frame, record)
+            servo = self.runtime.telemetry().servo
+            self._video.offer(*frame, record, None if servo is None else servo.next_key)
+        if self._foxglove is not None:
+            self._foxglove.offer(*frame, self.runtime.telemetry())
         if on_step is None:
             return AfterStep.NEXT_FRAME
         after = on_step(record)

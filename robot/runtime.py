@@ -39,7 +39,9 @@ failsafes, photo goals) in one table; what they rest on here:
    them a new path of the memory, joined to the others and written atomically to
    ``memory_dir`` (:func:`robot.worker.store_path`); the runtime then works on the
    new memory. A drive shorter than ``TeachConfig.min_path_length_m``, or a memory
-   that cannot be written, is reported and nothing stored changes.
+   that cannot be written, is reported and nothing stored changes. Meanwhile the
+   telemetry carries the thumbnail of each key image taken, with the id it gets when
+   stored (``VehicleTelemetry.teach_thumbnails``), so the ground sees them come.
 5. A photo goal is read and localized in the memory by the worker
    (:func:`robot.worker.find_photo`): found, the robot goes there in GUIDED; not found
    (or an unreadable photo, or one of another size than the camera's) is a notice.
@@ -123,6 +125,7 @@ from shared.mavlink.mission.goal import Goal
 from shared.mavlink.mission.items import MissionRefusal
 from shared.mavlink.modes import Mode
 from shared.memory import VisualMemory
+from shared.memory.store import thumbnail_png
 from shared.pose import Pose2
 
 #: Notices queued at most (the oldest go first when the link does not take them).
@@ -136,6 +139,8 @@ class _Teaching:
     name: str
     selector: KeyImageSelector
     key_images: list[SelectedKeyImage]
+    first_id: int  #: the id the first key image gets when the path is stored
+    thumbnails: tuple[tuple[int, bytes], ...] = ()  #: (id to be, PNG) of each taken so far
 
 
 class RobotRuntime:
@@ -455,14 +460,18 @@ class RobotRuntime:
         name = name or f"path-{len(self._memory.paths) + 1}"
         config = self._config
         selector = KeyImageSelector(self._memory.camera, config.features, config.teach)
-        self._teaching = _Teaching(name, selector, [])
+        self._teaching = _Teaching(name, selector, [], max(self._memory.keyframes, default=-1) + 1)
         self._say(t_ns, logging.INFO, f"teaching {name!r}: drive the route in MANUAL")
 
     def _teach_frame(self, teaching: _Teaching, t_ns: int, image: npt.NDArray[np.uint8],
                      base: BaseState) -> None:
         if self._log is not None:
             self._log.teach_frame(t_ns, image, base.odom_pose)
-        teaching.key_images += teaching.selector.push(t_ns, image, base.odom_pose)
+        taken = teaching.selector.push(t_ns, image, base.odom_pose)
+        for key_image in taken:  # shown by the ground as they come (rule 4)
+            teaching.thumbnails += ((teaching.first_id + len(teaching.thumbnails),
+                                     thumbnail_png(key_image.record.image)),)
+        teaching.key_images += taken
 
     def _save_path(self) -> None:
         """Hand the taught key images to the worker (rule 4)."""
@@ -497,6 +506,7 @@ class RobotRuntime:
         top = self._top
         self._snapshot = self._goals.with_goals(VehicleTelemetry(
             mode=top.mode, armed=top.armed, teaching=self._teaching is not None,
+            teach_thumbnails=() if self._teaching is None else self._teaching.thumbnails,
             battery_v=base.battery_v, odom_pose=base.odom_pose, velocity=self._twist,
             home_pose=self._home, base_reporting=not top.base_lost))
 

@@ -1,4 +1,5 @@
-"""What the robot's runtime records as it works (the field log's side of it)."""
+"""What the robot's runtime records as it works (the field log's side of it, and the live
+topics')."""
 
 from __future__ import annotations
 
@@ -38,3 +39,33 @@ class RuntimeLog(Protocol):
         """Anything else for the operator (``logging`` level, one line)."""
         ...
 
+
+
+class RuntimeLogs:
+    """Several :class:`RuntimeLog` as one (the field log and the live topics): each call
+    goes to every one, in the order given."""
+
+    def __init__(self, *logs: RuntimeLog) -> None:
+        self._logs = logs
+
+    def mission_started(self, t_ns: int, goal_id: int, rng_state: Any,
+                        config: VmnavConfig) -> None:
+        for log in self._logs:
+            log.mission_started(t_ns, goal_id, rng_state, config)
+
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
+              targets: Sequence[int] = ()) -> None:
+        for log in self._logs:
+            log.cycle(record, image, targets)
+
+    def event(self, event: AppEvent) -> None:
+        for log in self._logs:
+            log.event(event)
+
+    def teach_frame(self, t_ns: int, image: npt.NDArray[np.uint8], odom_pose: Pose2) -> None:
+        for log in self._logs:
+            log.teach_frame(t_ns, image, odom_pose)
+
+    def note(self, t_ns: int, level: int, text: str) -> None:
+        for log in self._logs:
+            log.note(t_ns, level, text)

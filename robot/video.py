@@ -11,7 +11,9 @@ Rules:
 2. **The matches** drawn in the ``?matches=1`` view are the corners of the frame the
    vision matched with the key image the robot heads for, inliers of its estimate
    marked (:attr:`robot.vision.frame_state.FrameState.matched_xy`): while following only;
-   other frames go without points.
+   other frames go without points. The key image's corners they were matched with
+   (``FrameState.key_xy``) and its id go with them, for ``/matches.json``: a viewer
+   draws them on the key image.
 3. :func:`video_stream` describes the stream for the camera component
    (:mod:`shared.mavlink.camera`): its URI, the size it is served at, its rate, and the
    lens's horizontal field of view.
@@ -29,16 +31,43 @@ from shared.clock import NS_PER_S
 from shared.mavlink.camera import VideoStream
 from shared.mjpeg_server import MjpegServer, scaled_size
 
+MatchedPoints = tuple[npt.NDArray[np.float64] | None, npt.NDArray[np.bool_] | None,
+                      npt.NDArray[np.float64] | None]
+"""(frame corners (N, 2) px, which are inliers (N,) bool, key image corners (N, 2) px)."""
 
-def matched_points(record: CycleRecord | None) -> tuple[npt.NDArray[np.float64] | None,
-                                                       npt.NDArray[np.bool_] | None]:
-    """The frame's matched corners and which are inliers (rule 2); (None, None) without."""
+
+def matched_points(record: CycleRecord | None) -> MatchedPoints:
+    """The frame's matched corners, which are inliers, and the key image's corners they
+    were matched with (rule 2); (None, None, None) without."""
     follow = None if record is None else record.follow
     vision = None if follow is None else follow.vision
     if vision is None or len(vision.matched_xy) == 0:
-        return None, None
+        return None, None, None
     inliers = vision.state.inlier_mask
-    return vision.matched_xy, inliers if len(inliers) == len(vision.matched_xy) else None
+    key_xy = vision.key_xy if len(vision.key_xy) == len(vision.matched_xy) else None
+    return (vision.matched_xy, inliers if len(inliers) == len(vision.matched_xy) else None,
+            key_xy)
+
+
+class FramePacer:
+    """At most one frame per ``period_ns`` of frame time: the first frame is due, then one
+    each period after it; after a gap, the next frame is due at once.
+
+    Args:
+        period_ns: the shortest time between two frames let through, ns.
+    """
+
+    def __init__(self, period_ns: int) -> None:
+        self._period_ns = period_ns
+        self._next_ns: int | None = None
+
+    def due(self, t_ns: int) -> bool:
+        """Whether the frame at ``t_ns`` goes out (then the next is due a period later)."""
+        if self._next_ns is not None and t_ns < self._next_ns:
+            return False
+        next_ns = (t_ns if self._next_ns is None else self._next_ns) + self._period_ns
+        self._next_ns = next_ns if next_ns > t_ns else t_ns + self._period_ns
+        return True
 
 
 class LiveView:
@@ -51,17 +80,17 @@ class LiveView:
 
     def __init__(self, server: MjpegServer, config: VideoConfig) -> None:
         self.server = server
-        self._period_ns = config.frame_period_ns
-        self._next_ns: int | None = None
+        self._pacer = FramePacer(config.frame_period_ns)
 
-    def offer(self, t_ns: int, image: npt.NDArray[np.uint8], record: CycleRecord | None) -> None:
-        """The loop's frame at ``t_ns`` (H, W) uint8 grey, and the cycle it ran (None: no
-        mission run): published if a period has passed since the last one."""
-        if self._next_ns is not None and t_ns < self._next_ns:
-            return
-        next_ns = (t_ns if self._next_ns is None else self._next_ns) + self._period_ns
-        self._next_ns = next_ns if next_ns > t_ns else t_ns + self._period_ns
-        self.server.publish(t_ns, image, *matched_points(record))
+    def offer(self, t_ns: int, image: npt.NDArray[np.uint8], record: CycleRecord | None,
+              next_key: int | None = None) -> None:
+        """The loop's frame at ``t_ns`` (H, W) uint8 grey, the cycle it ran (None: no
+        mission run) and the key image it headed for (VISUAL_SERVO_STATUS ``next_key``):
+        published if a period has passed since the last one."""
+        if self._pacer.due(t_ns):
+            points_xy, inliers, key_xy = matched_points(record)
+            self.server.publish(t_ns, image, points_xy, inliers, key_xy=key_xy,
+                                key_id=None if key_xy is None else next_key)
 
 
 def video_stream(server: MjpegServer, config: VideoConfig, camera: CameraModel) -> VideoStream:

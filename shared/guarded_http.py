@@ -226,7 +226,7 @@ class GuardedHTTPServer(ThreadingHTTPServer):
     def __init__(self, address: tuple[str, int], handler: type[GuardedHandler],
                  limits: HttpLimits) -> None:
         self.limits = limits
-        self.loopback_only = _is_loopback(address[0])
+        self.loopback_only = is_loopback_name(address[0])
         self._slots = threading.BoundedSemaphore(limits.max_handlers)
         self._counts_lock = threading.Lock()
         self._handling = self._busy_refused = 0
@@ -299,8 +299,8 @@ class GuardedHandler(BaseHTTPRequestHandler):
     def refusal(self) -> RequestRefusedError | None:
         """Rule 3: why this request's ``Host`` or ``Origin`` is refused; None if it is not."""
         host = self.headers.get("Host")
-        if host is not None and self.server.loopback_only and not _is_loopback(
-                _host_name(host)):
+        if host is not None and self.server.loopback_only and not is_loopback_name(
+                host_name_of(host)):
             return RequestRefusedError(403, f"Host {host!r} is not this machine's loopback")
         origin = self.headers.get("Origin")
         if origin is not None and (host is None or origin.lower() != f"http://{host}".lower()):
@@ -350,8 +350,9 @@ class GuardedHandler(BaseHTTPRequestHandler):
         return bytes(body)
 
 
-def _is_loopback(host: str) -> bool:
-    """Whether ``host`` (a name or an address) means this machine only."""
+def is_loopback_name(host: str) -> bool:
+    """Whether ``host`` (a name or an address) means this machine only (also the web app's
+    check, ``ground.web.access``)."""
     if host.lower() in _LOOPBACK_NAMES:
         return True
     try:
@@ -360,7 +361,7 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
-def _host_name(host_header: str) -> str:
+def host_name_of(host_header: str) -> str:
     """The name or address of a ``Host`` header, without its port and IPv6 brackets."""
     if host_header.startswith("["):
         return host_header[1:].partition("]")[0]

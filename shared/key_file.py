@@ -16,6 +16,8 @@ from shared.mavlink.signing import key_from_file_bytes, new_passphrase
 
 #: A key file's permissions: its owner reads and writes it, nobody else.
 KEY_FILE_MODE = 0o600
+#: Mode of the folders :func:`create_key_file` creates (owner only).
+KEY_FOLDER_MODE = 0o700
 
 
 def read_key_file(path: str | Path) -> bytes:
@@ -43,16 +45,20 @@ def create_key_file(path: str | Path) -> None:
 
     Atomic and never overwriting: the key goes to a temporary 0600 file in the same
     folder, which is then linked as ``path`` (the link fails if ``path`` exists) and
-    removed; readers see no file or the whole key.
+    removed; readers see no file or the whole key. Missing folders are created, mode
+    0700 (as ``ssh-keygen`` creates ``~/.ssh``).
 
     Raises:
-        InputError: ``path`` exists, or its folder is missing or cannot be written.
+        InputError: ``path`` exists, or its folder cannot be created or written.
     """
     path = Path(path)
     if path.exists() or path.is_symlink():
         raise InputError(path, "exists: a new key never replaces one (delete it first "
                                "if that is really what you want)")
+    if path.parent.exists() and not path.parent.is_dir():
+        raise InputError(path, f"cannot create key file: {path.parent} is not a folder")
     try:
+        path.parent.mkdir(mode=KEY_FOLDER_MODE, parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as e:
         raise InputError(path, f"cannot create key file: {e.strerror}") from None

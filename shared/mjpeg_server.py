@@ -20,7 +20,10 @@ Rules:
    published frame; a client that falls behind skips to the newest frame (nothing
    queues). ``GET /snapshot.jpg``: the newest frame as one JPEG (503 before the first).
    ``?matches=1`` on either draws the points given with the frame (green: inliers of
-   the vision's estimate, orange: the other matches). Anything else: 404. Grey frames
+   the vision's estimate, orange: the other matches). ``GET /matches.json``: those
+   points of the newest frame as JSON, with the points of the key image they were
+   matched with when given (:func:`matches_json`; 503 before the first frame), so a
+   page can draw them on the key image beside the stream. Anything else: 404. Grey frames
    give grey JPEGs (OpenCV decodes them to three equal channels, which
    ``cv2.COLOR_BGR2GRAY`` turns back exactly).
 4. **Threads.** One thread accepts, one thread per client writes. A client that goes
@@ -41,10 +44,12 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import socket
 import threading
 from dataclasses import dataclass, field
+from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import cv2
@@ -58,6 +63,8 @@ log = logging.getLogger(__name__)
 
 STREAM_PATH = "/stream.mjpg"
 SNAPSHOT_PATH = "/snapshot.jpg"
+#: The newest frame's matches as JSON (rule 3), beside the stream on the same server.
+MATCHES_PATH = "/matches.json"
 #: The query that asks for the matched points drawn (rule 3).
 MATCHES_QUERY = "matches=1"
 BOUNDARY = "vmnavframe"
@@ -107,9 +114,12 @@ class _Frame:
     """A frame published, and its JPEG per view (made once, under ``lock``: rule 2)."""
 
     seq: int
+    t_ns: int
     image: npt.NDArray[np.uint8]
     points_xy: npt.NDArray[np.float64] | None
     inliers: npt.NDArray[np.bool_] | None
+    key_xy: npt.NDArray[np.float64] | None
+    key_id: int | None
     corrupt: bool
     jpegs: dict[bool, bytes] = field(default_factory=dict)
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -133,7 +143,8 @@ class _FrameBoard:
 
     def publish(self, t_ns: int, image: npt.NDArray[np.uint8],
                 points_xy: npt.NDArray[np.float64] | None,
-                inliers: npt.NDArray[np.bool_] | None) -> None:
+                inliers: npt.NDArray[np.bool_] | None,
+                key_xy: npt.NDArray[np.float64] | None, key_id: int | None) -> None:
         with self._changed:
             self._published += 1
             self._newest_t_ns = t_ns
@@ -146,7 +157,8 @@ class _FrameBoard:
                 self._corrupt_left -= 1
                 self._corrupted += 1
             self._seq += 1
-            self._frame = _Frame(self._seq, image, points_xy, inliers, corrupt)
+            self._frame = _Frame(self._seq, t_ns, image, points_xy, inliers, key_xy, key_id,
+                                 corrupt)
             self._changed.notify_all()
 
     def stall(self, duration_ns: int) -> None:
@@ -172,6 +184,18 @@ class _FrameBoard:
         with self._changed:
             frame = self._frame
         return None if frame is None else self._encoded(frame, matches)
+
+    def newest_matches(self) -> bytes | None:
+        """The newest frame's matches as JSON (:func:`matches_json`), or None before the
+        first frame."""
+        with self._changed:
+            frame = self._frame
+        if frame is None:
+            return None
+        height, width = frame.image.shape[:2]
+        return json.dumps(matches_json(frame.seq, frame.t_ns, (width, height), frame.points_xy,
+                                       frame.inliers, frame.key_xy, frame.key_id),
+                          separators=(",", ":")).encode()
 
     def _encoded(self, frame: _Frame, matches: bool) -> bytes:
         """The frame's JPEG for the view, made by the first client that asks (rule 2)."""
@@ -213,6 +237,29 @@ class _FrameBoard:
         with self._changed:
             self._closed = True
             self._changed.notify_all()
+
+
+def matches_json(seq: int, t_ns: int, size_wh: tuple[int, int],
+                 points_xy: npt.NDArray[np.float64] | None,
+                 inliers: npt.NDArray[np.bool_] | None,
+                 key_xy: npt.NDArray[np.float64] | None, key_id: int | None) -> dict[str, Any]:
+    """What ``GET /matches.json`` answers for a frame (rule 3).
+
+    Returns:
+        ``{"seq", "t_ns", "size": [W, H] of the frame as published (not scaled),
+        "key": the key image's id or None, "frame_xy": [[x, y], ...] px of the frame,
+        "key_xy": [[x, y], ...] px of the key image (the same matches, in order) or None,
+        "inliers": [bool, ...] or None}``, pixels rounded to 0.1 px. Key points whose
+        count differs from the frame's are left out (None), and so are inliers.
+    """
+    frame = np.zeros((0, 2)) if points_xy is None else points_xy
+    key = None if key_xy is None or len(key_xy) != len(frame) else key_xy
+    return {"seq": seq, "t_ns": t_ns, "size": list(size_wh),
+            "key": key_id if key is not None else None,
+            "frame_xy": np.round(frame, 1).tolist(),
+            "key_xy": None if key is None else np.round(key, 1).tolist(),
+            "inliers": None if inliers is None or len(inliers) != len(frame)
+            else [bool(v) for v in inliers]}
 
 
 def _draw_points(image: npt.NDArray[np.uint8], points_xy: npt.NDArray[np.float64],
@@ -284,8 +331,10 @@ class _Handler(GuardedHandler):
                 self._stream(matches)
             elif url.path == SNAPSHOT_PATH:
                 self._snapshot(matches)
+            elif url.path == MATCHES_PATH:
+                self._matches()
             else:
-                self.send_error(404, f"try {STREAM_PATH} or {SNAPSHOT_PATH}")
+                self.send_error(404, f"try {STREAM_PATH}, {SNAPSHOT_PATH} or {MATCHES_PATH}")
         except OSError as e:  # the client went away (reset, broken pipe, shut at close)
             log.debug("camera client %s:%s gone: %s", *self.client_address, e)
 
@@ -318,6 +367,18 @@ class _Handler(GuardedHandler):
         self.send_header("Cache-Control", "no-cache, no-store")
         self.end_headers()
         self.wfile.write(jpeg)
+
+    def _matches(self) -> None:
+        body = self.server.board.newest_matches()
+        if body is None:
+            self.send_error(503, "no frame yet")
+            return
+        self.send_response(200)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-cache, no-store")
+        self.end_headers()
+        self.wfile.write(body)
 
     def log_message(self, format: str, *args: object) -> None:
         log.debug("camera client %s: " + format, self.address_string(), *args)
@@ -381,13 +442,20 @@ class MjpegServer:
         return f"http://{_url_host(self.host)}:{self.port}{STREAM_PATH}"
 
     @property
+    def matches_url(self) -> str:
+        """The newest frame's matches as JSON (rule 3)."""
+        return f"http://{_url_host(self.host)}:{self.port}{MATCHES_PATH}"
+
+    @property
     def snapshot_url(self) -> str:
         """The newest frame as one JPEG."""
         return f"http://{_url_host(self.host)}:{self.port}{SNAPSHOT_PATH}"
 
     def publish(self, t_ns: int, image: npt.NDArray[np.uint8],
                 points_xy: npt.NDArray[np.float64] | None = None,
-                inliers: npt.NDArray[np.bool_] | None = None) -> None:
+                inliers: npt.NDArray[np.bool_] | None = None, *,
+                key_xy: npt.NDArray[np.float64] | None = None,
+                key_id: int | None = None) -> None:
         """A new frame for every client (rule 1); never waits for a client.
 
         Args:
@@ -397,16 +465,21 @@ class MjpegServer:
             points_xy: (N, 2) float64 pixels of ``image`` (x right, y down, OpenCV's
                 centres at integers) to draw in the ``?matches=1`` view; None: none.
             inliers: (N,) bool, which of ``points_xy`` to draw as inliers; None: none.
+            key_xy: (N, 2) float64 pixels of the key image ``key_id`` that ``points_xy``
+                were matched with, in order, for ``/matches.json``; None: not known.
+            key_id: the key image's id.
 
         Raises:
-            ShapeError: ``image`` is neither, or ``points_xy`` is not (N, 2).
+            ShapeError: ``image`` is neither, or ``points_xy`` or ``key_xy`` is not (N, 2).
         """
         if image.dtype != np.uint8 or not (image.ndim == 2 or image.shape[2:] == (3,)):
             raise ShapeError(f"image: expected (H, W) or (H, W, 3) uint8, got {image.shape} "
                              f"{image.dtype}")
         if points_xy is not None and (points_xy.ndim != 2 or points_xy.shape[1] != 2):
             raise ShapeError(f"points_xy: expected (N, 2), got {points_xy.shape}")
-        self._board.publish(t_ns, image, points_xy, inliers)
+        if key_xy is not None and (points_xy is None or key_xy.shape != points_xy.shape):
+            raise ShapeError(f"key_xy: expected the shape of points_xy, got {key_xy.shape}")
+        self._board.publish(t_ns, image, points_xy, inliers, key_xy, key_id)
 
     def stall(self, duration_ns: int) -> None:
         """Withhold the frames from the newest one published until ``duration_ns`` later
@@ -431,6 +504,14 @@ class MjpegServer:
         self._http.drop_all()
         self._http.server_close()
         self._thread.join()
+
+
+def matches_url(stream_url: str) -> str:
+    """The ``/matches.json`` beside a stream of this server (``http://H:P/stream.mjpg``
+    -> ``http://H:P/matches.json``): where a viewer that found the stream (the camera
+    protocol advertises it alone) finds the matches of its frames."""
+    url = urlsplit(stream_url)
+    return url._replace(path=MATCHES_PATH, query="", fragment="").geturl()
 
 
 def _url_host(host: str) -> str:

@@ -1,8 +1,7 @@
 """``vmnav bench ...``: benchmarks that print JSON (medians; one core).
 
-This module declares the command line; each benchmark lives in :mod:`tools.bench`, whose
-module ``run(args)`` checks its arguments, measures and prints the JSON. That module is
-imported only when its benchmark runs (OpenCV, pymunk), so ``vmnav --help`` stays fast.
+This module declares the command line; each benchmark's module in :mod:`tools.bench` has a
+``run(args)``, imported only when it runs (OpenCV, pymunk): ``vmnav --help`` stays fast.
 """
 
 from __future__ import annotations
@@ -12,7 +11,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
-from tools import bench_safety_cmd, bench_sweep_cmd
+from tools import bench_foxglove_cmd, bench_safety_cmd, bench_sweep_cmd, bench_web_cmd
 from tools.harness.arg_types import POSITIVE_COUNT, SEED
 from tools.harness.sim_args import add_sim_arguments
 
@@ -22,8 +21,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     bench = subparsers.add_parser("bench", help="benchmarks printing JSON")
     bench_sub = bench.add_subparsers(dest="bench_command", metavar="BENCHMARK", required=True)
     sim = bench_sub.add_parser(
-        "sim",
-        help="simulator: physics + rendering frames/s, camera-model accuracy",
+        "sim", help="simulator: physics + rendering frames/s, camera-model accuracy",
         description="Drive the simulated robot along a route and time physics + rendering per "
         "frame on one core; check the camera model's round trip and agreement with cv2.omnidir.",
     )
@@ -149,6 +147,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       help="timed runs of each front end on the pair [default: 10]")
     real.set_defaults(run=runner("real"))
     bench_safety_cmd.add_parser(bench_sub, runner("safety"))
+    bench_foxglove_cmd.add_parser(bench_sub, runner("foxglove"))
+    bench_web_cmd.add_parser(bench_sub, runner("web"))
     chance = bench_sub.add_parser("chance", help="issue 16: pairs of unrelated real images "
                                   "through localization's acceptance test (target: none pass)")
     chance.add_argument("--realdata", type=Path, metavar="DIR", help="real image sets' folder")

@@ -87,6 +87,9 @@ def _describe(parser: argparse.ArgumentParser) -> None:
 #: Environment that keeps OpenCV's and FFmpeg's own warnings off the output (a camera URL
 #: that does not open printed two lines of theirs before ours); set them to see them.
 _QUIET_LIBRARIES = {"OPENCV_LOG_LEVEL": "ERROR", "OPENCV_FFMPEG_LOGLEVEL": "-8"}
+#: Libraries whose INFO lines are their own business (matplotlib's "generated new
+#: fontManager" on a first plot): warnings only, unless --verbose.
+_QUIET_LOGGERS = ("matplotlib",)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -98,6 +101,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         level=logging.DEBUG if args.verbose else logging.INFO,
         format="%(levelname)s %(name)s: %(message)s",
     )
+    if not args.verbose:
+        for name in _QUIET_LOGGERS:
+            logging.getLogger(name).setLevel(logging.WARNING)
     # SIGTERM (a service manager, `kill`) unwinds like Ctrl-C: finally blocks close
     # logs and links; commands that need more install their own handler.
     signal.signal(signal.SIGTERM, _exit_on_sigterm)

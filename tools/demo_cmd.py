@@ -51,6 +51,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
                       "station as separate processes on TCP, HTTP and UDP; teach one route (the "
                       "world's first, or --routes NAME) by teleoperation, then repeat it from "
                       "the usual offset")
+    demo.add_argument("--web", action="store_true",
+                      help="with --hil: serve the web app on loopback while it runs (prints "
+                      "its URL) and the robot's camera, to watch the demo in a browser")
     add_repeat_arguments(demo)
     add_change_arguments(demo)
     demo.add_argument("--no-video", action="store_true", help="do not write the MP4 video")
@@ -69,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
 
     setup = repeat_setup_from_args(args)
     config, sim_config, change, routes = setup.config, setup.sim_config, setup.change, setup.routes
+    if args.web and not args.hil:
+        raise InputError("--web", "needs --hil (the lock-step demo has no ground station)")
     out: Path = args.out or Path("out/hil" if args.hil else "out/demo")
     if out.exists() and not out.is_dir():
         raise InputError(out, "is not a folder")
@@ -80,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--hil", "repeats in the taught world from the usual offset: "
                              "--lighting, --moved, --removed, --doors and --start-offset are "
                              "for the lock-step demo")
-        return run_hil_demo(out, config, sim_config, None if routes is None else routes[0])
+        return run_hil_demo(out, config, sim_config, None if routes is None else routes[0],
+                            args.web)
     started = time.perf_counter()
     taught = taught_memory(out, routes, config, sim_config, setup.camera)
     teach_s = time.perf_counter() - started
@@ -131,14 +137,17 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_hil_demo(out: Path, config: VmnavConfig, sim_config: SimConfig,
-                 route: str | None) -> int:
-    """``vmnav demo --hil``: run it, write ``report.json``, print the summary."""
+                 route: str | None, web: bool = False) -> int:
+    """``vmnav demo --hil`` (``--web``: with the web app): run it, write ``report.json``,
+    print the summary."""
     from tools.figures.demo_report import hil_summary_text
     from tools.harness.hil_demo import robot_config_text, run_hil
 
     robot_config = out / "robot.toml"
     robot_config.write_text(robot_config_text(config))
-    report = run_hil(out, config, sim_config, robot_config, route)
+    report = run_hil(out, config, sim_config, robot_config, route, watch=(lambda url: print(
+        f"vmnav demo: watch it at {url} (the web app, while the demo runs)", flush=True))
+        if web else None)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(hil_summary_text(report, out))
     return 0 if report["reached_goal"] else 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -35,19 +36,41 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
         description="Serve the ground station's web app until Ctrl-C: every vehicle heard, "
         "the live servo state and odometry of one, its memory's key images (click one to go "
         "there), mode/arm/hold/emergency stop, parameters, and teaching with the keyboard or "
-        "a gamepad. Loopback only.")
+        "a gamepad, the ground logs. Serving an address other than loopback takes an access "
+        "token, generated and printed at start or read from --token-file.")
     web.add_argument("--http", type=http_address, default=http_address(DEFAULT_HTTP),
                      metavar="HOST:PORT",
-                     help=f"where to serve the page (default {DEFAULT_HTTP}; port 0 picks one)")
-    web.set_defaults(action=run_web, waits_for_vehicle=False)
+                     help=f"where to serve the page (default {DEFAULT_HTTP}; port 0 picks one; "
+                          "an address other than loopback, e.g. 0.0.0.0:8080, requires a token)")
+    web.add_argument("--token-file", type=Path, metavar="FILE",
+                     help="the access token every request must carry, on FILE's first line "
+                          "(at least 16 of A-Z a-z 0-9 . _ ~ -); without it, one is generated "
+                          "when --http is not loopback")
+    web.set_defaults(action=run_web, waits_for_vehicle=False, check=check_web)
+
+
+def check_web(args: argparse.Namespace) -> None:
+    """Read the token file before connecting: a bad one is one line, and nothing opened."""
+    from ground.web.access import read_token_file
+
+    if args.token_file is not None:
+        read_token_file(args.token_file)
 
 
 def web_config(args: argparse.Namespace) -> WebConfig:
-    """The server's config from the arguments."""
+    """The server's config from the arguments (the token read or generated here)."""
+    from ground.web.access import generate_token, read_token_file
     from ground.web.server import WebConfig
+    from shared.guarded_http import is_loopback_name
 
     host, port = args.http
-    return WebConfig(host=host, port=port, vehicle_timeout_s=args.timeout)
+    token = None
+    if args.token_file is not None:
+        token = read_token_file(args.token_file)
+    elif not is_loopback_name(host):
+        token = generate_token()
+    return WebConfig(host=host, port=port, vehicle_timeout_s=args.timeout, token=token,
+                     log_dir=args.log)
 
 
 def run_web(station: GroundStation, args: argparse.Namespace) -> int:

@@ -6,12 +6,12 @@ the Pioneer (:class:`robot.pioneer.driver.PioneerDriver` on ``--aria ADDRESS``),
 camera (:class:`robot.camera.VideoCaptureSource` on ``--camera SOURCE``), the ground link
 (``robot.vehicle.vehicle_link`` on ``--mavlink ADDRESS``, signed with ``--key FILE``; on
 this machine only without a key: ``shared.link_security``; addresses: docs/links.md),
-the application (:class:`robot.runtime.RobotRuntime` over ``--memory DIR``) and, with
-``--video``, the live view (:mod:`robot.video`, advertised by the MAVLink camera protocol).
+the application (:class:`robot.runtime.RobotRuntime` over ``--memory DIR``), ``--video``'s
+live view and ``--foxglove``'s live topics for Foxglove (:mod:`tools.harness.robot_views`).
 
 :class:`robot.process.RobotProcess` assembles them and runs the loop: it hands each
 frame to the runtime and, when no frame comes within ``TeleopConfig.frame_timeout_ns``,
-tells it the camera stalled (the base stops). Start-up checks come first: both addresses,
+tells it the camera stalled (the base stops). Start-up checks come first: every address,
 the ground link's transport (a port in use, a missing radio) and the Pioneer's (a missing
 device, a refused or unanswered connect: one line in under 2 s), before the Pioneer's
 motors are enabled. Parameters set from the ground and goal
@@ -29,10 +29,7 @@ from pathlib import Path
 
 from shared.errors import InputError, TransportError
 from tools.harness.arg_types import POSITIVE, SYSTEM_ID
-from tools.harness.tcp_spec import parse_http_spec
-
-#: The live view's port for a plain ``--video http``.
-DEFAULT_VIDEO_PORT = 8090
+from tools.harness.robot_views import DEFAULT_VIDEO_PORT, FOXGLOVE_PORT, check_views, open_views
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -73,8 +70,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                              "sign everything, drop unsigned input")
     parser.add_argument("--insecure", action="store_true",
                         help="allow an unsigned --mavlink link open to the network (anyone "
-                             "on it can drive the robot); warns at start and to each ground "
-                             "station")
+                             "on it can drive the robot; warns at start and to each ground "
+                             "station), and --foxglove on a host off this machine")
     parser.add_argument("--log", type=Path, metavar="DIR",
                         help="write the field log to DIR/robot-NNNN.mcap: frames, matches, "
                              "servo state, commands, odometry, SIPs, MAVLink in and out, events "
@@ -87,6 +84,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                              f"http:HOST:PORT (host 127.0.0.1 unless given; port "
                              f"{DEFAULT_VIDEO_PORT} for plain http; 0 picks a free one) "
                              "[default: off]")
+    parser.add_argument("--foxglove", metavar="[HOST:]PORT",
+                        help="serve the live topics (camera, servo state, tf, commands: the "
+                             "field log's topics and schemas) over the Foxglove WebSocket "
+                             "protocol, for Foxglove or Lichtblick (docs/foxglove.md); host "
+                             "127.0.0.1 unless given, another needs --insecure; port "
+                             f"{FOXGLOVE_PORT} is the viewers' default, 0 picks a free one "
+                             "[default: the config's foxglove.address, off]")
     parser.add_argument("--duration", type=POSITIVE, metavar="S",
                         help="stop after this long, s [default: until Ctrl-C or SIGTERM]")
     parser.set_defaults(run=run)
@@ -105,13 +109,11 @@ def run(args: argparse.Namespace) -> int:
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
     from robot.vehicle.vehicle_link import open_vehicle_transport
-    from robot.video import LiveView
     from shared.calibration import read_camera
     from shared.clock import WallClock, unix_offset_ns
     from shared.key_file import read_key_file
     from shared.link_security import INSECURE_NOTICE, check_link
     from shared.memory import open_or_create
-    from shared.mjpeg_server import MjpegServer
 
     config = load_config(args.config)
     config = dataclasses.replace(
@@ -124,8 +126,7 @@ def run(args: argparse.Namespace) -> int:
                                                        else {"system_id": args.system})))
     if args.duration is not None and not args.duration > 0:
         raise InputError("--duration", f"must be > 0 seconds, got {args.duration}")
-    video = None if args.video is None else parse_http_spec(args.video, "--video",
-                                                            DEFAULT_VIDEO_PORT)
+    views = check_views(args.video, args.foxglove, config.foxglove.address, args.insecure)
     aria_option = "--aria" if args.aria is not None else "[pioneer] url"
     aria_address(config.pioneer.url, aria_option)
     key = read_key_file(args.key) if args.key is not None else None
@@ -146,12 +147,7 @@ def run(args: argparse.Namespace) -> int:
         transport = open_vehicle_transport(url)
         owned.callback(transport.close)  # until the process owns it
         camera = owned.enter_context(VideoCaptureSource(config.camera, clock, memory.camera))
-        view = None
-        if video is not None:
-            view = LiveView(owned.enter_context(MjpegServer(
-                video.host, video.port, config.video.jpeg_quality,
-                width_px=config.video.width_px, max_clients=config.video.max_clients)),
-                config.video)
+        view, bridge = open_views(views, config, unix_offset, owned)
         driver = owned.enter_context(PioneerDriver.from_config(config.pioneer, clock))
         try:
             driver.open_transport()
@@ -176,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         parts = RobotParts(memory, driver, camera, clock, config, files, np.random.default_rng(),
                            log=log, signing=signing,
                            link_warning=INSECURE_NOTICE if link_check.insecure else None,
-                           video=view)
+                           video=view, foxglove=bridge)
         with RobotProcess(parts, transport, owned=owned.pop_all(),
                           log_end=pioneer_closed) as process:
             identity = driver.status().identity
@@ -188,8 +184,11 @@ def run(args: argparse.Namespace) -> int:
                   f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
             if view is not None:
                 print(f"vmnav robot: live view on {view.server.stream_url}", flush=True)
-            if link_check.line is not None:
-                print(f"vmnav robot: {link_check.line}", flush=True)
+            if bridge is not None:
+                print(f"vmnav robot: live topics for Foxglove on {bridge.url}", flush=True)
+            for line in (link_check.line, views.line):
+                if line is not None:
+                    print(f"vmnav robot: {line}", flush=True)
             ended = process.run(end_ns=None if args.duration is None
                                 else clock.now_ns() + round(args.duration * 1e9))
     print(f"vmnav robot: {ended}; base stopped, links closed", flush=True)

@@ -5,8 +5,14 @@ Routes:
 * ``GET /``: the page (``static/index.html``); ``/static/...``: its modules and style;
 * ``GET /api/vehicles/{system}/memory/{thumbnails|images}/{key}.png``: a key image file
   fetched from the robot over MAVLink FTP (cached by the station loop);
+* ``GET /api/vehicles/{system}/teaching/{key}.png``: the thumbnail of a key image of the
+  path being taught, over MAVLink FTP (not cached);
 * ``GET /api/vehicles/{system}/camera.mjpg`` (``?matches=1``): the robot's camera, relayed
-  (``ground.web.camera_proxy``);
+  (``ground.web.camera_proxy``); ``GET /api/vehicles/{system}/camera-matches.json``: the
+  matches of its newest frame, with the key image's points;
+* ``POST /api/vehicles/{system}/goto-photo``: a photo as the goal;
+* ``GET /api/logs``: the ground log's files (``--log``); ``GET /api/logs/{name}``: one,
+  downloaded (``ground.web.log_files``);
 * ``WS /ws``: live data and the page's requests (``ground.web.requests``).
 
 On the WebSocket the server sends JSON objects with a ``type``:
@@ -45,12 +51,13 @@ from typing import Any
 from starlette.applications import Starlette
 from starlette.requests import HTTPConnection
 from starlette.requests import Request as HttpRequest
-from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from ground.web.camera_proxy import CameraProxy, StreamUnavailableError
+from ground.web.camera_proxy import CameraProxy, StreamUnavailableError, fetch_matches
+from ground.web.log_files import list_logs, open_log
 from ground.web.requests import parse_request, request_id_of
 from ground.web.station_loop import StationLoop
 from shared.errors import InputError, VmnavError
@@ -216,12 +223,15 @@ async def _index(request: HttpRequest) -> Response:
 
 async def _memory_file(request: HttpRequest) -> Response:
     station_loop: StationLoop = request.app.state.station_loop
-    system, kind, key = (request.path_params["system"], request.path_params["kind"],
+    system, kind, key = (request.path_params["system"], request.path_params.get("kind"),
                          request.path_params["key"])
     try:
+        if kind is None:  # the path being taught: its ids are freed if it is dropped
+            data = await asyncio.wrap_future(station_loop.teaching_file(system, key))
+            return Response(data, media_type="image/png", headers={"Cache-Control": "no-store"})
         data = await asyncio.wrap_future(station_loop.memory_file(system, kind, key))
     except VmnavError as e:
-        _log.warning("key image %s/%d of vehicle %d: %s", kind, key, system, e)
+        _log.warning("key image %s/%d of vehicle %d: %s", kind or "teaching", key, system, e)
         # 400: the page asked for something that cannot be; 502: the robot refused or failed.
         return JSONResponse({"error": str(e)}, status_code=400 if isinstance(e, InputError)
                             else 502)
@@ -230,11 +240,14 @@ async def _memory_file(request: HttpRequest) -> Response:
 
 
 async def _camera(request: HttpRequest) -> Response:
+    """The camera's stream, or (``camera-matches.json``) its newest frame's matches."""
     station_loop: StationLoop = request.app.state.station_loop
     proxy: CameraProxy = request.app.state.camera_proxy
     system = request.path_params["system"]
     try:
         stream = await asyncio.wrap_future(station_loop.video_stream(system))
+        if request.url.path.endswith(".json"):
+            return await fetch_matches(stream)
         return await proxy.relay(system, stream, request.query_params.get("matches") == "1")
     except VmnavError as e:
         _log.warning("camera of vehicle %d: %s", system, e)
@@ -275,8 +288,36 @@ async def _goto_photo(request: HttpRequest) -> Response:
                          "said": found.said})
 
 
-def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
-    """The app around a (not yet started) station loop: the loop runs while the app does."""
+async def _logs(request: HttpRequest) -> Response:
+    """The ground log's files, newest first (``{"dir": null}`` without ``--log``)."""
+    log_dir: Path | None = request.app.state.log_dir
+    if log_dir is None:
+        return JSONResponse({"dir": None, "files": []})
+    files = await asyncio.to_thread(list_logs, log_dir)
+    return JSONResponse({"dir": str(log_dir), "files": [
+        {"name": f.name, "bytes": f.size_bytes, "modified_unix_s": f.modified_unix_s}
+        for f in files]})
+
+
+async def _log_file(request: HttpRequest) -> Response:
+    """One of the ground log's files, as a download."""
+    log_dir: Path | None = request.app.state.log_dir
+    name = request.path_params["name"]
+    if log_dir is None:
+        return JSONResponse({"error": "no ground log: start with --log DIR"}, status_code=404)
+    try:
+        size, chunks = await asyncio.to_thread(open_log, log_dir, name)
+    except InputError as e:
+        _log.warning("log download: %s", e)
+        return JSONResponse({"error": str(e)}, status_code=404)
+    return StreamingResponse(chunks, media_type="application/octet-stream", headers={
+        "Content-Length": str(size), "Content-Disposition": f'attachment; filename="{name}"',
+        "Cache-Control": "no-store"})
+
+
+def build_app(station_loop: StationLoop, hub: Hub, log_dir: Path | None = None) -> Starlette:
+    """The app around a (not yet started) station loop: the loop runs while the app does;
+    ``log_dir``: the ground log's folder the page lists (None: no log)."""
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:
@@ -291,10 +332,15 @@ def build_app(station_loop: StationLoop, hub: Hub) -> Starlette:
         Route("/", _index),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
         Route("/api/vehicles/{system:int}/memory/{kind}/{key:int}.png", _memory_file),
+        Route("/api/vehicles/{system:int}/teaching/{key:int}.png", _memory_file),
         Route("/api/vehicles/{system:int}/camera.mjpg", _camera),
+        Route("/api/vehicles/{system:int}/camera-matches.json", _camera),
         Route("/api/vehicles/{system:int}/goto-photo", _goto_photo, methods=["POST"]),
+        Route("/api/logs", _logs),
+        Route("/api/logs/{name}", _log_file),
         WebSocketRoute("/ws", _websocket),
     ], lifespan=lifespan)
+    app.state.log_dir = log_dir
     app.state.station_loop = station_loop
     app.state.hub = hub
     app.state.camera_proxy = CameraProxy()

@@ -20,11 +20,16 @@ Rules:
    so the robot's server drops it after its own timeout (``shared.mjpeg_server`` rule 4).
 3. At most :data:`MAX_VIEWERS` relays at once (each costs a connection to the robot);
    more get 503 at once.
+4. The matches of the newest frame (``GET .../camera-matches.json``): the ``/matches.json``
+   beside the advertised stream on the robot's server (``shared.mjpeg_server`` rule 3),
+   fetched once per request like the stream's head (rule 1), at most
+   :data:`MAX_MATCHES_BYTES`, and checked to be a JSON object before the page gets it.
 """
 
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 from collections.abc import AsyncIterator
 from urllib.parse import urlsplit
@@ -32,6 +37,7 @@ from urllib.parse import urlsplit
 from starlette.responses import JSONResponse, Response, StreamingResponse
 
 from shared.mavlink.camera import VideoStream
+from shared.mjpeg_server import matches_url
 
 _log = logging.getLogger(__name__)
 
@@ -41,6 +47,8 @@ CONNECT_TIMEOUT_S = 5.0
 READ_TIMEOUT_S = 10.0
 #: Relays at once (rule 3).
 MAX_VIEWERS = 8
+#: The largest matches document taken from the robot (rule 4), bytes.
+MAX_MATCHES_BYTES = 1 << 20
 _CHUNK = 64 * 1024
 _HEADER_LINES = 50
 
@@ -66,7 +74,7 @@ class CameraProxy:
         if self.viewers >= self.max_viewers:
             return JSONResponse({"error": f"{self.max_viewers} camera views open already; "
                                           "close one"}, status_code=503)
-        reader, writer, content_type = await _open(stream, matches)
+        reader, writer, content_type = await _open_stream(stream, matches)
         self.viewers += 1  # before the response starts: counted however it ends
         return StreamingResponse(self._body(system_id, stream, reader, writer),
                                  media_type=content_type,
@@ -86,11 +94,46 @@ class CameraProxy:
             writer.close()
 
 
-async def _open(stream: VideoStream, matches: bool) \
+async def fetch_matches(stream: VideoStream) -> Response:
+    """The newest frame's matches of ``stream``'s server, for the page (rule 4).
+
+    Raises:
+        StreamUnavailableError: the server did not answer with a JSON object.
+    """
+    uri = matches_url(stream.uri)
+    reader, writer, _ = await _open(uri, "camera matches")
+    try:
+        body = await asyncio.wait_for(reader.read(MAX_MATCHES_BYTES + 1), READ_TIMEOUT_S)
+        while len(body) <= MAX_MATCHES_BYTES and (more := await asyncio.wait_for(
+                reader.read(MAX_MATCHES_BYTES + 1 - len(body)), READ_TIMEOUT_S)):
+            body += more
+    except (OSError, TimeoutError) as e:
+        raise StreamUnavailableError(f"camera matches {uri}: "
+                                     f"{'no answer' if isinstance(e, TimeoutError) else e}") \
+            from None
+    finally:
+        writer.close()
+    if len(body) > MAX_MATCHES_BYTES:
+        raise StreamUnavailableError(f"camera matches {uri}: more than {MAX_MATCHES_BYTES} bytes")
+    try:
+        if not isinstance(json.loads(body), dict):
+            raise ValueError("not an object")
+    except ValueError as e:
+        raise StreamUnavailableError(f"camera matches {uri}: not a JSON object ({e})") from None
+    return Response(body, media_type="application/json",
+                    headers={"Cache-Control": "no-cache, no-store"})
+
+
+async def _open_stream(stream: VideoStream, matches: bool) \
         -> tuple[asyncio.StreamReader, asyncio.StreamWriter, str]:
-    """Connect, ask, check the status and read the headers (rule 1)."""
-    url = urlsplit(stream.uri)
-    where = f"camera stream {stream.uri}"
+    """The stream, with the matched points drawn if ``matches`` (rule 1)."""
+    return await _open(stream.uri + ("?matches=1" if matches else ""), "camera stream")
+
+
+async def _open(uri: str, what: str) -> tuple[asyncio.StreamReader, asyncio.StreamWriter, str]:
+    """Connect to ``uri``, ask, check the status and read the headers (rule 1)."""
+    url = urlsplit(uri)
+    where = f"{what} {uri}"
     if url.scheme != "http" or not url.hostname:
         raise StreamUnavailableError(f"{where}: not an http:// URI")
     try:
@@ -101,7 +144,7 @@ async def _open(stream: VideoStream, matches: bool) \
                                      f"{'timed out' if isinstance(e, TimeoutError) else e}") \
             from None
     try:
-        path = (url.path or "/") + ("?matches=1" if matches else "")
+        path = (url.path or "/") + (f"?{url.query}" if url.query else "")
         writer.write(f"GET {path} HTTP/1.0\r\nHost: {url.netloc}\r\n\r\n".encode("ascii"))
         status = await asyncio.wait_for(reader.readline(), CONNECT_TIMEOUT_S)
         fields = status.split()

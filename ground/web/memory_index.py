@@ -2,19 +2,24 @@
 from ``/memory/manifest.json`` fetched over MAVLink FTP (pure).
 
 The manifest's format is :mod:`shared.memory.store`'s; this reads only what the browser
-shows (paths with their key image ids in order, and each key image's path, index,
-distance and teach odometry) and checks just that, so a manifest the robot wrote is
-never refused here for a field the page does not use. The camera and the data files stay
-on the robot; key images come as files (``thumbnails/<id>.png``, ``images/<id>.png``).
+shows (paths with their key image ids in order, each key image's path, index, distance
+and teach odometry, and the junctions) and checks just that, so a manifest the robot
+wrote is never refused here for a field the page does not use. That is also all route
+planning needs: :meth:`MemoryIndex.plan_route` plans with the robot's own planner
+(:class:`shared.memory.graph.RouteGraph`) on the manifest's graph. The camera and the
+data files stay on the robot; key images come as files (``thumbnails/<id>.png``,
+``images/<id>.png``).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
 from shared.errors import MemoryFormatError
 from shared.json_file import parse_json
+from shared.memory.graph import RouteGraph, route_edges
 from shared.memory.store import FORMAT, MANIFEST_NAME
 
 #: Where the robot serves its memory (``robot.vehicle.ftp_memory``).
@@ -22,22 +27,41 @@ MEMORY_ROOT = "/memory"
 MANIFEST_PATH = f"{MEMORY_ROOT}/{MANIFEST_NAME}"
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True)
 class MemoryIndex:
-    """Paths and key images.
+    """Paths, key images and junctions.
 
     Attributes:
         paths: ``{"id", "name", "keyframe_ids"}`` per path, in the manifest's order.
         keyframes: key image id -> ``{"path_id", "index", "distance_m", "odom_pose"}``.
+        junctions: ``{"from_id", "to_id"}`` per junction (the two key images are one place).
     """
 
     paths: tuple[dict[str, Any], ...]
     keyframes: dict[int, dict[str, Any]]
+    junctions: tuple[dict[str, int], ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         """For the page (JSON object keys are strings)."""
         return {"paths": list(self.paths),
-                "keyframes": {str(k): v for k, v in sorted(self.keyframes.items())}}
+                "keyframes": {str(k): v for k, v in sorted(self.keyframes.items())},
+                "junctions": list(self.junctions)}
+
+    def plan_route(self, start_id: int, goal_id: int) -> list[int]:
+        """The key images the robot passes from ``start_id`` to ``goal_id``, both included
+        (:meth:`shared.memory.graph.RouteGraph.plan_route`); ``[]`` if unreachable.
+
+        Raises:
+            UnknownKeyframeError: either id is not in the memory.
+        """
+        return self._graph.plan_route(start_id, goal_id)
+
+    @functools.cached_property
+    def _graph(self) -> RouteGraph:
+        return RouteGraph(self.keyframes, route_edges(
+            (p["keyframe_ids"] for p in self.paths),
+            {i: k["distance_m"] for i, k in self.keyframes.items()},
+            ((j["from_id"], j["to_id"]) for j in self.junctions)))
 
 
 def _int(where: str, value: Any) -> int:
@@ -96,4 +120,18 @@ def memory_index_from_manifest(data: bytes) -> MemoryIndex:
             "path_id": _int(f"keyframes[{i}].path_id", entry.get("path_id")),
             "index": _int(f"keyframes[{i}].index", entry.get("index")),
             "distance_m": float(distance), "odom_pose": [float(v) for v in pose]}
-    return MemoryIndex(tuple(paths), keyframes)
+    for i, entry in enumerate(paths):
+        missing = [k for k in entry["keyframe_ids"] if k not in keyframes]
+        if missing:
+            raise MemoryFormatError(MANIFEST_PATH, f"paths[{i}].keyframe_ids: key image "
+                                                   f"{missing[0]} is not in keyframes")
+    junctions = []
+    for i, entry in enumerate(_list("junctions", manifest.get("junctions", []))):
+        entry = _object(f"junctions[{i}]", entry)
+        pair = {name: _int(f"junctions[{i}].{name}", entry.get(name))
+                for name in ("from_id", "to_id")}
+        if not all(k in keyframes for k in pair.values()):
+            raise MemoryFormatError(MANIFEST_PATH, f"junctions[{i}]: joins a key image not "
+                                                   "in keyframes")
+        junctions.append(pair)
+    return MemoryIndex(tuple(paths), keyframes, tuple(junctions))

@@ -14,6 +14,8 @@ vehicle's system id, the one selected last when absent. Each command's other fie
 ``hold``       -- (mode HOLD)
 ``estop``      -- (the forced disarm of ``vmnav ground stop``)
 ``goto``       ``key``: key image id, 0..2^24
+``mission``    ``keys``: 1 to 64 key image ids (goals visited in order)
+``route``      ``key``: the key images the robot would pass to get there
 ``params``     -- (every parameter)
 ``param_set``  ``name``: up to 16 characters; ``value``: a finite number
 ``teach_start`` ``name``: the path's name (up to 21 printable ASCII characters)
@@ -46,10 +48,12 @@ MAX_REQUEST_CHARS = 4096
 PARAM_NAME_CHARS = 16
 #: Largest MAVLink system id.
 MAX_SYSTEM_ID = 255
+#: Most goals in one mission from the page.
+MAX_GOALS = 64
 
 _NO_ARGS = frozenset({"select", "arm", "hold", "estop", "params", "teach_stop"})
-COMMANDS = frozenset({*_NO_ARGS, "mode", "goto", "param_set", "teach_start", "teleop",
-                      "drive", "memory", "camera"})
+COMMANDS = frozenset({*_NO_ARGS, "mode", "goto", "mission", "route", "param_set",
+                      "teach_start", "teleop", "drive", "memory", "camera"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,8 +135,14 @@ def parse_request(text: str) -> Request:
             raise InputError("mode", f"unknown mode {name!r:.40} (known: "
                                      f"{', '.join(Mode.__members__)})")
         args["mode"] = Mode[name]
-    elif command == "goto":
+    elif command in ("goto", "route"):
         args["key"] = _int(data, "key", 0, MAX_ID)
+    elif command == "mission":
+        keys = data.get("keys")
+        if not isinstance(keys, list) or not 1 <= len(keys) <= MAX_GOALS:
+            raise InputError("keys", f"expected a list of 1 to {MAX_GOALS} key image ids, "
+                                     f"got {keys!r:.40}")
+        args["keys"] = tuple(_int({"keys": k}, "keys", 0, MAX_ID) for k in keys)
     elif command == "param_set":
         args["name"] = _text(data, "name", PARAM_NAME_CHARS)
         args["value"] = _number(data, "value")

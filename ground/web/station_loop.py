@@ -28,7 +28,12 @@ asyncio. So the station lives on this loop's thread alone:
 5. Key images never change once in a memory (``shared.memory.store`` rule 1), so their
    files fetched over FTP are cached by (system, path) up to :data:`CACHE_BYTES`; the
    manifest is fetched again on request (a path taught since).
-6. The camera (``ground.camera_stream``): a vehicle's video stream is asked of its camera
+6. Planned routes (``route``) start at the key image the vehicle last said it was at or
+   had passed (VISUAL_SERVO_STATUS ``current_key``, kept with when it came, since the
+   robot reports none between runs); a vehicle that never said is "start unknown". The
+   robot localizes again when a run starts, so the route shown is the one it would take
+   from there.
+7. The camera (``ground.camera_stream``): a vehicle's video stream is asked of its camera
    component once and kept per system, until the page asks again (``refresh``) or the
    stream fails to open (:meth:`StationLoop.forget_video_stream`).
 """
@@ -56,7 +61,7 @@ from ground.web.memory_index import (
 from ground.web.requests import Request
 from ground.web.vehicle_json import sample_json, vehicle_json
 from shared.clock import NS_PER_S, Clock
-from shared.errors import InputError
+from shared.errors import InputError, UnknownKeyframeError
 from shared.mavlink.camera import VideoStream
 from shared.mavlink.dialect import Message, mavlink
 from shared.mavlink.mission.goal import Goal
@@ -77,6 +82,8 @@ CACHE_BYTES = 64 * 2**20
 PLOT_INTERVAL_US = 100_000
 _ENDED = "the ground station's loop has ended (its error is in the server's log)"
 _PLOTTED = (mavlink.MAVLINK_MSG_ID_ODOMETRY, mavlink.MAVLINK_MSG_ID_VISUAL_SERVO_STATUS)
+#: Where the robot serves the thumbnails of the path it is teaching (``robot.vehicle.ftp_memory``).
+TEACHING_ROOT = "/teaching"
 #: The files the page may ask for (rule 5), under ``/memory``.
 MEMORY_FILES = frozenset({"thumbnails", "images"})
 
@@ -118,6 +125,7 @@ class StationLoop:
         self._file_bytes = 0
         self._indexes: dict[int, MemoryIndex] = {}
         self._streams: dict[int, VideoStream] = {}
+        self._last_key: dict[int, tuple[int, int]] = {}  # system -> (current_key, when ns)
         station.listeners.append(self._on_message)
         station.packet_taps.append(self._on_packet)
 
@@ -167,6 +175,11 @@ class StationLoop:
     def memory_file(self, system_id: int, kind: str, key: int) -> concurrent.futures.Future[bytes]:
         """The bytes of ``/memory/<kind>/<key>.png`` of vehicle ``system_id`` (rule 5)."""
         return self.submit(lambda station: self._memory_file(system_id, kind, key))
+
+    def teaching_file(self, system_id: int, key: int) -> concurrent.futures.Future[bytes]:
+        """The thumbnail of key image ``key`` of the path vehicle ``system_id`` is teaching
+        (``/teaching/<key>.png``; not cached: a path dropped frees its ids)."""
+        return self.submit(lambda station: self._teaching_file(system_id, key))
 
     def video_stream(self, system_id: int,
                      refresh: bool = False) -> concurrent.futures.Future[VideoStream]:
@@ -236,6 +249,8 @@ class StationLoop:
 
     def _on_message(self, vehicle: VehicleState, msg: Any) -> None:
         self._dirty = True
+        if msg.get_type() == "VISUAL_SERVO_STATUS" and msg.current_key >= 0:
+            self._last_key[vehicle.system_id] = (msg.current_key, self.clock.now_ns())
         sample = sample_json(msg, (self.clock.now_ns() - self._start_ns) / NS_PER_S)
         if sample is not None:
             self._samples.setdefault(vehicle.system_id, []).append(sample)
@@ -315,7 +330,11 @@ class StationLoop:
             station.set_mode(mode)
             return {"text": f"{who}: mode {mode.name}"}
         if command == "goto":
-            return self._goto(vehicle, args["key"])
+            return self._goto(vehicle, (args["key"],))
+        if command == "mission":
+            return self._goto(vehicle, args["keys"])
+        if command == "route":
+            return self._route(vehicle, args["key"])
         if command == "params":
             return {"params": station.fetch_params()}
         if command == "param_set":
@@ -345,16 +364,45 @@ class StationLoop:
         self._aim(system_id)
         return self.station.goto_photo(photo, suffix)
 
-    def _goto(self, vehicle: VehicleState, key: int) -> dict[str, Any]:
+    def _goto(self, vehicle: VehicleState, keys: tuple[int, ...]) -> dict[str, Any]:
+        """Upload ``keys`` as the mission's goals, in order, and start it."""
         index = self._indexes.get(vehicle.system_id)
-        if index is not None and key not in index.keyframes:
+        if index is not None and any(k not in index.keyframes for k in keys):
             index = self._memory_index(vehicle.system_id, True)  # taught since?
-        if index is not None and key not in index.keyframes:
+        missing = [] if index is None else [k for k in keys if k not in index.keyframes]
+        if missing:
             raise InputError("key", f"vehicle {vehicle.system_id}'s memory has no key image "
-                                    f"{key} ({len(index.keyframes)} key images)")
-        self.station.upload_goals([Goal(key)])
+                                    f"{missing[0]} ({len(index.keyframes)} key images)")
+        self.station.upload_goals([Goal(k) for k in keys])
         self.station.start_mission()
-        return {"text": f"vehicle {vehicle.system_id}: going to key image {key}"}
+        if len(keys) == 1:
+            return {"text": f"vehicle {vehicle.system_id}: going to key image {keys[0]}"}
+        return {"text": f"vehicle {vehicle.system_id}: mission of {len(keys)} goals: "
+                        f"key images {', '.join(map(str, keys))}"}
+
+    def _route(self, vehicle: VehicleState, goal: int) -> dict[str, Any]:
+        """The key images the vehicle would pass to reach ``goal`` (rule 6)."""
+        index = self._memory_index(vehicle.system_id, False)
+        if goal not in index.keyframes:
+            raise InputError("key", f"vehicle {vehicle.system_id}'s memory has no key image "
+                                    f"{goal} ({len(index.keyframes)} key images)")
+        last = self._last_key.get(vehicle.system_id)
+        if last is None:
+            return {"start": None, "route": [], "text": f"key image {goal}: the start is "
+                    f"unknown (vehicle {vehicle.system_id} has not said where it is)"}
+        start, when_ns = last
+        age_s = (self.clock.now_ns() - when_ns) / NS_PER_S
+        try:
+            route = index.plan_route(start, goal)
+        except UnknownKeyframeError:
+            return {"start": start, "route": [], "text": f"key image {goal}: the start, key "
+                    f"image {start}, is not in the memory loaded (Refresh?)"}
+        if not route:
+            text = f"key image {goal}: no route from key image {start} (the paths run one way)"
+        else:
+            text = (f"key image {goal}: {len(route)} key images from key image {start} "
+                    f"(where the vehicle was {age_s:.0f} s ago)")
+        return {"start": start, "route": route, "text": text}
 
     def _teleop(self, vehicle: VehicleState, owner: int, on: bool) -> dict[str, Any]:
         who = f"vehicle {vehicle.system_id}"
@@ -394,6 +442,10 @@ class StationLoop:
             self._aim(system_id)
             stream = self._streams[system_id] = find_video_stream(self.station)
         return stream
+
+    def _teaching_file(self, system_id: int, key: int) -> bytes:
+        self._aim(system_id)
+        return self.station.ftp_get(f"{TEACHING_ROOT}/{key}.png")
 
     def _memory_file(self, system_id: int, kind: str, key: int) -> bytes:
         if kind not in MEMORY_FILES:

@@ -29,7 +29,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from robot.config.devices import CameraSourceConfig, PioneerDriverConfig, VideoConfig
+from robot.config.devices import (
+    CameraSourceConfig,
+    FoxgloveConfig,
+    PioneerDriverConfig,
+    VideoConfig,
+)
 from robot.config.driving import (
     BASE_LOST_ACTIONS,
     CONTROL_LAWS,
@@ -73,6 +78,7 @@ __all__ = [
     "ControlConfig",
     "EstimatorConfig",
     "FeatureConfig",
+    "FoxgloveConfig",
     "LocalizeConfig",
     "MatchConfig",
     "MissionConfig",
@@ -111,6 +117,7 @@ class VmnavConfig:
     teleop: TeleopConfig = field(default_factory=TeleopConfig)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     video: VideoConfig = field(default_factory=VideoConfig)
+    foxglove: FoxgloveConfig = field(default_factory=FoxgloveConfig)
 
 
 #: Tables of the layout before the simulator's tables left the robot's config: the old

@@ -1,8 +1,8 @@
-"""The robot's device configs: the Pioneer's ARIA driver, the camera with its mount, and the
-camera's live view.
+"""The robot's device configs: the Pioneer's ARIA driver, the camera with its mount, the
+camera's live view, and the live topics served to Foxglove.
 
-Tables ``[pioneer]``, ``[camera]`` (``[camera.mount]``) and ``[video]`` of a vmnav config file
-(:mod:`robot.config`).
+Tables ``[pioneer]``, ``[camera]`` (``[camera.mount]``), ``[video]`` and ``[foxglove]`` of a
+vmnav config file (:mod:`robot.config`).
 """
 
 from __future__ import annotations
@@ -163,3 +163,36 @@ class VideoConfig:
                 f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
         require(1 <= self.max_clients <= 64,
                 f"max_clients must be in 1..64, got {self.max_clients}")
+
+
+@dataclass(frozen=True, slots=True)
+class FoxgloveConfig:
+    """The robot's live topics over the Foxglove WebSocket protocol (``vmnav robot
+    --foxglove``, :mod:`robot.foxglove_bridge`): the field log's topics and schemas, live,
+    for Foxglove or Lichtblick. Table ``[foxglove]``.
+
+    The robot's loop hands frames and cycles over by reference and never waits; one thread
+    encodes them, and the server drops a slow client's oldest messages.
+    """
+
+    address: str = ""
+    """Where to serve: ``PORT`` or ``HOST:PORT`` (host 127.0.0.1 unless given; 0 picks a
+    free port; a host off this machine needs ``--insecure``); empty: not served.
+    ``--foxglove`` overrides it."""
+    frame_period_ns: int = 100_000_000
+    """At most one camera image (and its annotations) this often, ns of frame time
+    (10 frames/s); servo state, commands and transforms go out every frame."""
+    jpeg_quality: int = 80
+    """cv2.IMWRITE_JPEG_QUALITY of the camera images, 1-100."""
+    client_backlog_messages: int = 256
+    """Messages queued per client (about 2 s of every topic); a client too slow for them
+    loses the oldest (the SDK's ``message_backlog_size``)."""
+
+    def __post_init__(self) -> None:
+        require(self.frame_period_ns >= 10_000_000,
+                f"frame_period_ns must be >= 10 ms (10000000), got {self.frame_period_ns}")
+        require(1 <= self.jpeg_quality <= 100,
+                f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
+        require(16 <= self.client_backlog_messages <= 65536,
+                f"client_backlog_messages must be in 16..65536, got "
+                f"{self.client_backlog_messages}")

@@ -112,6 +112,9 @@ class VehicleTelemetry:
         run_count: goal runs started so far (each goal of a mission is one run, a photo
             goal is one): a change tells a new run started, even when its states came
             and went between two snapshots the endpoint read.
+        teach_thumbnails: while teaching, (id, PNG file) of each key image taken so far,
+            in order: the id it gets when the path is stored, and its 80x60 thumbnail
+            (served over FTP as ``/teaching/<id>.png``); () otherwise.
     """
 
     mode: Mode
@@ -129,6 +132,7 @@ class VehicleTelemetry:
     home_pose: Pose2 | None = None
     base_reporting: bool = True
     run_count: int = 0
+    teach_thumbnails: tuple[tuple[int, bytes], ...] = ()
 
     @property
     def mission_running(self) -> bool:

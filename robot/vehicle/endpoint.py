@@ -16,7 +16,9 @@ Rules:
 
 1. Identity: system ``MavlinkConfig.system_id``, component 1 (QGC and MAVSDK want
    an autopilot there), HEARTBEAT as a generic-autopilot ground rover every
-   ``heartbeat_period_ns`` with ArduRover mode numbers (``shared.mavlink.modes``).
+   ``heartbeat_period_ns`` with ArduRover mode numbers (``shared.mavlink.modes``), and
+   one more at once when the mode or the armed state changes (a ground station shows the
+   change within a poll, not up to a period later).
 2. Received packets go to the cores: commands (``shared.mavlink.commands.vehicle``, plus
    the user commands of ``user_commands``), missions, parameters, FTP over the
    memory and upload area (``robot.vehicle.ftp_memory``); HEARTBEATs of ground
@@ -242,7 +244,8 @@ class VehicleEndpoint:
                                       admit=self._admit_upload)
         ftp = ftp if ftp is not None else config.ftp
         self._fs = MemoryFileSystem(files.memory_dir, files.upload_dir, ftp.upload_limit_bytes,
-                                    ftp.upload_total_bytes)
+                                    ftp.upload_total_bytes,
+                                    teaching=lambda: self._app.telemetry().teach_thumbnails)
         self._ftp = FtpServer(self._fs, ftp)
         self._intervals = MessageIntervals(default_periods_ns(link), link.min_stream_period_ns)
         builders: dict[int, Builder] = {
@@ -275,6 +278,7 @@ class VehicleEndpoint:
                 camera_handlers(video, lambda: self._time_usec() // 1000))
         self._camera_outbox: list[Message] = []
         self._camera_beat_ns: int | None = None
+        self._beat_state: tuple[Mode, bool] | None = None  # (mode, armed) last beaten
         self._policy: UnsignedPolicy | None = None
         self._signing_clock: SigningClock | None = None
         self._timestamp_file = signing.timestamp_file if signing is not None else None
@@ -348,6 +352,9 @@ class VehicleEndpoint:
         self._keep_signing(now_ns)
         out, self._outbox = self._outbox, []
         t = self._app.telemetry()
+        if self._beat_state not in (None, (t.mode, t.armed)):
+            out.append(self._heartbeat(t, self._time_usec()))
+        self._beat_state = (t.mode, t.armed)
         out += self._progress.update(t, self._time_usec())
         while (notice := self._app.next_notice()) is not None:
             out += self._notice(_SEVERITIES.get(notice[0], mavlink.MAV_SEVERITY_INFO), notice[1])

@@ -7,6 +7,8 @@ Tree seen by the ground station::
         images/<id>.png  features/<id>.npz  thumbnails/<id>.png
     /upload/<name>    writable and flat (the goal photo), at most ``upload_limit_bytes``
                       a file and ``upload_total_bytes`` in all
+    /teaching/<id>.png  read-only, from RAM: the thumbnails of the key images of the path
+                      being taught (``VehicleTelemetry.teach_thumbnails``); empty otherwise
 
 Rules:
 
@@ -34,7 +36,7 @@ import errno
 import io
 import os
 import stat
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from shared.atomic_file import write_bytes_atomic
@@ -42,7 +44,9 @@ from shared.config import FtpConfig
 from shared.errors import InputError
 from shared.mavlink.ftp.payload import DirEntry
 
-_AREAS = ("memory", "upload")
+_AREAS = ("memory", "teaching", "upload")
+#: (id, PNG file) of the key images of the path being taught (``/teaching/``).
+TeachingFiles = Callable[[], Sequence[tuple[int, bytes]]]
 
 
 class FileReader:
@@ -63,6 +67,20 @@ class FileReader:
 
     def close(self) -> None:
         self._file.close()
+
+
+class BytesReader:
+    """A file served from RAM (``/teaching/``): the bytes handed over, which never change."""
+
+    def __init__(self, data: bytes) -> None:
+        self._data = data
+        self.size = len(data)
+
+    def read(self, offset: int, size: int) -> bytes:
+        return self._data[offset:offset + size]
+
+    def close(self) -> None:
+        pass
 
 
 class Upload:
@@ -149,11 +167,15 @@ class MemoryFileSystem:
         upload_dir: where uploads land; created if missing.
         upload_limit_bytes: the largest upload accepted, bytes.
         upload_total_bytes: the upload area's quota (files plus uploads in progress), bytes.
+        teaching: the files of ``/teaching/`` now (called from the serving thread, so
+            it returns an immutable snapshot); None: always empty.
     """
 
     def __init__(self, memory_dir: str | Path, upload_dir: str | Path,
                  upload_limit_bytes: int = FtpConfig().upload_limit_bytes,
-                 upload_total_bytes: int = FtpConfig().upload_total_bytes) -> None:
+                 upload_total_bytes: int = FtpConfig().upload_total_bytes,
+                 teaching: TeachingFiles | None = None) -> None:
+        self._teaching = teaching or (lambda: ())
         self.memory_dir = Path(memory_dir)
         self.upload_dir = Path(upload_dir)
         self.upload_limit_bytes = upload_limit_bytes
@@ -166,6 +188,11 @@ class MemoryFileSystem:
         parts = _parts(path)
         if not parts:
             return [DirEntry(area, True) for area in _AREAS]
+        if parts[0] == "teaching":
+            if len(parts) > 1:
+                raise NotADirectoryError(errno.ENOTDIR, "not a directory", path)
+            return sorted((DirEntry(f"{key}.png", False, len(data))
+                           for key, data in self._teaching()), key=lambda e: e.name)
         entries = []
         with os.scandir(self._resolve(path, parts)) as it:
             for entry in it:
@@ -177,11 +204,16 @@ class MemoryFileSystem:
                     entries.append(DirEntry(entry.name, False, entry.stat().st_size))
         return sorted(entries, key=lambda e: e.name)
 
-    def open_read(self, path: str) -> FileReader:
-        """Open a file under ``/memory/`` or ``/upload/``."""
+    def open_read(self, path: str) -> FileReader | BytesReader:
+        """Open a file under ``/memory/``, ``/teaching/`` or ``/upload/``."""
         parts = _parts(path)
         if not parts:
             raise IsADirectoryError(errno.EISDIR, "is a directory", path)
+        if parts[0] == "teaching":
+            files = {f"{key}.png": data for key, data in self._teaching()}
+            if len(parts) != 2 or parts[1] not in files:
+                raise FileNotFoundError(errno.ENOENT, "no such file or directory", path)
+            return BytesReader(files[parts[1]])
         fd = os.open(self._resolve(path, parts), os.O_RDONLY | os.O_NOFOLLOW)
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             os.close(fd)

@@ -163,13 +163,18 @@ def _key(key: int | None) -> int:
 
 
 def visual_servo_message(t: VehicleTelemetry, time_usec: int) -> Message:
-    """VISUAL_SERVO_STATUS (project dialect); NaN errors and -1 keys while not following."""
+    """VISUAL_SERVO_STATUS (project dialect); NaN errors and -1 keys while not following.
+
+    While teaching, ``current_key`` is the last key image taken (the id it gets when the
+    path is stored; its thumbnail is ``/teaching/<id>.png`` over FTP), -1 before the first.
+    """
     servo = t.servo
     state = mavlink.VTR_STATE_TEACHING if t.teaching else _VTR_STATES[t.mission_state]
     if servo is None:
+        current = t.teach_thumbnails[-1][0] if t.teaching and t.teach_thumbnails else -1
         return mavlink.MAVLink_visual_servo_status_message(
-            time_usec, -1, -1, _key(t.goal_key), 0, math.nan, math.nan, math.nan, math.nan,
-            math.nan, state)
+            time_usec, current, -1, _key(t.goal_key), 0, math.nan, math.nan, math.nan,
+            math.nan, math.nan, state)
     return mavlink.MAVLink_visual_servo_status_message(
         time_usec, _key(servo.current_key), _key(servo.next_key), _key(t.goal_key),
         min(servo.matches, UINT16_MAX), servo.err_image_max_px, servo.err_points_px,

@@ -88,12 +88,15 @@ class FrameState:
         matches: corners of the frame matched with the next key image (valid rays).
         matched_xy: (matches, 2) float64 pixels of those corners in the frame, in the
             order of ``state.inlier_mask`` (for display: the robot's live view).
+        key_xy: (matches, 2) float64 pixels of the next key image's corners they were
+            matched with, same order (for display beside the key image).
     """
 
     state: PathState
     image_errors: ImageErrors
     matches: int
     matched_xy: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
+    key_xy: npt.NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
 
 
 def key_correspondences(
@@ -224,4 +227,5 @@ def state_from_frame(
     errors = image_errors(current.pixels_xy[idx_current[inliers]],
                           segment.next_features.pixels_xy[idx_next[inliers]])
     return FrameState(state=state, image_errors=errors, matches=len(idx_current),
-                      matched_xy=current.pixels_xy[idx_current])
+                      matched_xy=current.pixels_xy[idx_current],
+                      key_xy=segment.next_features.pixels_xy[idx_next])

@@ -10,7 +10,14 @@ paths to (:func:`open_or_create`, for every command that writes one),
 from __future__ import annotations
 
 from shared.memory.folder import open_or_create
-from shared.memory.graph import ConnectivityReport, Edge, EdgeKind, VisualMemory
+from shared.memory.graph import (
+    ConnectivityReport,
+    Edge,
+    EdgeKind,
+    RouteGraph,
+    VisualMemory,
+    route_edges,
+)
 from shared.memory.keyframe import (
     THUMBNAIL_HEIGHT_PX,
     THUMBNAIL_WIDTH_PX,
@@ -32,12 +39,14 @@ __all__ = [
     "Junction",
     "Keyframe",
     "KeyframeRecord",
+    "RouteGraph",
     "VisualMemory",
     "VisualPath",
     "add_path_to_disk",
     "memory_summary",
     "open_or_create",
     "read_memory",
+    "route_edges",
     "summary_text",
     "thumbnail_from_image",
     "write_memory",

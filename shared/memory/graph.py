@@ -10,7 +10,9 @@ Here the vertices are key images; each visual path contributes a directed edge
 between consecutive key images, weighted by the teach odometric distance between
 them; each junction contributes two zero-length edges (the two key images are
 the same place, so it is traversable both ways). Routes are shortest paths by
-odometric distance (Dijkstra, ``scipy.sparse.csgraph``).
+odometric distance (Dijkstra, ``scipy.sparse.csgraph``), planned by
+:class:`RouteGraph`, which needs only the structure (ids, paths, distances,
+junctions): the ground station plans on the memory's manifest with it.
 
 Rules kept by :class:`VisualMemory` (it only ever grows):
 
@@ -99,13 +101,108 @@ class ConnectivityReport:
         return tuple(sorted(set(self.not_reachable_from_main) | set(self.cannot_reach_main)))
 
 
-@dataclass(frozen=True)
-class _Graph:
-    """The multigraph as a sparse matrix over vertex indices 0..n-1."""
+def route_edges(paths: Iterable[Sequence[int]], distance_m: Mapping[int, float],
+                junctions: Iterable[tuple[int, int]]) -> tuple[Edge, ...]:
+    """The multigraph's directed edges (module docstring) from its bare structure.
 
-    ids: npt.NDArray[np.int64]  # (n,) key image id of each vertex index
-    index: Mapping[int, int]  # key image id -> vertex index
-    lengths_m: sp.csr_array  # (n, n) edge lengths, m; explicit zeros are edges
+    Args:
+        paths: each path's key image ids in teach order.
+        distance_m: key image id -> teach odometric distance from its path's start, m.
+        junctions: (from_id, to_id) of each junction.
+
+    Returns:
+        The path steps in the order given, then both directions of each junction.
+    """
+    steps = [
+        Edge(a, b, distance_m[b] - distance_m[a], EdgeKind.PATH)
+        for ids in paths
+        for a, b in itertools.pairwise(ids)
+    ]
+    crossings = [
+        Edge(a, b, 0.0, EdgeKind.JUNCTION)
+        for from_id, to_id in junctions
+        for a, b in ((from_id, to_id), (to_id, from_id))
+    ]
+    return tuple(steps + crossings)
+
+
+class RouteGraph:
+    """The multigraph as a sparse matrix over vertex indices 0..n-1, for route planning.
+
+    The one home of planning: the robot's :class:`VisualMemory` builds it from its
+    records, the ground station from the memory's manifest alone
+    (``ground.web.memory_index``), so both plan the same routes.
+
+    Args:
+        ids: every key image id (the vertices).
+        edges: the directed edges (:func:`route_edges`); both ends in ``ids``.
+    """
+
+    def __init__(self, ids: Iterable[int], edges: Iterable[Edge]) -> None:
+        self.ids: npt.NDArray[np.int64] = np.array(sorted(set(ids)), dtype=np.int64)
+        """(n,) key image id of each vertex index."""
+        self.index: Mapping[int, int] = MappingProxyType(
+            {int(i): n for n, i in enumerate(self.ids)})
+        """Key image id -> vertex index."""
+        # A dict keeps the shortest of parallel edges (a junction between two
+        # consecutive key images of one path); a sparse matrix would sum them.
+        lengths: dict[tuple[int, int], float] = {}
+        for e in edges:
+            key = (self.index[e.from_id], self.index[e.to_id])
+            lengths[key] = min(e.length_m, lengths.get(key, e.length_m))
+        rows = np.array([k[0] for k in lengths], dtype=np.int64)
+        cols = np.array([k[1] for k in lengths], dtype=np.int64)
+        data = np.array(list(lengths.values()), dtype=np.float64)
+        n = len(self.ids)
+        self.lengths_m: sp.csr_array = sp.csr_array((data, (rows, cols)), shape=(n, n))
+        """(n, n) edge lengths, m; explicit zeros are edges."""
+
+    def vertex(self, keyframe_id: int) -> int:
+        """The vertex index of ``keyframe_id``.
+
+        Raises:
+            UnknownKeyframeError: not a vertex.
+        """
+        try:
+            return self.index[keyframe_id]
+        except KeyError:
+            raise UnknownKeyframeError(keyframe_id, len(self.ids)) from None
+
+    def plan_route(self, start_id: int, goal_id: int) -> list[int]:
+        """The visual route: the shortest walk by teach odometric distance.
+
+        Args:
+            start_id: the key image the robot is localized at.
+            goal_id: the goal key image.
+
+        Returns:
+            Key image ids from ``start_id`` to ``goal_id`` inclusive, each step an
+            edge (a path step or a junction crossing, the latter zero-length);
+            ``[start_id]`` if they are equal; ``[]`` if the goal is unreachable.
+
+        Raises:
+            UnknownKeyframeError: either id is not a vertex.
+        """
+        start, goal = self.vertex(start_id), self.vertex(goal_id)
+        if start_id == goal_id:
+            return [start_id]
+        distances_m, predecessors = dijkstra(
+            self.lengths_m, directed=True, indices=start, return_predecessors=True
+        )
+        if not np.isfinite(distances_m[goal]):
+            return []
+        walk = [goal]
+        while walk[-1] != start:
+            walk.append(int(predecessors[walk[-1]]))
+        return [int(self.ids[i]) for i in reversed(walk)]
+
+    def unreached(self, matrix: sp.csr_array, source: int) -> tuple[int, ...]:
+        """Key image ids that no walk over ``matrix`` (``lengths_m`` or its transpose)
+        from vertex index ``source`` reaches, sorted."""
+        reached = breadth_first_order(matrix, source, directed=True, return_predecessors=False)
+        mask = np.ones(len(self.ids), dtype=bool)
+        mask[reached] = False
+        return tuple(int(i) for i in self.ids[mask])
 
 
 class VisualMemory:
@@ -124,7 +221,7 @@ class VisualMemory:
         self._paths: dict[int, VisualPath] = {}
         self._junctions: list[Junction] = []
         self._descriptor_length: int | None = None
-        self._graph_cache: _Graph | None = None
+        self._graph_cache: RouteGraph | None = None
 
     @classmethod
     def from_parts(
@@ -263,48 +360,19 @@ class VisualMemory:
 
     def edges(self) -> tuple[Edge, ...]:
         """Every directed edge: path steps by path id, then both directions of each junction."""
-        steps = [
-            Edge(a, b, self._keyframes[b].distance_m - self._keyframes[a].distance_m, EdgeKind.PATH)
-            for path in sorted(self._paths.values(), key=lambda p: p.id)
-            for a, b in itertools.pairwise(path.keyframe_ids)
-        ]
-        crossings = [
-            Edge(a, b, 0.0, EdgeKind.JUNCTION)
-            for j in self._junctions
-            for a, b in ((j.from_id, j.to_id), (j.to_id, j.from_id))
-        ]
-        return tuple(steps + crossings)
+        return route_edges(
+            (p.keyframe_ids for p in sorted(self._paths.values(), key=lambda p: p.id)),
+            {i: k.distance_m for i, k in self._keyframes.items()},
+            ((j.from_id, j.to_id) for j in self._junctions),
+        )
 
     def plan_route(self, start_id: int, goal_id: int) -> list[int]:
-        """The visual route: the shortest walk by teach odometric distance.
-
-        Args:
-            start_id: the key image the robot is localized at.
-            goal_id: the goal key image.
-
-        Returns:
-            Key image ids from ``start_id`` to ``goal_id`` inclusive, each step an
-            edge (a path step or a junction crossing, the latter zero-length);
-            ``[start_id]`` if they are equal; ``[]`` if the goal is unreachable.
+        """The visual route (:meth:`RouteGraph.plan_route`).
 
         Raises:
             UnknownKeyframeError: either id is not in the memory.
         """
-        self.keyframe(start_id)
-        self.keyframe(goal_id)
-        if start_id == goal_id:
-            return [start_id]
-        graph = self._graph()
-        start, goal = graph.index[start_id], graph.index[goal_id]
-        distances_m, predecessors = dijkstra(
-            graph.lengths_m, directed=True, indices=start, return_predecessors=True
-        )
-        if not np.isfinite(distances_m[goal]):
-            return []
-        walk = [goal]
-        while walk[-1] != start:
-            walk.append(int(predecessors[walk[-1]]))
-        return [int(graph.ids[i]) for i in reversed(walk)]
+        return self._graph().plan_route(start_id, goal_id)
 
     def unreachable_from(self, keyframe_id: int) -> tuple[int, ...]:
         """Key images that no route from ``keyframe_id`` reaches, sorted.
@@ -314,7 +382,7 @@ class VisualMemory:
         """
         self.keyframe(keyframe_id)
         graph = self._graph()
-        return self._unreached(graph, graph.lengths_m, graph.index[keyframe_id])
+        return graph.unreached(graph.lengths_m, graph.index[keyframe_id])
 
     def connectivity(self) -> ConnectivityReport:
         """Check the paper's requirement that the memory is strongly connected."""
@@ -332,8 +400,8 @@ class VisualMemory:
         return ConnectivityReport(
             strongly_connected=n_components == 1,
             components=tuple(components),
-            not_reachable_from_main=self._unreached(graph, graph.lengths_m, root),
-            cannot_reach_main=self._unreached(graph, graph.lengths_m.T.tocsr(), root),
+            not_reachable_from_main=graph.unreached(graph.lengths_m, root),
+            cannot_reach_main=graph.unreached(graph.lengths_m.T.tocsr(), root),
         )
 
     def _insert_path(self, path: VisualPath, keyframes: Sequence[Keyframe]) -> None:
@@ -374,29 +442,10 @@ class VisualMemory:
         self._descriptor_length = descriptor_length
         self._graph_cache = None
 
-    def _graph(self) -> _Graph:
+    def _graph(self) -> RouteGraph:
         if self._graph_cache is None:
-            ids = np.array(sorted(self._keyframes), dtype=np.int64)
-            index = {int(i): n for n, i in enumerate(ids)}
-            # A dict keeps the shortest of parallel edges (a junction between two
-            # consecutive key images of one path); a sparse matrix would sum them.
-            lengths: dict[tuple[int, int], float] = {}
-            for e in self.edges():
-                key = (index[e.from_id], index[e.to_id])
-                lengths[key] = min(e.length_m, lengths.get(key, e.length_m))
-            rows = np.array([k[0] for k in lengths], dtype=np.int64)
-            cols = np.array([k[1] for k in lengths], dtype=np.int64)
-            data = np.array(list(lengths.values()), dtype=np.float64)
-            matrix = sp.csr_array((data, (rows, cols)), shape=(len(ids), len(ids)))
-            self._graph_cache = _Graph(ids=ids, index=MappingProxyType(index), lengths_m=matrix)
+            self._graph_cache = RouteGraph(self._keyframes, self.edges())
         return self._graph_cache
-
-    @staticmethod
-    def _unreached(graph: _Graph, matrix: sp.csr_array, source: int) -> tuple[int, ...]:
-        reached = breadth_first_order(matrix, source, directed=True, return_predecessors=False)
-        mask = np.ones(len(graph.ids), dtype=bool)
-        mask[reached] = False
-        return tuple(int(i) for i in graph.ids[mask])
 
 
 def _check_step(previous: Keyframe | None, keyframe: Keyframe) -> None:

@@ -74,6 +74,7 @@ from shared.memory.keyframe import (
     check_features,
     check_grey_image,
     check_tracks,
+    thumbnail_from_image,
 )
 
 FORMAT = "vmnav-memory"
@@ -382,6 +383,12 @@ def _max_png_bytes(shape: tuple[int, int]) -> int:
     twice the pixels plus 64 KiB (stored, uncompressed, it is one filter byte per row
     more than the pixels, plus 5 bytes per 64 KiB deflate block and the chunks' 12 each)."""
     return 2 * shape[0] * shape[1] + _FILE_OVERHEAD_BYTES
+
+
+def thumbnail_png(image: GreyImage) -> bytes:
+    """The PNG file of ``image``'s thumbnail, as ``thumbnails/<id>.png`` holds it (for a key
+    image not stored yet: the robot serves those of the path it is teaching)."""
+    return _encode_png(thumbnail_from_image(image))
 
 
 def _encode_png(image: GreyImage) -> bytes:

@@ -29,6 +29,7 @@ from tests.robot.vehicle.harness import make_vehicle
 from tests.shared.memory.builders import loop_memory
 from tools.bench.hostile_images import bogus_chunk_png
 from tools.cli import main
+from tools.ground_memory_cmd import id_ranges
 
 Capsys = pytest.CaptureFixture[str]
 
@@ -79,9 +80,15 @@ def test_params_list_get_set(vehicle: UdpVehicle, app: FakeApp, capsys: Capsys) 
 def test_memory_list_and_get(vehicle: UdpVehicle, tmp_path: Path, rng: np.random.Generator,
                              capsys: Capsys) -> None:
     write_memory(tmp_path / "memory", loop_memory(rng))
-    ids = sorted(read_memory(tmp_path / "memory").keyframes)
+    memory = read_memory(tmp_path / "memory")
     assert run_ground(vehicle, "memory", "list") == 0
-    assert [int(line.split()[0]) for line in capsys.readouterr().out.splitlines()] == ids
+    listed = capsys.readouterr()
+    assert listed.out.splitlines() == [
+        f"path {path.id} {path.name!r}: key images {id_ranges(list(path.keyframe_ids))} "
+        f"({len(path.keyframe_ids)}, "
+        f"{memory.keyframes[path.keyframe_ids[-1]].distance_m:.2f} m)"
+        for path in memory.paths.values()]
+    assert f"paths: {len(memory.paths)}, key images: {len(memory.keyframes)}" in listed.err
     out = tmp_path / "thumbs"
     assert run_ground(vehicle, "memory", "get", "5", "2", "--out", str(out)) == 0
     for key in (5, 2):
@@ -89,6 +96,11 @@ def test_memory_list_and_get(vehicle: UdpVehicle, tmp_path: Path, rng: np.random
             thumbnail_path(tmp_path / "memory", key).read_bytes()
     assert run_ground(vehicle, "memory", "get", "99", "--out", str(out)) == 1
     assert "FTP OPEN_FILE_RO /memory/thumbnails/99.png" in one_line_error(capsys)
+
+
+def test_key_image_ids_are_listed_in_runs() -> None:
+    assert id_ranges([0, 1, 2, 5, 7, 8]) == "0-2, 5, 7-8"
+    assert id_ranges([3]) == "3" and id_ranges([]) == ""
 
 
 def test_goto_key_uploads_and_starts_a_one_goal_mission(vehicle: UdpVehicle, app: FakeApp,

@@ -149,7 +149,7 @@ class TestHandle:
         (following, Start(ns_from_s(2), 3), "FOLLOWING"),
         (following, Localized(ns_from_s(2), 7, 99), "FOLLOWING"),
         (following, LocalizationFailed(ns_from_s(2), "x"), "FOLLOWING"),
-        (lost, Arrived(ns_from_s(3), 42), "LOST"),
+        (lost, Start(ns_from_s(3), 42), "LOST"),
     ])
     def test_illegal_inputs_raise(self, make: Callable[[], Mission], event: m.MissionInput,
                                   state: str) -> None:
@@ -199,6 +199,15 @@ class TestSafetyWait:
 
 
 class TestTrueCauses:
+    def test_localized_at_the_goal_is_arrived(self) -> None:
+        for make in (lambda: Mission(CONFIG), lost):
+            mission = make()
+            if mission.state is MissionState.IDLE:
+                mission.handle(Start(0, goal_id=42))
+            arrived = mission.handle(Arrived(ns_from_s(3), 42))
+            assert (arrived.target, arrived.reason) == (MissionState.ARRIVED, "arrived")
+            assert Command.STOP in arrived.commands
+
     def test_no_route_fails_the_mission(self) -> None:
         mission = Mission(CONFIG)
         mission.handle(Start(0, goal_id=42))

@@ -134,3 +134,16 @@ def test_the_route_starts_at_the_first_key_image_ahead_of_the_view(memory, monke
     localized = [e.detail for e in result.events if e.reason == "localized"]
     assert localized and localized[0].endswith("at key image 3 (40 matches)")
     assert app.mission._route[0] == 3
+
+
+def test_localized_at_the_goal_just_past_it_has_arrived(memory, monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    base = FakeBase()
+    app, _ = make_app(memory, base, count=2)
+    # Nearest key image 5, the goal, with 6 the first one ahead: no route leads back to 5.
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image: Localization(5, 40, 30, True, (), 100, ahead_id=6))
+    result = app.run(5, 10**11)
+    assert result.state is MissionState.ARRIVED and result.reached_goal
+    assert all(command == (0.0, 0.0) for command in base.commands)

@@ -27,6 +27,7 @@ from shared.mavlink.dialect import mavlink
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
 from shared.memory import read_memory
+from shared.memory.store import thumbnail_path
 from shared.pose import Pose2
 from sim.config import SimConfig
 from sim.sim_camera import SimFrameSource
@@ -318,10 +319,16 @@ class TestTeaching:
         assert not robot.runtime.teach_start("again")
         assert not robot.runtime.start_mission((Goal(0),), 0)
         robot.drive(12.0, x=0.5)
+        taken = robot.runtime.telemetry().teach_thumbnails  # shown while teaching
         assert robot.runtime.teach_stop()
         robot.run(0.1)
         assert not robot.runtime.telemetry().teaching
+        assert robot.runtime.telemetry().teach_thumbnails == ()
         stored = read_memory(memory_dir)
+        # Each key image taken had the id it got when stored, and its thumbnail.
+        ids = stored.paths[1].keyframe_ids
+        assert len(taken) >= 2 and [k for k, _ in taken] == list(ids[:len(taken)])
+        assert all(png == thumbnail_path(memory_dir, k).read_bytes() for k, png in taken)
         assert [p.name for p in stored.paths.values()] == ["east_a", "east_b"]
         assert len(stored.junctions) >= 1
         assert robot.runtime.memory.paths.keys() == stored.paths.keys()

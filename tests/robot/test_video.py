@@ -34,14 +34,18 @@ class CountingServer:
 
     def __init__(self) -> None:
         self.published: list[tuple[int, Any, Any]] = []
+        self.keys: list[tuple[Any, int | None]] = []
 
-    def publish(self, t_ns: int, image: Any, points_xy: Any = None, inliers: Any = None) -> None:
+    def publish(self, t_ns: int, image: Any, points_xy: Any = None, inliers: Any = None, *,
+                key_xy: Any = None, key_id: int | None = None) -> None:
         self.published.append((t_ns, points_xy, inliers))
+        self.keys.append((key_xy, key_id))
 
 
-def follow_record(matched_xy: np.ndarray, inlier_mask: np.ndarray) -> Any:
-    vision = SimpleNamespace(matched_xy=matched_xy,
-                             state=SimpleNamespace(inlier_mask=inlier_mask))
+def follow_record(matched_xy: np.ndarray, inlier_mask: np.ndarray,
+                  key_xy: np.ndarray | None = None) -> Any:
+    vision = SimpleNamespace(matched_xy=matched_xy, key_xy=matched_xy + 100 if key_xy is None
+                             else key_xy, state=SimpleNamespace(inlier_mask=inlier_mask))
     return SimpleNamespace(follow=SimpleNamespace(vision=vision))
 
 
@@ -64,13 +68,26 @@ class TestLiveView:
         assert [t // MS for t, _, _ in server.published] == [0, 1500, 1700]
 
     def test_the_matches_of_a_servo_cycle(self) -> None:
-        xy, mask = np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([True, False])
-        points, inliers = matched_points(follow_record(xy, mask))
-        assert points is xy and inliers is mask
+        xy, mask, key_xy = np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([True, False]), \
+            np.array([[5.0, 6.0], [7.0, 8.0]])
+        points, inliers, key_points = matched_points(follow_record(xy, mask, key_xy))
+        assert points is xy and inliers is mask and key_points is key_xy
         assert matched_points(follow_record(xy, np.zeros(0, bool)))[1] is None
-        assert matched_points(follow_record(np.zeros((0, 2)), np.zeros(0, bool))) == (None, None)
-        assert matched_points(None) == (None, None)
-        assert matched_points(SimpleNamespace(follow=None)) == (None, None)  # type: ignore[arg-type]
+        assert matched_points(follow_record(xy, mask, np.zeros((1, 2))))[2] is None
+        nothing = (None, None, None)
+        assert matched_points(follow_record(np.zeros((0, 2)), np.zeros(0, bool))) == nothing
+        assert matched_points(None) == nothing
+        assert matched_points(SimpleNamespace(follow=None)) == nothing  # type: ignore[arg-type]
+
+    def test_the_key_image_goes_with_its_matches_only(self) -> None:
+        server = CountingServer()
+        view = LiveView(server, VideoConfig(frame_period_ns=200 * MS))  # type: ignore[arg-type]
+        image = np.zeros((4, 4), np.uint8)
+        xy, mask = np.array([[1.0, 2.0]]), np.array([True])
+        view.offer(0, image, follow_record(xy, mask), next_key=7)
+        view.offer(200 * MS, image, None, next_key=7)
+        assert server.keys[0][1] == 7 and np.array_equal(server.keys[0][0], xy + 100)
+        assert server.keys[1] == (None, None)
 
 
 class TestVideoStream:

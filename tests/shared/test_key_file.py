@@ -75,6 +75,13 @@ class TestCreateKeyFile:
         assert not (tmp_path / "dangling").exists()
         assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "vmnav.key"]
 
-    def test_a_missing_folder_is_one_line(self, tmp_path: Path) -> None:
-        with pytest.raises(InputError, match="cannot create key file: No such file"):
-            create_key_file(tmp_path / "nope" / "vmnav.key")
+    def test_missing_folders_are_made_for_the_owner_only(self, tmp_path: Path) -> None:
+        path = tmp_path / "home" / "vmnav" / "vmnav.key"  # `keygen ~/vmnav/vmnav.key`
+        create_key_file(path)
+        assert stat.S_IMODE(path.parent.stat().st_mode) == 0o700
+        assert stat.S_IMODE(path.stat().st_mode) == 0o600
+
+    def test_a_folder_that_cannot_be_made_is_one_line(self, tmp_path: Path) -> None:
+        (tmp_path / "file").write_bytes(b"")
+        with pytest.raises(InputError, match=r"cannot create key file: .*/file is not a folder"):
+            create_key_file(tmp_path / "file" / "vmnav.key")

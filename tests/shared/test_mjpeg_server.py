@@ -7,6 +7,7 @@ ones, faults) is tested through the simulator's camera (tests/sim/test_camera_se
 
 from __future__ import annotations
 
+import json
 import socket
 import threading
 from collections.abc import Iterator
@@ -19,7 +20,7 @@ import numpy.typing as npt
 import pytest
 
 from shared.errors import ShapeError
-from shared.mjpeg_server import MjpegServer, scaled_size
+from shared.mjpeg_server import MjpegServer, matches_url, scaled_size
 from tests.sim.camera_stream import eventually, frame_number, numbered_frame
 
 
@@ -80,6 +81,34 @@ class TestViews:
     def test_points_of_the_wrong_shape_are_refused(self) -> None:
         with MjpegServer() as server, pytest.raises(ShapeError, match="points_xy"):
             server.publish(0, numbered_frame(0), np.zeros((3, 3)))
+        with MjpegServer() as server, pytest.raises(ShapeError, match="key_xy"):
+            server.publish(0, numbered_frame(0), np.zeros((3, 2)), key_xy=np.zeros((2, 2)))
+
+
+class TestMatchesJson:
+    def test_the_newest_frames_matches_with_the_key_images_points(self) -> None:
+        with MjpegServer(width_px=80) as server:
+            assert matches_url(server.stream_url) == server.matches_url
+            with pytest.raises(HTTPError) as before:
+                urlopen(server.matches_url, timeout=5.0)
+            assert before.value.code == 503
+            server.publish(5, numbered_frame(1, (120, 160)), np.array([[10.04, 20.0]]),
+                           np.array([True]), key_xy=np.array([[30.0, 40.06]]), key_id=12)
+            server.publish(9, numbered_frame(2, (120, 160)), np.array([[1.0, 2.0], [3.0, 4.0]]),
+                           np.array([False, True]), key_xy=np.array([[5.0, 6.0], [7.0, 8.0]]),
+                           key_id=13)
+            with urlopen(server.matches_url, timeout=5.0) as reply:
+                assert reply.headers["Content-Type"] == "application/json"
+                newest = json.loads(reply.read())
+            server.publish(11, numbered_frame(3, (120, 160)))
+            with urlopen(server.matches_url, timeout=5.0) as reply:
+                bare = json.loads(reply.read())
+        # Pixels of the frame as published (160x120), not as served (80 wide).
+        assert newest == {"seq": 2, "t_ns": 9, "size": [160, 120], "key": 13,
+                          "frame_xy": [[1.0, 2.0], [3.0, 4.0]],
+                          "key_xy": [[5.0, 6.0], [7.0, 8.0]], "inliers": [False, True]}
+        assert bare == {"seq": 3, "t_ns": 11, "size": [160, 120], "key": None,
+                        "frame_xy": [], "key_xy": None, "inliers": None}
 
     def test_bad_options_are_refused(self) -> None:
         with pytest.raises(ValueError, match="width_px"):

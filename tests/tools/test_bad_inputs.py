@@ -24,6 +24,8 @@ FILES = {
     "notjson.json": "{",
     "notimg.png": "xx",
     "empty.mcap": "",
+    "foxnet.toml": '[foxglove]\naddress = "192.0.2.1:8765"\n',
+    "badfox.toml": "[foxglove]\njpeg_quality = 0\n",
     "plan.toml": "[axes]\nseed = [1]\n",
     "windplan.toml": "[axes]\nwind = [1]\n",
 }
@@ -140,6 +142,14 @@ CASES: list[tuple[list[str], int, str]] = [
      "an unsigned link open to the network lets anyone drive the robot"),
     (["ground", "--connect", "udpin:0.0.0.0:14556", "status"], 1,
      "an unsigned link open to the network lets anyone drive the robot"),
+    (["robot", "--memory", "m", "--foxglove", "70000"], 1,
+     "--foxglove: '70000': the TCP port must be 0-65535"),
+    (["robot", "--memory", "m", "--foxglove", "0.0.0.0:8765"], 1, "--foxglove 0.0.0.0:8765: "
+     "live topics open to the network show anyone who reaches them the camera"),
+    (["robot", "--memory", "m", "--config", "foxnet.toml"], 1, "[foxglove] address "
+     "192.0.2.1:8765: live topics open to the network"),
+    (["robot", "--memory", "m", "--config", "badfox.toml"], 1,
+     "badfox.toml: foxglove: jpeg_quality must be in 1..100, got 0"),
     ([*NO_VEHICLE, "status"], 1, "no HEARTBEAT from a vehicle within 0.2 s"),
     # checked before connecting: no vehicle needed to be told
     ([*NO_VEHICLE, "goto", "--image", "notimg.png"], 1,

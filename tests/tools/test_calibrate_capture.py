@@ -13,7 +13,7 @@ from robot.calibration_capture import GRID, CaptureGoal, ViewPicker
 from shared.calibration import read_camera
 from shared.camera_model import CameraModel
 from shared.chessboard import Chessboard
-from sim.checkerboard import write_synthetic_set
+from tests.tools.board_video import board_video, render_board_views, write_video
 from tools.cli import main
 
 #: The camera behind the video: the default lens with some distortion.
@@ -23,32 +23,16 @@ TRUTH = CameraModel(
 BOARD = Chessboard(9, 6, 0.025)
 
 
-def write_video(path: Path, frames: list[np.ndarray]) -> None:
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 15.0, (800, 600),
-                             isColor=False)
-    for frame in frames:
-        writer.write(frame)
-    writer.release()
-
-
 @pytest.fixture(scope="module")
 def board_views(tmp_path_factory: pytest.TempPathFactory) -> list[np.ndarray]:
     """20 rendered views of the 9x6 board through :data:`TRUTH`."""
-    folder = tmp_path_factory.mktemp("rendered")
-    paths = write_synthetic_set(folder, TRUTH, np.random.default_rng(3), 20)
-    return [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in paths]
+    return render_board_views(tmp_path_factory.mktemp("rendered"), TRUTH, 20)
 
 
 @pytest.fixture(scope="module")
 def video(board_views: list[np.ndarray], tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The views, each held for three frames, between frames of the lens without a board."""
-    empty = np.where(board_views[0] > 0, 128, 0).astype(np.uint8)
-    frames = [empty] * 3
-    for view in board_views:
-        frames += [view] * 3 + [empty]
-    path = tmp_path_factory.mktemp("video") / "boards.avi"
-    write_video(path, frames)
-    return path
+    return board_video(tmp_path_factory.mktemp("video") / "boards.avi", board_views)
 
 
 def capture(video: Path, views: Path, output: Path, *extra: str) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import re
 import socket
+import urllib.error
 import urllib.request
 from pathlib import Path
 
@@ -71,9 +72,34 @@ def test_a_bad_address_is_a_usage_error(http: str, capsys: pytest.CaptureFixture
         capsys.readouterr().err
 
 
-def test_an_address_open_to_the_network_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_bad_token_file_is_refused_before_connecting(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "token").write_text("short\n")
     assert main(["ground", "--connect", "udpin:127.0.0.1:0", "web",
-                 "--http", "0.0.0.0:0"]) == 1
+                 "--http", "0.0.0.0:0", "--token-file", str(tmp_path / "token")]) == 1
     assert capsys.readouterr().err == (
-        "vmnav ground: error: --http: 0.0.0.0 is not a loopback address: the web app has no "
-        "access token yet, so it serves this machine only (use an SSH tunnel)\n")
+        f"vmnav ground: error: {tmp_path / 'token'}: the token must be at least 16 characters "
+        "of letters, digits and -._~ (no spaces)\n")
+
+
+def test_an_address_open_to_the_network_gets_a_token(tmp_path: Path) -> None:
+    web = VmnavProcess(["ground", "--connect", "udpin:127.0.0.1:0", "web", "--http",
+                        "0.0.0.0:0"], tmp_path / "web.out", 15.0)
+    try:
+        line = wait_for(lambda: re.search(
+            r"^vmnav ground web: serving http://0\.0\.0\.0:(\d+)/\?token=([A-Za-z0-9_-]{32}) ",
+            web.output(), re.M) or web.process.poll() is not None, "vmnav ground web started")
+        assert line is not True, web.output()
+        port, token = line.groups()
+        try:
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=60)
+            raise AssertionError("served without the token")
+        except urllib.error.HTTPError as e:
+            assert e.code == 401
+        opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor())
+        with opener.open(f"http://127.0.0.1:{port}/?token={token}", timeout=60) as response:
+            assert response.url == f"http://127.0.0.1:{port}/"  # the token left the address
+            assert b"<title>vmnav ground</title>" in response.read()
+    finally:
+        code = web.stop()
+    assert code == 143 and "Traceback" not in web.output()

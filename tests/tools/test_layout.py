@@ -32,7 +32,8 @@ NESTED = {
                          "tools.ground_params_cmd", "tools.ground_keygen_cmd",
                          "tools.ground_stop_cmd", "tools.ground_goto_cmd",
                          "tools.ground_web_cmd"},
-    "tools.bench_cmd": {"tools.bench_safety_cmd", "tools.bench_sweep_cmd"},
+    "tools.bench_cmd": {"tools.bench_safety_cmd", "tools.bench_foxglove_cmd",
+                        "tools.bench_web_cmd", "tools.bench_sweep_cmd"},
 }
 #: Lines a top-level tools/ module may have ("under ~200").
 MAX_COMMAND_LINES = 210

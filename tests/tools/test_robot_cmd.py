@@ -191,8 +191,14 @@ def test_wrong_urls_and_ports_in_use_are_one_line_at_start(sim_serve, tmp_path) 
         port = taken_tcp.getsockname()[1]
         video_in_use = run_robot("--aria", aria, "--camera", camera, "--video",
                                  f"http:127.0.0.1:{port}", *memory)
+        foxglove_in_use = run_robot("--aria", aria, "--camera", camera, "--foxglove",
+                                    str(port), *memory)
     assert video_in_use.returncode == 1
     assert f"http:127.0.0.1:{port}: cannot listen" in video_in_use.stderr.splitlines()[-1]
+    assert foxglove_in_use.returncode == 1
+    assert foxglove_in_use.stderr.splitlines() == [
+        f"vmnav robot: error: --foxglove {port}: cannot listen: Failed to bind port: Address "
+        "already in use (os error 98)"]  # before the Pioneer was connected: nothing from it
     assert "Traceback" not in (bad_camera.stderr + no_robot.stderr + in_use.stderr
                                + video_in_use.stderr)
 

@@ -36,6 +36,7 @@ from robot.vehicle.endpoint import VehicleEndpoint
 from robot.vehicle.options import VehicleFiles
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.clock import Clock, WallClock
+from shared.mavlink.camera import VideoStream
 
 #: How long a vehicles process may take to start its vehicles, s.
 READY_TIMEOUT_S = 60.0
@@ -93,9 +94,11 @@ def load_factory(name: str) -> AppFactory:
 
 
 def serve_vehicles(system_ids: Sequence[int], ground_port: int, key_images: Sequence[int],
-                   app_factory: AppFactory, until_stopped: Callable[[], None]) -> None:
+                   app_factory: AppFactory, until_stopped: Callable[[], None],
+                   video: VideoStream | None = None) -> None:
     """Run one vehicle per system id (module docstring) until ``until_stopped()``
-    returns; then close them all."""
+    returns; then close them all. ``video``: a stream each one's camera component
+    advertises (``vmnav bench web``'s camera); None: no camera."""
     with tempfile.TemporaryDirectory(prefix="vmnav-link-vehicles-") as tmp:
         vehicles: list[UdpVehicle] = []
         try:
@@ -109,7 +112,8 @@ def serve_vehicles(system_ids: Sequence[int], ground_port: int, key_images: Sequ
                     base, mavlink=dataclasses.replace(base.mavlink, system_id=system_id))
                 files = VehicleFiles(folder / "memory", folder / "upload", folder / "params.json")
                 vehicle = UdpVehicle.open(f"udpout:127.0.0.1:{ground_port}",
-                                          VehicleEndpoint(app, config, files), clock)
+                                          VehicleEndpoint(app, config, files, video=video),
+                                          clock)
                 vehicles.append(vehicle)
                 vehicle.start_thread()
             until_stopped()

@@ -22,7 +22,8 @@ repetition of its cases: one with ``--quick``, ten in the full run (measured 20 
 ``fuzz`` (issue 15) adds about 30 s with ``--quick`` (1,000 inputs per target) and
 about 16 min in the full run (100,000 per target; docs/fuzzing.md); ``hostile``
 about 2 min in both (it has no reduced size); ``real`` (issue 16) about 20 s (15 s with
-``--quick``: 3 timed pairs instead of 10); ``sweep`` (issue 20) about 7.5 min measured
+``--quick``: 3 timed pairs instead of 10); ``foxglove`` (issue 18) 4 x 5 s (4 x 2 s with
+``--quick``); ``web`` (issue 18) about 45 s; ``sweep`` (issue 20) about 7.5 min measured
 (20 cases on 1 and 2 workers and Ray, 5 memories taught) and about 2 min with ``--quick``
 (4 cases, 1 memory; estimated).
 """
@@ -53,6 +54,8 @@ QUICK_ARGS: dict[str, tuple[str, ...]] = {
     "fuzz": ("--inputs", "1000"),
     "real": ("--repeats", "3"),
     "safety": ("--seeds", "1", "--worlds", "lab", "--estops", "4"),
+    "foxglove": ("--seconds", "2"),
+    "web": ("--changes", "10", "--dispatches", "10"),
     "sweep": ("--cases", "4"),
 }
 #: Exit codes of ``vmnav bench all`` beyond 0 (all ran, every target met).

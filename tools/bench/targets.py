@@ -1,7 +1,8 @@
 """Every benchmark's targets in one table, and their check against a benchmark's JSON.
 
 The numbers are the issues' (issue 2: simulator, 3: vision, 4: route following,
-6: MAVLink link, 7: field logging, 8: every fault case passes every run, 15: no fuzzed
+6: MAVLink link, 7: field logging, 8: every fault case passes every run, 18: the live
+topics' cost on the robot's loop, 15: no fuzzed
 input crashes or hangs a decoder, and every attack of ``bench hostile`` is met, 16: real
 images in ``bench real``, and unrelated real images never pass localization's acceptance
 test in ``bench chance``, 20: a sweep's speed-up on 2 workers, Ray, memory per worker;
@@ -38,6 +39,7 @@ from tools.bench.safety import TARGETS as SAFETY_TARGETS
 from tools.bench.sim import CORNER_ERROR_TARGET_PX, RENDER_FPS_TARGET
 from tools.bench.sweep import TARGETS as SWEEP_TARGETS
 from tools.bench.vision import TARGETS as VISION_TARGETS
+from tools.bench.web import TARGETS as WEB_TARGETS
 
 #: The law the route-following targets apply to: the robot's default.
 DEFAULT_LAW = ControlConfig().law
@@ -93,6 +95,8 @@ TARGETS: tuple[Target, ...] = (
     _follow("heading_rms_deg_max", "<=", 1.5),
     _follow("loop_ms_p50_median", "<", 20.0),
     Target("log", "log_overhead_core_fraction", "<", 0.10, "issue 7"),
+    Target("foxglove", "loop_us_p99_worst", "<", 1000.0,
+           "issue 18: the loop never waits on the live topics (1 ms: 3 % of a 30 Hz frame)"),
     Target("chance", "accepted", "<=", 0, "issue 16"),
     Target("chance", "paper_front_end.accepted", "<=", 0, "issue 16"),
     Target("vision", "localize_relit_top1_rate", ">=", 0.90, "issue 16"),
@@ -132,6 +136,8 @@ TARGETS: tuple[Target, ...] = (
       for figure, (comparison, bound) in SAFETY_TARGETS.items()),
     *(Target("sweep", figure, comparison, bound, "issue 20")
       for figure, (comparison, bound) in SWEEP_TARGETS.items()),
+    *(Target("web", figure, comparison, bound, "issue 18")
+      for figure, (comparison, bound) in WEB_TARGETS.items()),
 )
 
 

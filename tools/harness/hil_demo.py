@@ -25,6 +25,13 @@ The story (:func:`run_hil`):
    station saw it; from the robot's field log: key images reached, mean matches, LOST
    events. ``OUT/report.json`` holds it all.
 
+With ``--web`` (``watch``), this process also serves the web app on loopback
+(``vmnav ground web``'s :class:`~ground.web.server.WebServer`, a free port, its URL
+announced) and the robot serves its camera (``--video``): a user watches the story in a
+browser, and may click (Hold, the emergency stop). The web app's loop then owns the
+ground station and the operator's steps go through it
+(:class:`~tools.harness.station_hands.StationHands`).
+
 Every process is stopped (SIGTERM, then SIGKILL after a grace period) on success,
 failure and Ctrl-C.
 """
@@ -34,9 +41,11 @@ from __future__ import annotations
 import json
 import math
 import re
+import threading
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -61,6 +70,7 @@ from sim.teach_driver import TeachDriver
 from sim.world import load_world
 from tools.figures.demo_report import SETTLED_M, track_errors, track_metrics
 from tools.harness.demo import START_KEY_INDEX, START_OFFSET_DEG, START_OFFSET_M
+from tools.harness.station_hands import StationHands
 from tools.harness.teach import DRIVER_STREAM, find_route
 from tools.harness.vmnav_process import VmnavProcess
 
@@ -152,7 +162,8 @@ class Processes:
 
 
 def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_file: Path,
-            route_name: str | None = None) -> dict[str, Any]:
+            route_name: str | None = None,
+            watch: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run the three-process demo (module docstring); returns the report.
 
     Args:
@@ -162,6 +173,8 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         robot_config_file: the config file ``vmnav robot`` runs with (the follow law, the
             camera mount), and ``vmnav sim serve`` too (the camera mount).
         route_name: the route to teach and repeat; None: the world's first.
+        watch: serve the web app while it runs and call this with its URL; None: no web
+            app.
 
     Raises:
         TransportError: a process did not start or a link failed.
@@ -195,13 +208,15 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
                                time.time_ns() - clock.now_ns())
         stack.callback(ground_log.close)
         station.packet_taps.append(ground_log.record)
+        hands = StationHands(station, clock, None if watch is None else
+                             _serve_web(stack, station, clock, logs, watch))
         processes.start("robot", [
             "robot", "--aria", f"socket://{aria}", "--camera", camera, "--mavlink",
             f"udpout:127.0.0.1:{station.link.local_port}", "--memory", str(out / "memory"),
             "--state", str(out / "state"), "--log", str(logs), "--config",
-            str(robot_config_file)])
-        station.wait_vehicle(START_TIMEOUT_S)
-        taught = teach(station, sim, route.waypoints, config, sim_config, route.name)
+            str(robot_config_file), *(["--video", "http:127.0.0.1:0"] if watch else [])])
+        hands.do(lambda s: s.wait_vehicle(START_TIMEOUT_S))
+        taught = teach(hands, sim, route.waypoints, config, sim_config, route.name)
         memory = read_memory(out / "memory")
         path = next(p for p in memory.paths.values() if p.name == route.name)
         start_key = memory.keyframes[path.keyframe_ids[min(START_KEY_INDEX,
@@ -209,10 +224,10 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
         start_pose = offset_start(taught, start_key.distance_m)
         sim.place(start_pose)
         goal = path.keyframe_ids[-1]
-        repeat, upload_ms = follow(station, sim, goal, config)
+        repeat, upload_ms = follow(hands, sim, goal, config)
         wall_s = time.perf_counter() - started
-        notices = tuple(station.vehicle.notices) if station.vehicle is not None else ()
-        outcome = station.mission_outcome
+        notices = hands.do(lambda s: tuple(s.vehicle.notices) if s.vehicle is not None else ())
+        outcome = hands.do(lambda s: s.mission_outcome)
     exit_codes = processes.stop()
     servo = servo_figures(sorted(logs.glob("robot-*.mcap")))
     settle_m = settling_distance_m(config.control.pole_1_m, START_OFFSET_M, SETTLED_M)
@@ -238,7 +253,31 @@ def run_hil(out: Path, config: VmnavConfig, sim_config: SimConfig, robot_config_
     }
 
 
-def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: VmnavConfig,
+def _serve_web(stack: ExitStack, station: GroundStation, clock: WallClock, logs: Path,
+               watch: Callable[[str], None]) -> Any:
+    """Serve the web app on a free loopback port until ``stack`` closes (before the station
+    does); announce its URL; its station loop, started."""
+    from ground.web.server import WebConfig, WebServer
+
+    server = WebServer(station, clock, WebConfig(port=0, log_dir=logs))
+    serving = threading.Thread(target=server.run, name="hil-web", daemon=True)
+    serving.start()
+
+    def stop() -> None:
+        server.stop()
+        serving.join(START_TIMEOUT_S)
+
+    stack.callback(stop)
+    limit = time.monotonic() + START_TIMEOUT_S
+    while not server.started:
+        if not serving.is_alive() or time.monotonic() > limit:
+            raise TransportError(server.url, "the web app did not start")
+        time.sleep(0.05)
+    watch(server.url)
+    return server.station_loop
+
+
+def teach(hands: StationHands, sim: SimControl, waypoints: Any, config: VmnavConfig,
           sim_config: SimConfig, name: str) -> Drive:
     """Teach ``name`` by teleoperation (module step 1, the operator ``sim_config``'s teach
     driver, seeded from its seed); the true drive.
@@ -249,7 +288,7 @@ def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: Vmnav
     driver = TeachDriver(waypoints, sim_config.teach_driver,  # the lock-step teacher's draws
                          np.random.default_rng([sim_config.seed, DRIVER_STREAM]))
     teleop = config.teleop
-    station.teach_start(name)
+    hands.do(lambda s: s.teach_start(name))
     times, poses = [], []
     limit = time.monotonic() + 3 * driver.length_m / sim_config.teach_driver.speed_m_s + 30
     while not driver.done:
@@ -259,16 +298,16 @@ def teach(station: GroundStation, sim: SimControl, waypoints: Any, config: Vmnav
         times.append(t_ns / 1e9)
         poses.append(pose)
         command = driver.command(pose)
-        station.send_manual_control(
-            float(np.clip(command.v_m_s / teleop.max_speed_m_s, -1, 1)),
-            float(np.clip(-command.omega_rad_s / teleop.max_omega_rad_s, -1, 1)))
-        station.run_until(lambda: False, round(OPERATOR_PERIOD_S * 1e9))
-    station.send_manual_control(0.0, 0.0)
-    station.run_until(lambda: False, 1_000_000_000)  # let the robot stop on its last frames
+        x = float(np.clip(command.v_m_s / teleop.max_speed_m_s, -1, 1))
+        r = float(np.clip(-command.omega_rad_s / teleop.max_omega_rad_s, -1, 1))
+        hands.do(lambda s, x=x, r=r: s.send_manual_control(x, r))
+        hands.wait(round(OPERATOR_PERIOD_S * 1e9))
+    hands.do(lambda s: s.send_manual_control(0.0, 0.0))
+    hands.wait(1_000_000_000)  # let the robot stop on its last frames
     t_ns, pose = sim.truth()
     times.append(t_ns / 1e9)
     poses.append(pose)
-    station.teach_stop()  # waits while the robot stores the path; raises if it did not
+    hands.do(lambda s: s.teach_stop())  # waits while the robot stores the path; raises if not
     return Drive(np.array(times), np.array(poses))
 
 
@@ -284,22 +323,25 @@ def offset_start(taught: Drive, distance_m: float) -> Pose2:
                  float(yaw + math.radians(START_OFFSET_DEG)))
 
 
-def follow(station: GroundStation, sim: SimControl, goal: int,
+def follow(hands: StationHands, sim: SimControl, goal: int,
            config: VmnavConfig) -> tuple[Drive, float]:
     """Dispatch ``goal`` and record the true trajectory until the ground sees the outcome
     (module step 2); the drive and the mission upload's time to MISSION_ACK, ms."""
     uploaded = time.perf_counter()
-    station.upload_goals([Goal(goal)])
+    hands.do(lambda s: s.upload_goals([Goal(goal)]))
     upload_ms = (time.perf_counter() - uploaded) * 1e3
-    station.start_mission()
+    hands.do(lambda s: s.start_mission())
+
+    def ended(s: GroundStation) -> bool:
+        return s.mission_outcome is not None
+
     times, poses = [], []
     limit = time.monotonic() + 300.0
-    while station.mission_outcome is None and time.monotonic() < limit:
+    while not hands.do(ended) and time.monotonic() < limit:
         t_ns, pose = sim.truth()
         times.append(t_ns / 1e9)
         poses.append(pose)
-        station.run_until(lambda: station.mission_outcome is not None,
-                          round(OPERATOR_PERIOD_S * 1e9))
+        hands.wait(round(OPERATOR_PERIOD_S * 1e9), ended)
     t_ns, pose = sim.truth()
     times.append(t_ns / 1e9)
     poses.append(pose)

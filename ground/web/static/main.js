@@ -2,6 +2,7 @@
 // Plain ES modules, no build step; every asset is served by `vmnav ground web` itself.
 
 import { CameraView } from "./camera.js";
+import { loadLogs } from "./logs.js";
 import { DEG, ScrollingPlot, TrailView } from "./plot.js";
 import { MemoryBrowser } from "./memory.js";
 import { showMessage } from "./message.js";
@@ -100,6 +101,8 @@ class App {
     $("hold").onclick = () => this.command("hold");
     $("estop").onclick = () => this.command("estop");
     $("mode-set").onclick = () => this.command("mode", { mode: $("mode-select").value });
+    $("logs-load").onclick = () => loadLogs();
+    loadLogs();
   }
 
   handle(message) {
@@ -151,6 +154,7 @@ class App {
       this.plots.err.push(s.t, s.err_max);
       this.memory.highlight(s.next, s.goal);
       this.camera.setTarget(s.next);
+      if (s.state === "teaching") this.memory.teaching(s.current);
     }
   }
 

@@ -44,11 +44,16 @@ def wait_for(done: Callable[[], Any], what: str, timeout_s: float = WAIT_S) -> A
 
 
 class RunningWeb:
-    """A :class:`WebServer` on its thread; :meth:`close` stops it."""
+    """A :class:`WebServer` on its thread; :meth:`close` stops it.
 
-    def __init__(self, station: GroundStation) -> None:
+    Args:
+        station: the ground station it serves.
+        options: :class:`WebConfig` fields other than the port (a free one).
+    """
+
+    def __init__(self, station: GroundStation, **options: Any) -> None:
         self.station = station
-        self.server = WebServer(station, station.clock, WebConfig(port=0))
+        self.server = WebServer(station, station.clock, WebConfig(port=0, **options))
         self.url = self.server.url
         self.ws_url = self.url.replace("http://", "ws://") + "ws"
         self._thread = threading.Thread(target=self.server.run, name="web-server")
@@ -64,9 +69,10 @@ class RunningWeb:
 
 
 @pytest.fixture
-def web(vehicle: UdpVehicle) -> Iterator[RunningWeb]:
+def web(vehicle: UdpVehicle, tmp_path: Path) -> Iterator[RunningWeb]:
+    """The app on a free port; its ground log folder (``--log``) is ``tmp_path / "logs"``."""
     station = GroundStation.open(f"udpout:127.0.0.1:{vehicle.link.local_port}", WallClock())
-    running = RunningWeb(station)
+    running = RunningWeb(station, log_dir=tmp_path / "logs")
     try:
         yield running
     finally:
@@ -76,10 +82,11 @@ def web(vehicle: UdpVehicle) -> Iterator[RunningWeb]:
 class Page:
     """One WebSocket client of the app, as a page is (``websockets``' blocking client)."""
 
-    def __init__(self, url: str, origin: str | None = None) -> None:
+    def __init__(self, url: str, origin: str | None = None,
+                 headers: dict[str, str] | None = None) -> None:
         from websockets.sync.client import connect
 
-        headers = {"Origin": origin} if origin is not None else None
+        headers = {**(headers or {}), **({"Origin": origin} if origin is not None else {})}
         self._opened = contextlib.ExitStack()
         self.ws = self._opened.enter_context(
             connect(url, additional_headers=headers, open_timeout=WAIT_S))

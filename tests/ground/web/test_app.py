@@ -16,6 +16,7 @@ import pytest
 from websockets.exceptions import InvalidStatus
 
 from ground.web.app import encode
+from robot.vehicle.app_port import ServoTelemetry
 from robot.vehicle.udp_vehicle import UdpVehicle
 from shared.mavlink.mission.goal import Goal
 from shared.mavlink.modes import Mode
@@ -39,7 +40,7 @@ def test_the_page_and_its_modules_are_served_locally(web: RunningWeb) -> None:
     assert status == 200 and b'<script type="module" src="/static/main.js">' in html
     assert b"http" not in html.replace(b"http-equiv", b"")  # no CDN, nothing remote
     for name in ("main.js", "plot.js", "memory.js", "params.js", "teleop.js", "message.js",
-                 "camera.js", "style.css"):
+                 "camera.js", "graph.js", "logs.js", "style.css"):
         status, body = get(web.url + "static/" + name)
         assert status == 200 and b"https://" not in body and b"http://" not in body, name
 
@@ -64,8 +65,10 @@ def test_updates_show_the_vehicle_with_its_mode_battery_and_link(
     ("not json", "request: not JSON (Expecting value: line 1 column 1 (char 0))"),
     ("[1, 2]", "request: expected a JSON object, got list"),
     ('{"id": 3, "cmd": "fly"}', "cmd: unknown command 'fly' (known: arm, camera, drive, estop, "
-                                "goto, hold, memory, mode, param_set, params, select, "
-                                "teach_start, teach_stop, teleop)"),
+                                "goto, hold, memory, mission, mode, param_set, params, route, "
+                                "select, teach_start, teach_stop, teleop)"),
+    ('{"id": 12, "cmd": "mission", "keys": [1, "2"]}',
+     "keys: expected an integer in 0..16777216, got '2'"),
     ('{"id": 4, "cmd": "goto", "key": -1}', "key: expected an integer in 0..16777216, got -1"),
     ('{"id": 5, "cmd": "goto", "key": 1.5}', "key: expected an integer in 0..16777216, got 1.5"),
     ('{"id": 6, "cmd": "mode", "mode": "FLY"}',
@@ -178,7 +181,7 @@ def test_teleop_sends_the_held_axes_and_stops_when_the_page_goes(
 
 
 def test_memory_index_and_key_image_files_over_ftp(
-        vehicle: UdpVehicle, web: RunningWeb, page: Page, tmp_path: Path,
+        vehicle: UdpVehicle, app: FakeApp, web: RunningWeb, page: Page, tmp_path: Path,
         rng: np.random.Generator) -> None:
     assert page.ask("memory")["error"].startswith("FTP ")  # no memory yet on the robot
     write_memory(tmp_path / "memory", loop_memory(rng))
@@ -204,6 +207,30 @@ def test_memory_index_and_key_image_files_over_ftp(
     # Known to the page's memory: a goal outside it is refused before anything is sent.
     assert page.ask("goto", key=42)["error"] == \
         "key: vehicle 1's memory has no key image 42 (7 key images)"
+    assert page.ask("mission", keys=[2, 42])["error"] == \
+        "key: vehicle 1's memory has no key image 42 (7 key images)"
+    assert app.called("start_mission") == []
+
+
+def test_a_mission_of_several_goals_and_the_route_planned_to_a_key_image(
+        app: FakeApp, page: Page, tmp_path: Path, rng: np.random.Generator) -> None:
+    write_memory(tmp_path / "memory", loop_memory(rng))
+    assert page.ask("route", key=2)["text"] == \
+        "key image 2: the start is unknown (vehicle 1 has not said where it is)"
+    assert page.ask("mission", keys=[5, 2, 6])["text"] == \
+        "vehicle 1: mission of 3 goals: key images 5, 2, 6"
+    assert app.called("start_mission") == [((Goal(5), Goal(2), Goal(6)), 0)]
+    page.ask("select")  # VISUAL_SERVO_STATUS streams now
+    app.update(servo=ServoTelemetry(current_key=5, next_key=6))
+    page.update_where(lambda u: any(s.get("current") == 5 for s in u["samples"].get("1", [])),
+                      "the vehicle at key image 5")
+    reply = page.ask("route", key=2)
+    assert (reply["start"], reply["route"]) == (5, [5, 6, 0, 1, 2])  # over the junction 6-0
+    assert reply["text"].startswith("key image 2: 5 key images from key image 5 (where the ")
+    assert page.ask("route", key=9)["error"] == \
+        "key: vehicle 1's memory has no key image 9 (7 key images)"
+    assert page.ask("mission", keys=[])["error"] == \
+        "keys: expected a list of 1 to 64 key image ids, got []"
 
 
 def test_numbers_json_lacks_become_null() -> None:

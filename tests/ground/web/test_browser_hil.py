@@ -3,7 +3,7 @@ the simulator's Pioneer (the HIL rig's parts: ``tools.harness.hil_rig``): the ro
 in the fleet view with its mode, Hold reaches it, a key image clicked in the memory browser
 makes it drive there, and the emergency stop stops it. The robot serves its camera
 (``--video``): the page finds it through the MAVLink camera protocol and shows it live,
-beside the key image the robot heads for.
+beside the key image the robot heads for, with the points matched drawn on that key image.
 
 Set ``VMNAV_WEB_SCREENSHOT=docs/img/ground-web.png`` to write the README's picture of the
 vehicle view."""
@@ -93,6 +93,11 @@ def test_a_simulated_robot_goes_where_a_key_image_is_clicked(
                 "return i.complete && i.naturalWidth > 0;"), "the target key image")
             assert chromium.find_element("id", "target-caption").text.startswith(
                 "target: key image ")
+            wait_for(lambda: chromium.execute_script(
+                "return document.getElementById('target-matches').dataset.points > 0 &&"
+                " document.getElementById('target-caption').textContent"
+                ".includes(\"points matched with the camera's\");"),
+                     "the matched points drawn on the target key image")
             if path := os.environ.get("VMNAV_WEB_SCREENSHOT"):
                 time.sleep(3)  # a few seconds of plots for the picture (not a synchronisation)
                 chromium.find_element("id", "vehicle").screenshot(path)

@@ -5,6 +5,7 @@ and a flood of viewers are one line each."""
 from __future__ import annotations
 
 import http.client
+import http.server
 import json
 import threading
 from collections.abc import Iterator
@@ -35,7 +36,8 @@ def camera() -> Iterator[MjpegServer]:
         def publish() -> None:
             k = 0
             while not stop.wait(0.05):
-                server.publish(k, numbered_frame(k), np.array([[80.0, 60.0]]))
+                server.publish(k, numbered_frame(k), np.array([[80.0, 60.0]]),
+                               key_xy=np.array([[70.0, 50.0]]), key_id=3)
                 k += 1
 
         thread = threading.Thread(target=publish)
@@ -103,8 +105,70 @@ def test_the_page_finds_the_stream_and_the_frames_come_through(web: RunningWeb,
              and page_viewers(web) == 0, "the relay closed with the page")
 
 
+def get(web: RunningWeb, path: str) -> tuple[int, dict]:
+    url = urlsplit(web.url)
+    conn = http.client.HTTPConnection(url.hostname, url.port, timeout=60)
+    try:
+        conn.request("GET", path)
+        response = conn.getresponse()
+        return response.status, json.loads(response.read())
+    finally:
+        conn.close()
+
+
+def test_the_matches_of_the_newest_frame_come_through_with_the_key_images(
+        web: RunningWeb, page: Page, camera: MjpegServer) -> None:
+    page.update_where(lambda u: u["vehicles"], "the vehicle heard")
+    status, body = get(web, "/api/vehicles/1/camera-matches.json")
+    assert status == 200, body
+    assert body["key"] == 3 and body["size"] == [160, 120]
+    assert body["frame_xy"] == [[80.0, 60.0]] and body["key_xy"] == [[70.0, 50.0]]
+
+
+class Garbage(http.server.BaseHTTPRequestHandler):
+    """A robot's server that answers anything with HTML."""
+
+    def do_GET(self) -> None:
+        self.send_response(200)
+        self.end_headers()
+        self.wfile.write(b"<html>not the matches</html>")
+
+    def log_message(self, *args: object) -> None:
+        pass
+
+
+class TestMatchesNotJson:
+    @pytest.fixture
+    def robot(self) -> Iterator[http.server.ThreadingHTTPServer]:
+        with http.server.ThreadingHTTPServer(("127.0.0.1", 0), Garbage) as server:
+            thread = threading.Thread(target=server.serve_forever)
+            thread.start()
+            yield server
+            server.shutdown()
+            thread.join()
+
+    @pytest.fixture
+    def vehicle(self, tmp_path: Path, app: FakeApp,
+                robot: http.server.ThreadingHTTPServer) -> Iterator[UdpVehicle]:
+        port = robot.server_address[1]
+        stream = VideoStream(f"http://127.0.0.1:{port}/stream.mjpg", 80, 60, 5.0)
+        with make_vehicle(tmp_path, app, WallClock(), video=stream) as udp_vehicle:
+            udp_vehicle.start_thread()
+            yield udp_vehicle
+
+    def test_is_one_line_and_the_server_goes_on(self, web: RunningWeb, page: Page,
+                                                robot: http.server.ThreadingHTTPServer) -> None:
+        page.update_where(lambda u: u["vehicles"], "the vehicle heard")
+        status, body = get(web, "/api/vehicles/1/camera-matches.json")
+        assert status == 502
+        assert body["error"] == (f"camera matches http://127.0.0.1:{robot.server_address[1]}"
+                                 "/matches.json: not a JSON object (Expecting value: line 1 "
+                                 "column 1 (char 0))")
+        assert page.ask("hold")["ok"]
+
+
 def page_viewers(web: RunningWeb) -> int:
-    proxy = web.server._server.config.app.state.camera_proxy  # type: ignore[attr-defined]
+    proxy = web.server._server.config.app.app.state.camera_proxy  # type: ignore[attr-defined]
     return int(proxy.viewers)
 
 

@@ -65,6 +65,16 @@ class TestModes:
         hb = next_heartbeat(net)
         assert hb.custom_mode == 4 and mavutil.mode_string_v10(hb) == "HOLD"
 
+    def test_a_mode_change_beats_at_once(self, net: Net, app: FakeApp) -> None:
+        net.advance(1.5)  # beats at 1 s and 2 s
+        assert net.command(DO_SET_MODE, CUSTOM, 4).result == mavlink.MAV_RESULT_ACCEPTED
+        t_ns, hb = arrivals(net, "HEARTBEAT")[-1]
+        assert mavutil.mode_string_v10(hb) == "HOLD" and t_ns < 1_600_000_000
+        app.update(armed=False)  # the robot's own change: the next poll beats
+        net.advance(0.1)
+        t_ns, hb = arrivals(net, "HEARTBEAT")[-1]
+        assert t_ns < 1_700_000_000 and not hb.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+
     def test_do_set_mode_in_the_px4_encoding(self, net: Net, app: FakeApp) -> None:
         app.update(mode=Mode.HOLD)
         armed = CUSTOM | mavlink.MAV_MODE_FLAG_SAFETY_ARMED  # what MAVSDK sends

@@ -29,7 +29,25 @@ def fs(tmp_path: Path, rng: np.random.Generator) -> MemoryFileSystem:
 
 class TestReadOnlyMemory:
     def test_root_lists_the_two_areas(self, fs: MemoryFileSystem) -> None:
-        assert fs.list_directory("/") == [DirEntry("memory", True), DirEntry("upload", True)]
+        assert fs.list_directory("/") == [DirEntry("memory", True), DirEntry("teaching", True),
+                                          DirEntry("upload", True)]
+
+    def test_teaching_serves_the_key_images_taken_from_ram(self, tmp_path: Path) -> None:
+        taken: list[tuple[int, bytes]] = []
+        fs = MemoryFileSystem(tmp_path / "mem", tmp_path / "upload", teaching=lambda: taken)
+        assert fs.list_directory("/teaching") == []
+        taken += [(7, b"\x89PNG seven"), (8, b"\x89PNG eight")]
+        assert fs.list_directory("/teaching/") == [DirEntry("7.png", False, 10),
+                                                   DirEntry("8.png", False, 10)]
+        reader = fs.open_read("/teaching/8.png")
+        assert (reader.size, reader.read(5, 100)) == (10, b"eight")
+        for path in ("/teaching/9.png", "/teaching/8.png/x", "/teaching"):
+            with pytest.raises(OSError):
+                fs.open_read(path)
+        with pytest.raises(PermissionError):
+            fs.open_write("/teaching/9.png", exclusive=False)
+        with pytest.raises(PermissionError):
+            fs.remove("/teaching/8.png")
 
     def test_memory_shows_the_store_layout(self, fs: MemoryFileSystem) -> None:
         manifest_size = (fs.memory_dir / MANIFEST_NAME).stat().st_size

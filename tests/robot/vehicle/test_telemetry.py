@@ -75,6 +75,9 @@ class TestBuilders:
         assert teaching.state == mavlink.VTR_STATE_TEACHING
         assert (teaching.current_key, teaching.next_key, teaching.goal_key) == (-1, -1, -1)
         assert math.isnan(teaching.y)
+        taken = visual_servo_message(VehicleTelemetry(
+            Mode.MANUAL, teaching=True, teach_thumbnails=((7, b"a"), (8, b"b"))), 5)
+        assert (taken.current_key, taken.next_key) == (8, -1)  # the last key image taken
 
     def test_system_status(self) -> None:
         idle, driving = VehicleTelemetry(Mode.HOLD), VehicleTelemetry(

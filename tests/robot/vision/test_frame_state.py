@@ -21,6 +21,7 @@ from robot.vision.frame_state import (
     state_from_frame,
 )
 from robot.vision.front_end import FrontEnd, make_front_end
+from robot.vision.image_errors import image_errors
 from shared.camera_model import CameraModel
 from shared.errors import DegenerateGeometryError, ShapeError
 from sim.synthetic.corridor_scene import CorridorScene, SceneView, corridor_scene
@@ -150,6 +151,17 @@ class TestStateFromFrame:
         assert result.state.inlier_mask.shape == (result.matches,)
         assert result.image_errors.n_points == n_inliers > 0
         assert result.image_errors.err_image_max_px >= result.image_errors.err_points_px > 0
+
+    def test_the_key_images_corners_go_with_the_frames_in_order(
+        self, scene: CorridorScene, rng: np.random.Generator
+    ) -> None:
+        segment, result = run(scene, rng)
+        assert result.key_xy.shape == result.matched_xy.shape == (result.matches, 2)
+        key_corners = {tuple(xy) for xy in segment.next_features.pixels_xy}
+        assert all(tuple(xy) in key_corners for xy in result.key_xy)
+        inliers = result.state.inlier_mask
+        again = image_errors(result.matched_xy[inliers], result.key_xy[inliers])
+        assert again.err_image_max_px == result.image_errors.err_image_max_px
 
     def test_teach_tracks_give_the_key_pair_matching_cannot(
         self, scene: CorridorScene, rng: np.random.Generator

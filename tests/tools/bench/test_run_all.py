@@ -76,8 +76,8 @@ def test_a_failed_benchmark_is_reported_and_the_others_still_run(
 
 @pytest.mark.parametrize("argv, message", [
     (["--only", "link,nope"],
-     "--only: unknown benchmark nope "
-     "(known: sim, vision, follow, sweep, log, link, faults, fuzz, hostile, real, safety, chance)"),
+     "--only: unknown benchmark nope (known: sim, vision, follow, sweep, log, link, faults, "
+     "fuzz, hostile, real, safety, foxglove, web, chance)"),
     (["--only", ","], "--only: no benchmark"),
     (["--bench-args", "nope=--x"], "--bench-args: 'nope=--x' is not NAME=ARGS"),
     (["--timeout-s", "0"], "--timeout-s: must be > 0"),
@@ -96,7 +96,8 @@ def test_a_hung_benchmark_times_out() -> None:
 
 def test_quick_arguments_parse_for_every_benchmark(tmp_path: Path) -> None:
     parser = build_parser()
-    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real"):
+    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real",
+                 "foxglove"):
         arguments = bench_arguments(name, quick=True, out_dir=tmp_path)
         assert arguments[:len(QUICK_ARGS[name])] == list(QUICK_ARGS[name])
         parser.parse_args(["bench", name, *arguments])
@@ -158,7 +159,8 @@ def test_figures_are_finite_numbers_at_a_dotted_path() -> None:
 
 
 def test_every_benchmark_has_targets_from_the_issues() -> None:
-    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real"):
+    for name in ("sim", "vision", "follow", "sweep", "log", "link", "faults", "real",
+                 "foxglove"):
         assert targets_of(name), name
     figures = {(t.benchmark, t.figure): t.text for t in TARGETS}
     assert figures[("link", "dispatch_ack_ms_p95")] == "< 50"
