@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from concurrent.futures.process import BrokenProcessPool
 
 import pytest
@@ -20,3 +21,17 @@ def test_a_dead_worker_fails_its_task_and_the_next_task_runs() -> None:
         assert pid != os.getpid()
     finally:
         pool.close()
+
+
+def test_ray_not_installed_says_how_to_install(monkeypatch, tmp_path, capsys) -> None:
+    from tools.cli import main
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # what `import ray` meets without it
+    (tmp_path / "plan.toml").write_text("[axes]\nseed = [1]\n")
+    out = tmp_path / "out"
+    assert main(["sweep", "run", str(tmp_path / "plan.toml"), "--out", str(out),
+                 "--ray", "local"]) == 1
+    err = capsys.readouterr().err
+    assert err == ("vmnav sweep: error: --ray: Ray is not installed: pip install 'vmnav[ray]' "
+                   "(or pip install 'ray>=2.40')\n")
+    assert not out.exists()
