@@ -78,6 +78,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     before = len(table.done)
     print(f"vmnav sweep: {len(cases)} cases, {before} done before; results in {table.path}",
           file=sys.stderr, flush=True)
+    older = sum(row.get("code_version") != version for row in table.rows)
+    if older:
+        print(f"vmnav sweep: note: {older} of the rows done before came from another code "
+              f"version than this one ({version}); they are kept", file=sys.stderr)
     count = before
 
     def line(case: Case, row: dict[str, object]) -> None:
