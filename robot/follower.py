@@ -264,9 +264,10 @@ class RouteFollower:
 
     def _prepare(self, key: Keyframe) -> KeySegment | None:
         """The key image's segment with the nearest key image of its path that gives a
-        trustworthy key pair: the previous one, else up to ``_PARTNERS`` back (on a path's
-        first key image: forward). Close key images in a turn, seeing only distant
-        landmarks (the ``campus`` courtyard), can triangulate too few points."""
+        trustworthy key pair: the previous one, else up to ``_PARTNERS`` back, else up to
+        as many forward (:func:`_partners`). Close key images in a turn, seeing only
+        distant landmarks (the ``campus`` courtyard), can triangulate too few points, or
+        fit a baseline whose direction disagrees with the odometry."""
         cfg = self._config
         for other, tracks in _partners(self._memory, key):
             try:
@@ -373,25 +374,27 @@ _PARTNERS = 3
 
 def _partners(memory: VisualMemory,
               key: Keyframe) -> Iterator[tuple[Keyframe, npt.NDArray[np.int64]]]:
-    """Key images of ``key``'s path to pair it with, nearest first, each with the teach
-    tracks (key's corner, partner's corner) chained through the key images between."""
+    """Key images of ``key``'s path to pair it with, each with the teach tracks (key's
+    corner, partner's corner) chained through the key images between: up to
+    :data:`_PARTNERS` before it, nearest first, then up to as many after it (a key image
+    whose view of distant landmarks in a turn disagrees with the odometry towards every
+    earlier one may agree with a later one)."""
     path = memory.paths[key.path_id].keyframe_ids
-    backward = key.index > 0
-    step = -1 if backward else 1
-    tracks = np.column_stack([np.arange(len(key.pixels_xy))] * 2).astype(np.int64)
-    current = key
-    for n in range(1, _PARTNERS + 1):
-        index = key.index + step * n
-        if not 0 <= index < len(path):
-            return
-        partner = memory.keyframe(path[index])
-        # tracked_from_previous pairs (earlier key image's corner, later's); link pairs
-        # (current's corner, partner's).
-        later = current if backward else partner
-        link = later.tracked_from_previous[:, ::-1] if backward else later.tracked_from_previous
-        tracks = chain_tracks(tracks, link)
-        current = partner
-        yield partner, tracks
+    for step in (-1, 1):
+        tracks = np.column_stack([np.arange(len(key.pixels_xy))] * 2).astype(np.int64)
+        current = key
+        for n in range(1, _PARTNERS + 1):
+            index = key.index + step * n
+            if not 0 <= index < len(path):
+                break
+            partner = memory.keyframe(path[index])
+            # tracked_from_previous pairs (earlier key image's corner, later's); link
+            # pairs (current's corner, partner's).
+            link = (current.tracked_from_previous[:, ::-1] if step < 0
+                    else partner.tracked_from_previous)
+            tracks = chain_tracks(tracks, link)
+            current = partner
+            yield partner, tracks
 
 
 def chain_tracks(a_b: npt.ArrayLike, b_c: npt.ArrayLike) -> npt.NDArray[np.int64]:

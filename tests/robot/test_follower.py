@@ -12,9 +12,11 @@ from hypothesis import strategies as st
 
 from robot.config import VmnavConfig
 from robot.follower import (
+    _PARTNERS,
     FollowerConfig,
     InitGate,
     RouteFollower,
+    _partners,
     chain_tracks,
     odometry_increment,
     targets_from_route,
@@ -31,6 +33,30 @@ from tests.shared.memory.builders import loop_memory
 @pytest.fixture
 def memory():
     return loop_memory(np.random.default_rng(4))
+
+
+class TestPartners:
+    def test_earlier_key_images_first_then_later_ones_with_chained_tracks(self, memory) -> None:
+        path = memory.paths[0].keyframe_ids  # 4 key images; _PARTNERS is 3
+        key = memory.keyframe(path[1])
+        found = list(_partners(memory, key))
+        assert [p.id for p, _ in found] == [path[0], path[2], path[3]]
+        # The nearest of each side: the teach tracks themselves, as (key's, partner's).
+        after = memory.keyframe(path[2])
+
+        def rows(tracks: np.ndarray) -> list[tuple[int, int]]:
+            return sorted(map(tuple, tracks.tolist()))
+
+        assert rows(found[0][1]) == rows(key.tracked_from_previous[:, ::-1])
+        assert rows(found[1][1]) == rows(after.tracked_from_previous)
+        # Further on: chained through the key image between.
+        assert rows(found[2][1]) == rows(chain_tracks(
+            after.tracked_from_previous, memory.keyframe(path[3]).tracked_from_previous))
+
+    def test_the_first_key_image_pairs_forward_only(self, memory) -> None:
+        path = memory.paths[0].keyframe_ids
+        assert [p.id for p, _ in _partners(memory, memory.keyframe(path[0]))] == list(
+            path[1:_PARTNERS + 1])
 
 
 class TestTargetsFromRoute:
