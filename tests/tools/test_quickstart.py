@@ -236,10 +236,15 @@ def test_the_quickstart_runs_in_order_against_the_simulator(tmp_path: Path) -> N
     assert path.name == "corridor" and 5 in path.keyframe_ids
     assert f"path {path.id} stored" in said["ground teach stop"]
     assert said["ground memory list"].startswith(f"path {path.id} 'corridor': key images ")
-    # Arrived where key image 5 was taught, then where the photo was taken (straight east).
+    # Arrived where key image 5 was taught, then where the key image the photo was found
+    # at was taught (straight east), near where the photo was taken.
+    found = int(re.search(r"found at key image (\d+)",
+                          said["ground goto --image door.jpg --wait"]).group(1))
+    assert abs(poses["teach"][0] + memory.keyframes[found].distance_m - poses["photo"][0]) < 0.5
     for name, goal_x in (("ground goto 5 --wait", poses["teach"][0]
                           + memory.keyframes[5].distance_m),
-                         ("ground goto --image door.jpg --wait", poses["photo"][0])):
+                         ("ground goto --image door.jpg --wait", poses["teach"][0]
+                          + memory.keyframes[found].distance_m)):
         assert "goal reached" in said[name], said[name]
         assert abs(poses[name][0] - goal_x) < 0.15 and abs(poses[name][1] - 10.0) < 0.1, \
             (name, poses[name], goal_x)
