@@ -22,7 +22,9 @@ Rules:
    which waits) and, when no frame comes within
    ``TeleopConfig.frame_timeout_ns``, tells it the camera stalled
    (:meth:`RobotRuntime.stall`: the base stops), until the camera ends, the loop's
-   clock reaches ``end_ns``, or the caller's ``on_step`` says :attr:`AfterStep.STOP`.
+   clock reaches ``end_ns``, the caller's ``on_step`` says :attr:`AfterStep.STOP`, or
+   :meth:`RobotProcess.stop` was called (from any thread or a signal handler; the loop
+   sees it before its next frame, within a frame period or the frame timeout).
    The real robot is paced by its camera; a lock-step loop gives a ``period_ns`` and
    sleeps on the clock to each next deadline, which steps the simulation.
 2. **Holding the clock** (lock-step only): ``on_step`` answering
@@ -53,6 +55,7 @@ from __future__ import annotations
 
 import contextlib
 import enum
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
@@ -184,6 +187,8 @@ class RobotProcess:
         self._link_clock = parts.clock if link_clock is None else link_clock
         self._lockstep = parts.lockstep
         self._frame_timeout_ns = parts.config.teleop.frame_timeout_ns
+        self._stop = threading.Event()
+        self._stop_why = STOPPED
         undo = contextlib.ExitStack()
         with undo:  # unwinds only when something below raises
             log = parts.log
@@ -234,7 +239,8 @@ class RobotProcess:
             on_step: the caller's look at each frame's step; None: always the next frame.
 
         Returns:
-            Why it stopped: :data:`CAMERA_ENDED`, :data:`TIME_UP` or :data:`STOPPED`.
+            Why it stopped: :data:`CAMERA_ENDED`, :data:`TIME_UP`, :data:`STOPPED`, or
+            what :meth:`stop` was told.
 
         Raises:
             ValueError: ``on_step`` held the clock of a process that is not lock-step.
@@ -242,6 +248,8 @@ class RobotProcess:
         runtime, clock = self.runtime, self._clock
         deadline_ns = clock.now_ns()
         while end_ns is None or clock.now_ns() < end_ns:
+            if self._stop.is_set():
+                return self._stop_why
             frame = self._frames.read_within(self._frame_timeout_ns)
             if frame is None:
                 return CAMERA_ENDED
@@ -255,6 +263,12 @@ class RobotProcess:
                 deadline_ns += period_ns
                 clock.sleep_until_ns(deadline_ns)
         return TIME_UP
+
+    def stop(self, why: str = STOPPED) -> None:
+        """Ask the loop to end before its next frame, saying ``why``; safe from another
+        thread or a signal handler (it sets a flag and never waits)."""
+        self._stop_why = why
+        self._stop.set()
 
     def _step(self, frame: Frame, on_step: OnStep | None) -> AfterStep:
         """Step ``frame``, again while ``on_step`` holds the clock (rule 2); what then."""

@@ -15,9 +15,11 @@ tells it the camera stalled (the base stops). Start-up checks come first: every 
 the ground link's transport (a port in use, a missing radio) and the Pioneer's (a missing
 device, a refused or unanswered connect: one line in under 2 s), before the Pioneer's
 motors are enabled. Parameters set from the ground and goal
-photos live in ``--state DIR``. Ctrl-C and SIGTERM stop the base, send the Pioneer its
-CLOSE, and close the link and the camera; the field log records all that (ending with
-how the Pioneer link ended) and is finished last.
+photos live in ``--state DIR``. Ctrl-C and SIGTERM end the loop before its next frame
+(``tools.harness.stop_signals``; a second one interrupts at once), which stops the base,
+sends the Pioneer its CLOSE, and closes the link and the camera; the field log records
+all that (ending with how the Pioneer link ended) and is finished last. Exit status: 0,
+or 130 after Ctrl-C, 143 after SIGTERM.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from pathlib import Path
 from shared.errors import InputError, TransportError
 from tools.harness.arg_types import POSITIVE, SYSTEM_ID
 from tools.harness.robot_views import DEFAULT_VIDEO_PORT, FOXGLOVE_PORT, check_views, open_views
+from tools.harness.stop_signals import stopped_by_signals
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -108,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.pioneer.serial_link import aria_address
     from robot.process import RobotParts, RobotProcess
     from robot.vehicle.options import SigningSetup, VehicleFiles
-    from robot.vehicle.vehicle_link import open_vehicle_transport
+    from robot.vehicle.vehicle_link import open_vehicle_transport, transport_address
     from shared.calibration import read_camera
     from shared.clock import WallClock, unix_offset_ns
     from shared.key_file import read_key_file
@@ -179,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
             width, height = camera.size_wh
             print(f"vmnav robot: {identity.name if identity else 'Pioneer'!r} on "
                   f"{config.pioneer.url}; camera {config.camera.source} ({width}x{height}); "
-                  f"MAVLink system {config.mavlink.system_id} on {link_name(transport)}"
+                  f"MAVLink system {config.mavlink.system_id} on {transport_address(transport)}"
                   f"{' (signed)' if signing else ''}; memory {args.memory}: "
                   f"{len(memory.paths)} paths, {len(memory.keyframes)} key images", flush=True)
             if view is not None:
@@ -189,21 +192,11 @@ def run(args: argparse.Namespace) -> int:
             for line in (link_check.line, views.line):
                 if line is not None:
                     print(f"vmnav robot: {line}", flush=True)
-            ended = process.run(end_ns=None if args.duration is None
-                                else clock.now_ns() + round(args.duration * 1e9))
+            with stopped_by_signals(process.stop) as signalled:
+                ended = process.run(end_ns=None if args.duration is None
+                                    else clock.now_ns() + round(args.duration * 1e9))
+    if signalled.signum is not None:
+        ended = f"stopped by {signalled.name}"
     print(f"vmnav robot: {ended}; base stopped, links closed", flush=True)
-    return 0
+    return signalled.exit_status
 
-
-def link_name(transport: object) -> str:
-    """The ground link's address as opened: a listener given port 0 shows the port it got."""
-    from shared.stream_port import StreamPort
-
-    if isinstance(transport, StreamPort):
-        return transport.url
-    from shared.udp_link import UdpLink
-
-    assert isinstance(transport, UdpLink)
-    if not transport.listening:
-        return transport.url
-    return f"udpin:{transport.url.split(':')[-2]}:{transport.local_port}"

@@ -11,9 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
-from collections.abc import Callable, Iterator
-from contextlib import ExitStack, closing, contextmanager
+from contextlib import ExitStack, closing
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +22,7 @@ from tools.harness.sim_args import (
     place_at_start,
     sim_config_from_args,
 )
+from tools.harness.stop_signals import stopped_by_signals
 from tools.harness.tcp_spec import TcpSpec, parse_http_spec, tcp_spec
 
 DEFAULT_ARIA = "tcp:8101"
@@ -165,7 +164,7 @@ def run_serve(args: argparse.Namespace) -> int:
                   "GET/POST /obstacles, DELETE /obstacles/<id>)")
         print("  Ctrl-C stops", flush=True)
         duration_ns = None if args.duration is None else round(args.duration * 1e9)
-        with _stopped_by_signals(server.stop):
+        with stopped_by_signals(server.stop):
             server.run(WallClock(), duration_ns)
     s = emulator.stats
     print(f"stopped after {sim.now_ns / 1e9:.1f} s of simulation: {s.sessions} session(s), "
@@ -176,15 +175,3 @@ def run_serve(args: argparse.Namespace) -> int:
         v = video_server.stats()
         print(f"camera: {v.published} frames, {v.clients} stream client(s)")
     return 0
-
-
-@contextmanager
-def _stopped_by_signals(stop: Callable[[], None]) -> Iterator[None]:
-    """SIGINT and SIGTERM call ``stop`` while inside (a clean shutdown); old handlers after."""
-    handlers = {sig: signal.signal(sig, lambda *_: stop())
-                for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield
-    finally:
-        for sig, handler in handlers.items():
-            signal.signal(sig, handler)

@@ -24,7 +24,7 @@ from shared.link_address import Scheme, parse_link_address
 from shared.stream_port import StreamPort
 from shared.udp_link import UdpLink
 
-__all__ = ["VehicleTransport", "open_vehicle_transport", "vehicle_on"]
+__all__ = ["VehicleTransport", "open_vehicle_transport", "transport_address", "vehicle_on"]
 
 #: The transport of a vehicle's ground link.
 VehicleTransport = UdpLink | StreamPort
@@ -50,6 +50,13 @@ def open_vehicle_transport(url: str, option: str = "--mavlink") -> VehicleTransp
             port.close()
             raise
     return port
+
+
+def transport_address(transport: VehicleTransport) -> str:
+    """``transport``'s address as opened: a listener given port 0 shows the port it got."""
+    if isinstance(transport, StreamPort) or not transport.listening:
+        return transport.url
+    return f"udpin:{transport.url.split(':')[-2]}:{transport.local_port}"
 
 
 def vehicle_on(transport: VehicleTransport, endpoint: VehicleEndpoint,

@@ -158,6 +158,19 @@ class TestLoop:
             assert robot.run(period_ns=50 * MS, on_step=on_step) == STOPPED
         assert stamps == [0, 50 * MS, 100 * MS, 150 * MS]
 
+    def test_stop_ends_it_before_the_next_frame_with_its_reason(self, tmp_path) -> None:
+        clock, stamps = ManualClock(), []
+        frames = ScriptedCamera(clock, [0] * 100)
+        with process(tmp_path, clock, frames, []) as robot:
+            def on_step(record) -> AfterStep:  # as a signal handler would, mid-loop
+                stamps.append(clock.now_ns())
+                if len(stamps) == 3:
+                    robot.stop("stopped by SIGINT")
+                return AfterStep.NEXT_FRAME
+
+            assert robot.run(period_ns=50 * MS, on_step=on_step) == "stopped by SIGINT"
+        assert stamps == [0, 50 * MS, 100 * MS] and frames.reads == 3
+
 
 class TestHoldingTheClock:
     def test_the_ground_station_is_heard_while_the_clock_stands_still(self, tmp_path) -> None:

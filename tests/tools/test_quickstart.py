@@ -16,9 +16,8 @@ differs from the page, and nothing else:
   space and ``q`` once the simulator's truth says the robot went :data:`DRIVE_M`;
 * ``door.jpg`` is the simulated camera's view at the end of that drive, and before step 7
   the simulator's hand carries the robot back to where teaching started;
-* step 8's "stop the robot" is a SIGTERM (what ``kill`` and a service manager send): a
-  SIGINT (Ctrl-C) at that point has twice left the robot hanging in its shutdown, after
-  the Pioneer closed, on a loaded machine: an open bug (the session note of 2026-11-29).
+* step 8's "stop the robot (Ctrl-C)" is a SIGINT to the robot's process (what a
+  terminal's Ctrl-C sends to its foreground process).
 """
 
 from __future__ import annotations
@@ -39,6 +38,7 @@ from pathlib import Path
 import pytest
 
 from shared.camera_model import CameraModel
+from shared.logs.reader import log_info, read_messages
 from shared.memory import read_memory
 from tests.tools.board_video import board_video, render_board_views
 from tests.tools.processes import start, wait_for
@@ -195,6 +195,7 @@ def test_the_quickstart_runs_in_order_against_the_simulator(tmp_path: Path) -> N
     robot: subprocess.Popen[bytes] | None = None
     said: dict[str, str] = {}
     poses: dict[str, list[float]] = {}
+    signalled_ns: int | None = None  # when step 8 stopped the robot, on its clock
     try:
         for command in commands:
             typed, name = user.typed(command), step(command)
@@ -213,8 +214,9 @@ def test_the_quickstart_runs_in_order_against_the_simulator(tmp_path: Path) -> N
             if name == "ground memory list":  # "drive the robot back near the start"
                 sim.place(poses["teach"])
             if name.startswith("log") and robot is not None and robot.poll() is None:
-                robot.send_signal(signal.SIGTERM)  # "stop the robot"
-                assert robot.wait(STEP_TIMEOUT_S) == 143
+                signalled_ns = time.monotonic_ns()  # the robot's WallClock: the same clock
+                robot.send_signal(signal.SIGINT)  # "stop the robot (Ctrl-C)"
+                assert robot.wait(STEP_TIMEOUT_S) == 130
             said[name] = user.run(typed)
             poses[name] = sim.pose()
     finally:
@@ -226,6 +228,7 @@ def test_the_quickstart_runs_in_order_against_the_simulator(tmp_path: Path) -> N
     robot_out = (tmp_path / "robot.out").read_text()
     assert "Traceback" not in robot_out, robot_out
     assert "pioneer: Closed()" in robot_out, robot_out
+    assert "vmnav robot: stopped by SIGINT; base stopped, links closed" in robot_out, robot_out
     assert "connected to 'vmnav'" in said["pioneer --aria serial:/dev/ttyUSB0"]
     assert "wrote camera.json" in said[step(commands[2])]
     assert (tmp_path / "vmnav" / "vmnav.key").stat().st_mode & 0o777 == 0o600
@@ -251,4 +254,19 @@ def test_the_quickstart_runs_in_order_against_the_simulator(tmp_path: Path) -> N
     assert "emergency stop accepted" in said["ground stop"]
     assert "armed" in said["ground arm"]
     assert "status    complete" in said["log info logs/robot-0001.mcap"]
+    field_log = tmp_path / "logs" / "robot-0001.mcap"
+    info = log_info(field_log)  # its start in Unix time, as Foxglove and `mcap info` read it
+    assert info.start_ns is not None and info.unix_offset_ns is not None
+    assert abs(info.start_ns / 1e9 - time.time()) < 3600
+    assert {"/camera/image/compressed", "/tf", "/pioneer/sip", "/mavlink/in/MANUAL_CONTROL",
+            "/mavlink/out/HEARTBEAT", "/log"} <= {t.topic for t in info.topics}
+    # The log was finished after the driver closed (stop and CLOSE sent): its last line,
+    # written then, gives the driver's last SIP, and that SIP is the log's last.
+    *_, closed = read_messages(field_log, ["/log"])
+    *_, last_sip = read_messages(field_log, ["/pioneer/sip"])
+    gap_ms = (closed.log_time_ns - last_sip.log_time_ns) / 1e6
+    assert signalled_ns is not None and closed.clock_ns > signalled_ns
+    assert closed.data["name"] == "robot.pioneer"
+    assert closed.data["message"].startswith("pioneer closed: "), closed.data
+    assert f"SIPs (the last {gap_ms:.1f} ms before)" in closed.data["message"], closed.data
     assert "wrote logs/robot-0001-matches.png" in said["log plot logs/robot-0001.mcap"]

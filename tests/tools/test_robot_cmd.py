@@ -1,15 +1,14 @@
-"""``vmnav robot`` as the field runs it: three processes on real transports.
+"""``vmnav robot`` as the field runs it: its parts on real transports, and what it says
+when one of them is wrong.
 
 ``vmnav sim serve`` is the emulated Pioneer on TCP and the camera as MJPEG over HTTP;
-``vmnav robot`` connects to both and calls this test's ground station over UDP. The
-ground station teaches a path by teleoperation (MANUAL_CONTROL), and the path lands in
-the robot's memory; SIGTERM then stops the robot cleanly.
-"""
+``vmnav robot`` connects to both and to this test's ground station. Teaching by
+teleoperation and the stop by a signal, with the field log that records them, are the
+README quickstart's test (``tests/tools/test_quickstart.py``)."""
 
 from __future__ import annotations
 
 import json
-import math
 import signal
 import socket
 import subprocess
@@ -22,9 +21,7 @@ from shared.calibration import write_camera
 from shared.camera_model import CameraModel
 from shared.clock import WallClock
 from shared.key_file import read_key_file
-from shared.logs.reader import log_info, read_messages
-from shared.mavlink.modes import Mode
-from shared.memory import read_memory, write_memory
+from shared.memory import write_memory
 from tests.robot.vehicle.stream_rig import Radios
 from tests.shared.memory.builders import folder_bytes, loop_memory, memory_without_manifest
 from tests.tools.processes import VMNAV, start, wait_for
@@ -41,79 +38,6 @@ def sim_serve(tmp_path):
     finally:
         process.send_signal(signal.SIGTERM)
         process.wait(10)
-
-
-#: Driven by teleoperation while teaching, m.
-DRIVE_M = 0.75
-
-
-def odometry_xy(station: GroundStation) -> tuple[float, float]:
-    """The robot's odometry position in its last ODOMETRY, (x_m, y_m) in LOCAL_FRD."""
-    assert station.vehicle is not None
-    odometry = station.vehicle.telemetry["ODOMETRY"]
-    return odometry.x, odometry.y
-
-
-@pytest.mark.slow
-def test_teach_by_teleoperation_then_sigterm(sim_serve, tmp_path) -> None:
-    aria, camera = sim_serve
-    clock = WallClock()
-    started_s = time.time()
-    with GroundStation.open("udpin:127.0.0.1:0", clock) as station:
-        log = tmp_path / "robot.out"
-        robot = start(["robot", "--aria", aria, "--camera", camera, "--mavlink",
-                       f"udpout:127.0.0.1:{station.link.local_port}",
-                       "--memory", str(tmp_path / "memory"), "--state", str(tmp_path / "state"),
-                       "--log", str(tmp_path / "logs")],
-                      log)
-        try:
-            station.wait_vehicle(30.0)
-            assert station.vehicle is not None and station.vehicle.mode is Mode.HOLD
-            assert station.run_until(lambda: "ODOMETRY" in station.vehicle.telemetry,
-                                     10_000_000_000)
-            start_xy = odometry_xy(station)
-            station.teach_start("corridor_east")
-            # Until the robot's odometry says it went DRIVE_M (about 4 s at 0.2 m/s, half
-            # stick, MANUAL_CONTROL at 10 Hz), not for a fixed time: how far that drives
-            # depends on the load (the dead-man stops the robot when a MANUAL_CONTROL comes
-            # late; the simulator falls behind the wall clock). 60 s: only a hang.
-            limit_ns = clock.now_ns() + 60_000_000_000
-            while math.dist(odometry_xy(station), start_xy) < DRIVE_M:
-                assert clock.now_ns() < limit_ns, f"drove {odometry_xy(station)} from {start_xy}"
-                station.send_manual_control(0.5, 0.0)
-                station.run_until(lambda: False, 100_000_000)
-            stored = station.teach_stop()  # answered once the path is written
-            assert stored.path_id == 0 and "'corridor_east'" in stored.said, stored
-            memory = read_memory(tmp_path / "memory")
-            (path,) = memory.paths.values()
-            assert path.name == "corridor_east" and len(path.keyframe_ids) >= 3
-            distance = memory.keyframes[path.keyframe_ids[-1]].distance_m
-            assert 0.5 < distance < 1.0
-        finally:
-            signalled_ns = time.monotonic_ns()  # the robot's WallClock: the same clock
-            robot.send_signal(signal.SIGTERM)
-            code = robot.wait(15)
-    output = log.read_text()
-    assert code == 143, output
-    assert "Traceback" not in output
-    assert "pioneer: Closed()" in output
-    field_log = tmp_path / "logs" / "robot-0001.mcap"
-    info = log_info(field_log)
-    assert info.complete, info.problem
-    # Unix time, as Foxglove and `mcap info` read it: the run's date.
-    assert info.start_ns is not None and info.unix_offset_ns is not None
-    assert started_s - 1 < info.start_ns / 1e9 < time.time()
-    topics = {t.topic for t in info.topics}
-    assert {"/camera/image/compressed", "/tf", "/pioneer/sip", "/mavlink/in/MANUAL_CONTROL",
-            "/mavlink/out/HEARTBEAT", "/log"} <= topics
-    # The log was finished after the driver closed (stop and CLOSE sent): its last line,
-    # written then, gives the driver's last SIP, and that SIP is the log's last.
-    *_, closed = read_messages(field_log, ["/log"])
-    *_, last_sip = read_messages(field_log, ["/pioneer/sip"])
-    gap_ms = (closed.log_time_ns - last_sip.log_time_ns) / 1e6
-    assert closed.clock_ns > signalled_ns and closed.data["name"] == "robot.pioneer"
-    assert closed.data["message"].startswith("pioneer closed: "), closed.data
-    assert f"SIPs (the last {gap_ms:.1f} ms before)" in closed.data["message"], closed.data
 
 
 @pytest.mark.slow
