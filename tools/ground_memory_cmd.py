@@ -36,7 +36,7 @@ def add_parser(ground_sub: argparse._SubParsersAction) -> None:  # type: ignore[
 def run_list(station: GroundStation, args: argparse.Namespace) -> int:
     """Print a line per visual path of the robot's memory: id, name, its key images (the
     goals ``goto`` takes) and its length; the totals on stderr."""
-    from ground.web.memory_index import MANIFEST_PATH, memory_index_from_manifest
+    from ground.memory_index import MANIFEST_PATH, memory_index_from_manifest
 
     index = memory_index_from_manifest(station.ftp_get(MANIFEST_PATH))
     for path in index.paths:

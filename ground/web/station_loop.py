@@ -49,15 +49,15 @@ from typing import Any, TypeVar
 
 from ground.camera_stream import find_video_stream
 from ground.fleet import VehicleState
-from ground.station import GroundError, GroundStation, PhotoGoal
-from ground.teleop import PERIOD_NS, DeadMan
-from ground.web.link_quality import LinkQuality
-from ground.web.memory_index import (
+from ground.memory_index import (
     MANIFEST_PATH,
     MEMORY_ROOT,
     MemoryIndex,
     memory_index_from_manifest,
 )
+from ground.station import GroundError, GroundStation, PhotoGoal
+from ground.teleop import PERIOD_NS, DeadMan
+from ground.web.link_quality import LinkQuality
 from ground.web.requests import Request
 from ground.web.vehicle_json import sample_json, vehicle_json
 from shared.clock import NS_PER_S, Clock

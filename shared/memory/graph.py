@@ -131,7 +131,7 @@ class RouteGraph:
 
     The one home of planning: the robot's :class:`VisualMemory` builds it from its
     records, the ground station from the memory's manifest alone
-    (``ground.web.memory_index``), so both plan the same routes.
+    (``ground.memory_index``), so both plan the same routes.
 
     Args:
         ids: every key image id (the vertices).

@@ -20,6 +20,7 @@ import math
 import subprocess
 import sys
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 
 from robot.config import BASE_LOST_ACTIONS, TeleopConfig
@@ -53,22 +54,39 @@ LOG_LOSS_NS = NS_PER_S
 KILL_PARAM, KILL_PARAM_VALUE = "CTL_SPEED", 0.25
 
 
-def go_silent(hil: Hil, seconds: float) -> tuple[int, int]:
-    """The ground station sends nothing (and reads nothing) for ``seconds``. Then waits
-    until the robot says it heard the station again, and until the simulation has run
-    ``seconds`` past the silence's start (it lags the wall clock on a loaded machine).
+@dataclass(frozen=True)
+class Silence:
+    """A silence of the ground station, in simulation time.
 
-    Returns:
-        The simulation time the silence began, ns, and the number of the robot's notices
-        before it (``since`` of :meth:`~tools.hil_rig.Hil.notice`).
+    Attributes:
+        began_ns: the simulation's time when the silence began, ns.
+        since: the number of the robot's notices before it (``since`` of
+            :meth:`~tools.harness.hil_rig.Hil.notice`).
+        marked_ns: the simulation's time when the wall clock had run ``mark_ns`` of the
+            silence, ns: where a timeout the robot times on its wall clock fell in the
+            simulation, which lags the wall clock on a loaded machine.
     """
+
+    began_ns: int
+    since: int
+    marked_ns: int
+
+
+def go_silent(hil: Hil, seconds: float, mark_ns: int) -> Silence:
+    """The ground station sends nothing (and reads nothing) for ``seconds``, noting the
+    simulation's time ``mark_ns`` into it on the wall clock. Then waits until the robot says
+    it heard the station again, and until the simulation has run ``seconds`` past the
+    silence's start."""
     began_ns, since = hil.sim.now_ns, len(hil.notices())
     clock = hil.station.clock
-    clock.sleep_until_ns(clock.now_ns() + round(seconds * NS_PER_S))
+    start_ns = clock.now_ns()
+    clock.sleep_until_ns(start_ns + mark_ns)
+    marked_ns = hil.sim.now_ns
+    clock.sleep_until_ns(start_ns + round(seconds * NS_PER_S))
     hil.run_until(lambda: hil.notice("GCS heartbeat regained", since) is not None, 5.0,
                   "the robot's 'GCS heartbeat regained'")
     hil.wait_sim(began_ns + round(seconds * NS_PER_S))
-    return began_ns, since
+    return Silence(began_ns, since, marked_ns)
 
 
 # -- the cases ----------------------------------------------------------------------------
@@ -169,18 +187,17 @@ def gcs_silent_hold(taught: Taught, folder: Path) -> None:
     goal = taught.keyframe_ids[-1]
     with open_hil(taught, folder) as hil:
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
-        silence_ns, since = go_silent(hil, SILENCE_S)
-        timeout_ns = MavlinkConfig().gcs_timeout_ns
+        silence = go_silent(hil, SILENCE_S, MavlinkConfig().gcs_timeout_ns)
         # Nominally 0.4 m at 0.2 m/s. The robot times the GCS timeout on its wall clock and
         # the simulation lags the wall on a loaded machine, so fewer simulated metres fit
         # before the hold: what is checked is that it drove on (a robot that stopped at
         # the silence's start coasts a few cm), not how far.
-        driven = hil.sim.truth.travelled_m(silence_ns, silence_ns + timeout_ns - NS_PER_S)
+        driven = hil.sim.truth.travelled_m(silence.began_ns, silence.marked_ns - NS_PER_S)
         expect(driven > 0.15, f"the robot drove only {driven:.2f} m before the GCS timeout")
-        moving = hil.sim.truth.still(silence_ns + timeout_ns + BRAKE_NS,
-                                     silence_ns + round(SILENCE_S * NS_PER_S))
+        moving = hil.sim.truth.still(silence.marked_ns + BRAKE_NS,
+                                     silence.began_ns + round(SILENCE_S * NS_PER_S))
         expect(moving is None, f"the robot did not hold after the GCS timeout: {moving}")
-        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in AUTO: hold", since)
+        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in AUTO: hold", silence.since)
                is not None, f"no failsafe notice: {hil.notices()}")
         expect(hil.vehicle.mode is Mode.HOLD, f"mode {hil.vehicle.mode_name} after the failsafe")
         expect(hil.station.mission_outcome is False,
@@ -196,12 +213,11 @@ def gcs_silent_continue(taught: Taught, folder: Path) -> None:
     with open_hil(taught, folder) as hil:
         hil.station.set_param("FS_GCS_ACTION", float(GCS_LOST_ACTIONS.index("continue")))
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
-        silence_ns, since = go_silent(hil, SILENCE_S)
-        timeout_ns = MavlinkConfig().gcs_timeout_ns
-        driven = hil.sim.truth.travelled_m(silence_ns + timeout_ns + BRAKE_NS,
-                                           silence_ns + round(SILENCE_S * NS_PER_S))
+        silence = go_silent(hil, SILENCE_S, MavlinkConfig().gcs_timeout_ns)
+        driven = hil.sim.truth.travelled_m(silence.marked_ns + BRAKE_NS,
+                                           silence.began_ns + round(SILENCE_S * NS_PER_S))
         expect(driven > 0.5, f"the robot drove only {driven:.2f} m after the GCS timeout")
-        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in AUTO: continue", since)
+        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in AUTO: continue", silence.since)
                is not None, f"no failsafe notice: {hil.notices()}")
         hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
 
@@ -218,12 +234,11 @@ def gcs_silent_manual(taught: Taught, folder: Path) -> None:
             return hil.sim.truth.moved_m() >= DRIVEN_BEFORE_FAULT_M / 2
 
         hil.run_until(drive, 10.0, "driving by MANUAL_CONTROL")
-        silence_ns, since = go_silent(hil, SILENCE_S)
-        deadman_ns = TeleopConfig().deadman_ns
-        moving = hil.sim.truth.still(silence_ns + deadman_ns + BRAKE_NS,
-                                     silence_ns + round(SILENCE_S * NS_PER_S))
+        silence = go_silent(hil, SILENCE_S, TeleopConfig().deadman_ns)
+        moving = hil.sim.truth.still(silence.marked_ns + BRAKE_NS,
+                                     silence.began_ns + round(SILENCE_S * NS_PER_S))
         expect(moving is None, f"the robot did not stop without the ground: {moving}")
-        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in MANUAL: stop", since)
+        expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in MANUAL: stop", silence.since)
                is not None, f"no failsafe notice: {hil.notices()}")
         expect(hil.vehicle.mode is Mode.MANUAL,
                f"mode {hil.vehicle.mode_name} after the failsafe")

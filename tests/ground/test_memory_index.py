@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ground.web.memory_index import memory_index_from_manifest
+from ground.memory_index import memory_index_from_manifest
 from shared.errors import MemoryFormatError, UnknownKeyframeError
 from shared.memory import VisualMemory
 from shared.memory.store import write_memory

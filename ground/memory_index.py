@@ -1,10 +1,11 @@
-"""The robot's visual memory as the page's browser needs it: paths and their key images,
-from ``/memory/manifest.json`` fetched over MAVLink FTP (pure).
+"""The robot's visual memory as the ground needs it (the web page, ``vmnav ground memory
+list``): paths and their key images, from ``/memory/manifest.json`` fetched over MAVLink
+FTP (pure).
 
 The manifest's format is :mod:`shared.memory.store`'s; this reads only what the browser
 shows (paths with their key image ids in order, each key image's path, index, distance
 and teach odometry, and the junctions) and checks just that, so a manifest the robot
-wrote is never refused here for a field the page does not use. That is also all route
+wrote is never refused here for a field the ground does not use. That is also all route
 planning needs: :meth:`MemoryIndex.plan_route` plans with the robot's own planner
 (:class:`shared.memory.graph.RouteGraph`) on the manifest's graph. The camera and the
 data files stay on the robot; key images come as files (``thumbnails/<id>.png``,
