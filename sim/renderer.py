@@ -165,6 +165,10 @@ class FisheyeRenderer:
         self.effects = CameraEffects(camera, mount, sensor, rng.spawn(1)[0])
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
         self._figures: PersonFigures | None = None
+        self._last_trace: tuple[Scene, bytes, npt.NDArray[np.float32],
+                                npt.NDArray[np.float32]] | None = None
+        #: How many frames went through the ray kernel (:meth:`_trace_again_if_moved`).
+        self.traced = 0
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
@@ -224,7 +228,7 @@ class FisheyeRenderer:
         T_world_cam = camera_pose_world(pose_w, self.mount)
         R_cam_world = T_world_cam[:3, :3].T
         centre_w = T_world_cam[:3, 3]
-        radiance, depth = self.trace(T_world_cam, pose_w[2])
+        radiance, depth = self._trace_again_if_moved(T_world_cam, pose_w[2])
 
         self._draw_people(sim, radiance, R_cam_world, centre_w, depth)
         if self._patches is not None:
@@ -248,6 +252,23 @@ class FisheyeRenderer:
             illumination_gain=gain,
             depth_m=depth,
         )
+
+    def _trace_again_if_moved(
+        self, T_world_cam: FloatArray, yaw_rad: float
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """:meth:`trace`, run again only when the camera moved or the scene changed (a robot
+        standing still sees the same surfaces; people, light and noise come after).
+
+        Returns:
+            copies of :meth:`trace`'s images, the caller's to draw on.
+        """
+        pose = T_world_cam.tobytes() + np.float64(yaw_rad).tobytes()
+        last = self._last_trace
+        if last is None or last[0] is not self.scene or last[1] != pose:
+            last = (self.scene, pose, *self.trace(T_world_cam, yaw_rad))
+            self._last_trace = last
+            self.traced += 1
+        return last[2].copy(), last[3].copy()
 
     def trace(
         self, T_world_cam: FloatArray, yaw_rad: float

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from shared.clock import ManualClock
+from tests.made_once import made_once
 from tools.threads import one_blas_thread
 
 one_blas_thread()  # as every vmnav command runs (tools/__init__.py)
@@ -28,11 +29,14 @@ def manual_clock() -> ManualClock:
 @pytest.fixture(scope="session")
 def east_a(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """(world file, memory folder): the lab's 2.5 m ``east_a`` route taught once per test
-    process in lock-step (seed 1; tools/harness/short_routes.py), with the default config.
+    run in lock-step (seed 1; tools/harness/short_routes.py), with the default config.
     Read only: copy the memory before changing it."""
     from robot.config import VmnavConfig
     from tools.harness.short_routes import teach_east_a
 
-    folder = tmp_path_factory.mktemp("east_a")
-    world_file, _ = teach_east_a(folder, VmnavConfig())
-    return world_file, folder / "memory"
+    def teach(folder: Path) -> str:
+        world_file, _ = teach_east_a(folder, VmnavConfig())
+        return str(world_file)
+
+    folder, world_file = made_once(tmp_path_factory, "east_a", teach)
+    return Path(world_file), folder / "memory"

@@ -67,7 +67,13 @@ def run(args: argparse.Namespace) -> int:
     """Teach (or reuse), repeat, write the outputs and print the summary."""
     from tools.figures.demo_plots import VideoWriter, write_plots
     from tools.figures.demo_report import build_report, dispatch_text, log_text, summary_text
-    from tools.harness.demo import START_OFFSET_M, default_goal, repeat_in_sim, taught_memory
+    from tools.harness.demo import (
+        START_OFFSET_M,
+        check_goal,
+        default_goal,
+        repeat_in_sim,
+        taught_memory,
+    )
     from tools.harness.demo_log import DemoLog
 
     setup = repeat_setup_from_args(args)
@@ -91,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     taught = taught_memory(out, routes, config, sim_config, setup.camera)
     teach_s = time.perf_counter() - started
     goal = default_goal(taught) if args.goal is None else args.goal
+    check_goal(taught.memory, goal)  # before the video and the log are opened
     video = None if args.no_video else VideoWriter(out / "demo.mp4", taught, sim_config, goal)
     robot_log = None if args.no_log else DemoLog(
         dataclasses.replace(config.log, output_dir=str(out / "logs"), replay_frames=True),

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from robot.runtime import RobotRuntime
     from shared.camera_model import CameraModel
     from shared.clock import Clock
+    from shared.memory import VisualMemory
     from sim.config import SimConfig
     from sim.renderer import RenderedFrame
     from sim.scene_change import ChangedWorld, SceneChange
@@ -169,6 +170,17 @@ def start_pose(taught: TaughtMemory, offset_m: float = START_OFFSET_M) -> Pose2:
                  yaw + math.radians(START_OFFSET_DEG))
 
 
+def check_goal(memory: VisualMemory, goal_id: int) -> None:
+    """Raise unless ``goal_id`` is a key image of ``memory``.
+
+    Raises:
+        InputError: one line naming ``--goal`` and the memory's ids.
+    """
+    if goal_id not in memory.keyframes:
+        raise InputError("--goal", f"key image {goal_id} is not in the memory "
+                                   f"(ids 0..{max(memory.keyframes)})")
+
+
 def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                   sim_config: SimConfig, change: SceneChange, out: Path,
                   on_cycle: Callable[[Simulation, RenderedFrame, CycleSample], None] | None = None,
@@ -218,9 +230,7 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     from tools.harness.lockstep_pioneer import lockstep_pioneer
 
     memory = taught.memory
-    if goal_id not in memory.keyframes:
-        raise InputError("--goal", f"key image {goal_id} is not in the memory "
-                                   f"(ids 0..{max(memory.keyframes)})")
+    check_goal(memory, goal_id)
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
     start = start_pose(taught, start_offset_m)
     taught_world = load_world(sim_config.world)

@@ -4,6 +4,7 @@ demo's memory as seed 1)."""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -20,28 +21,23 @@ def demo_mission(out: Path) -> list[str]:
 
 
 @pytest.mark.slow
-def test_one_seed_one_law_on_the_cached_memory(short_demo, capsys) -> None:
+def test_a_seed_repeats_on_the_cached_memory_with_people_and_the_light_changed(
+        short_demo, tmp_path, capsys) -> None:
     _, out, _ = short_demo
-    code = main(["bench", "follow", "--seeds", "1", *demo_mission(out),
-                 "--laws", "paper+ff", "--out", str(out.parent)])
+    (tmp_path / "seed1").mkdir()
+    shutil.copytree(out / "memory", tmp_path / "seed1" / "memory")
+    shutil.copy(out / "teach.json", tmp_path / "seed1" / "teach.json")
+    code = main(["bench", "follow", "--seeds", "1", *demo_mission(out), "--laws", "paper+ff",
+                 "--out", str(tmp_path), "--people", "2", "--lighting", "scale=0.8,step=0.6@6"])
     captured = capsys.readouterr()
     result = json.loads(captured.out)
     assert code == 0 and result["benchmark"] == "follow"
     assert "vmnav bench follow: seed 1 paper+ff: reached, lateral RMS" in captured.err
     (row,) = result["seeds"]
     assert row["seed"] == 1 and row["law"] == "paper+ff" and row["reached_goal"]
+    assert row["lateral_rms_m"] < 0.05
     assert result["aggregate"]["paper+ff"]["reached_goal"] == 1
     assert result["aggregate"]["paper+ff"]["lateral_rms_m_max"] == row["lateral_rms_m"]
-
-
-@pytest.mark.slow
-def test_the_repeat_runs_with_people_and_the_light_changed(short_demo, capsys) -> None:
-    _, out, _ = short_demo
-    code = main(["bench", "follow", "--seeds", "1", *demo_mission(out),
-                 "--laws", "paper+ff", "--out", str(out.parent), "--people", "2",
-                 "--lighting", "scale=0.8,step=0.6@6"])
-    (row,) = json.loads(capsys.readouterr().out)["seeds"]
-    assert code == 0 and row["reached_goal"] and row["lateral_rms_m"] < 0.05
     assert row["scene_change"] == {
         "light_scale": 0.8, "lamps_switched_off": 0, "daylight_hour": None,
         "light_step": {"factor": 0.6, "at_s": 6.0}, "moved_fraction": 0.0, "objects_moved": 0,

@@ -31,8 +31,7 @@ EPOCH_NS = 1_763_136_000_000_000_000
 
 @pytest.fixture(scope="module")
 def demo_log(short_demo) -> Path:
-    """The log of the short demo's repeat (the first file: later runs in the same folder
-    by other tests add numbered files)."""
+    """The log of the short demo's repeat."""
     code, out, _ = short_demo
     assert code == 0
     files = sorted((out / "logs").glob("robot-*.mcap"))
