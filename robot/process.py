@@ -38,7 +38,9 @@ Rules:
    The link's I/O thread runs on ``link_clock`` (the same clock on the robot; the wall
    clock in lock-step, where the ground station is outside the simulation). MAVLink
    in and out is logged on the loop's clock: at the I/O round's time when both
-   clocks are one, else at the loop clock's reading as the packet passes.
+   clocks are one, else at the loop clock's reading as the packet passes. The GCS
+   failsafe times the ground's silence on the loop's clock in lock-step (simulated
+   time: a starved process is not a silent ground station), else on the link's.
 4. **Closing** (:meth:`RobotProcess.close`, or leaving its ``with`` block; also when
    opening the link fails) goes in the order the field log needs: the link (no
    request comes in any more), the runtime (the base stops, a mission run ends as the
@@ -212,7 +214,8 @@ class RobotProcess:
             undo.callback(transport.close)
             endpoint = VehicleEndpoint(self.runtime, parts.config, parts.files,
                                        signing=parts.signing,
-                                       link_warning=parts.link_warning, video=stream)
+                                       link_warning=parts.link_warning, video=stream,
+                                       failsafe_clock=parts.clock if parts.lockstep else None)
             self.vehicle = undo.enter_context(vehicle_on(transport, endpoint,
                                                          self._link_clock))
             if log is not None:

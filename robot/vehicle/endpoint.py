@@ -52,9 +52,13 @@ Rules:
    unparsed (:attr:`VehicleEndpoint.shed_datagrams`), ``errors_count1`` the handler
    faults (rule 9), ``errors_count2`` the messages refused (rule 9).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
-   while lost. A ``link_warning`` (``vmnav robot --insecure``: unsigned and open to the
-   network) goes out as a STATUSTEXT WARNING to every ground station that connects:
-   with the first GCS HEARTBEAT, and again each time the link is regained.
+   while lost. The silence is timed on the ``now_ns`` the I/O thread gives (the link's
+   clock), or on ``failsafe_clock`` when one is given: a lock-step robot times it in
+   simulated time, so a process starved of CPU (a loaded sweep worker) does not find
+   its own ground station silent. A ``link_warning`` (``vmnav robot --insecure``:
+   unsigned and open to the network) goes out as a STATUSTEXT WARNING to every ground
+   station that connects: with the first GCS HEARTBEAT, and again each time the link is
+   regained.
 8. Signing (when a :class:`SigningSetup` is given): every packet out is signed;
    packets in that are unsigned (except RADIO_STATUS from a radio modem), wrongly
    signed or replayed are dropped and counted (:meth:`stats`); a wrongly signed packet
@@ -106,7 +110,7 @@ from robot.vehicle.telemetry import (
     system_status,
 )
 from robot.vehicle.user_commands import JobCommands, user_handlers
-from shared.clock import NS_PER_S
+from shared.clock import NS_PER_S, Clock
 from shared.config import FtpConfig
 from shared.errors import InputError
 from shared.handler_faults import HandlerFaults
@@ -214,6 +218,8 @@ class VehicleEndpoint:
         link_warning: told to every ground station that connects (rule 7); None: nothing.
         video: the camera's stream, which its component advertises (rule 10); None: no
             camera component.
+        failsafe_clock: the clock the GCS failsafe times its silence on (rule 7); None:
+            the link's.
 
     Raises:
         ConfigError: the parameter file is malformed, or a config value lies outside its
@@ -226,7 +232,8 @@ class VehicleEndpoint:
     def __init__(self, app: VehicleApp, config: VmnavConfig, files: VehicleFiles, *,
                  signing: SigningSetup | None = None, ftp: FtpConfig | None = None,
                  uid: int = 0, link_warning: str | None = None,
-                 video: VideoStream | None = None) -> None:
+                 video: VideoStream | None = None,
+                 failsafe_clock: Clock | None = None) -> None:
         link = config.mavlink
         self.address = Address(link.system_id, COMPONENT_ID)
         self.codec = make_codec(link.system_id, COMPONENT_ID)
@@ -258,6 +265,7 @@ class VehicleEndpoint:
         }
         self._streams = TelemetryStreams(builders, self._period_ns)
         self._watchdog = GcsWatchdog(link.gcs_timeout_ns)
+        self._failsafe_clock = failsafe_clock
         self._progress = MissionProgress(self._mission, self._notice)
         providers = {msg_id: (lambda build=build: build(self._app.telemetry(), self._time_usec()))
                      for msg_id, build in builders.items()}
@@ -380,8 +388,10 @@ class VehicleEndpoint:
         """When :meth:`poll` next has something to send, ns (0: at once)."""
         if self._outbox or self._camera_outbox:
             return self._now_ns
-        timers = [self._streams.get_timer(), self._watchdog.get_timer(),
-                  self._mission.get_timer(), self._params.get_timer(), self._jobs.get_timer()]
+        timers = [self._streams.get_timer(), self._mission.get_timer(),
+                  self._params.get_timer(), self._jobs.get_timer()]
+        if self._failsafe_clock is None:  # else on another clock: checked at every poll
+            timers.append(self._watchdog.get_timer())
         if self._camera is not None:
             timers.append(self._camera_beat_ns or 0)
         if self._signing_clock is not None:
@@ -460,7 +470,7 @@ class VehicleEndpoint:
             return []
         first, self._gcs_heard = not self._gcs_heard, True
         out: list[Message] = []
-        regained = self._watchdog.heartbeat(now_ns)
+        regained = self._watchdog.heartbeat(self._failsafe_ns(now_ns))
         if regained:
             self._app.gcs_regained()
             out += self._notice(mavlink.MAV_SEVERITY_INFO, "GCS heartbeat regained")
@@ -544,7 +554,7 @@ class VehicleEndpoint:
     # -- output -------------------------------------------------------------------------
 
     def _check_gcs(self, t: VehicleTelemetry, now_ns: int) -> list[Message]:
-        silence_ns = self._watchdog.check(now_ns)
+        silence_ns = self._watchdog.check(self._failsafe_ns(now_ns))
         if silence_ns is None:
             return []
         action = gcs_lost_action(t.mode, self.config.mavlink.gcs_lost_action)
@@ -552,6 +562,10 @@ class VehicleEndpoint:
         return self._notice(mavlink.MAV_SEVERITY_CRITICAL,  # one STATUSTEXT: <= 50 characters
                             f"GCS heartbeat lost for {silence_ns / 1e9:.1f} s in "
                             f"{t.mode.name}: {action}")
+
+    def _failsafe_ns(self, now_ns: int) -> int:
+        """The failsafe's time (rule 7), ns."""
+        return now_ns if self._failsafe_clock is None else self._failsafe_clock.now_ns()
 
     def _heartbeat(self, t: VehicleTelemetry, time_usec: int) -> Message:
         return heartbeat_message(t.mode, t.armed, system_status(t, self._watchdog.lost))

@@ -46,15 +46,16 @@ UNIX_OFFSET_NS = 1_750_000_000 * NS_PER_S
 def make_vehicle(root: Path, app: FakeApp, clock: Clock,
                  config: VmnavConfig | None = None, key: bytes | None = None,
                  url: str = "udpin:127.0.0.1:0", timestamp_file: Path | None = None,
-                 link_warning: str | None = None, video: VideoStream | None = None) -> UdpVehicle:
+                 link_warning: str | None = None, video: VideoStream | None = None,
+                 failsafe_clock: Clock | None = None) -> UdpVehicle:
     """A vehicle endpoint on ``url`` with its files under ``root`` (and a camera component
-    advertising ``video``, if given)."""
+    advertising ``video``, if given; its GCS failsafe on ``failsafe_clock``, if given)."""
     signing = (SigningSetup(key, UNIX_OFFSET_NS, timestamp_file=timestamp_file)
                if key is not None else None)
     files = VehicleFiles(root / "memory", root / "upload", root / "params.json")
     endpoint = VehicleEndpoint(app, config if config is not None else VmnavConfig(), files,
                                signing=signing, uid=0xC0FFEE, link_warning=link_warning,
-                               video=video)
+                               video=video, failsafe_clock=failsafe_clock)
     return UdpVehicle.open(url, endpoint, clock)
 
 

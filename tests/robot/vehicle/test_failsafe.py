@@ -92,6 +92,29 @@ def test_other_vehicles_heartbeats_do_not_count(net: Net, app: FakeApp) -> None:
     assert app.called("gcs_lost") == [("stop",)]
 
 
+def test_a_failsafe_clock_times_the_silence(tmp_path: Path, app: FakeApp,
+                                            manual_clock: ManualClock) -> None:
+    """A lock-step robot's failsafe runs on simulated time: 10 s of the link's clock
+    without a ground heartbeat while the simulation stands still (its process starved)
+    is no loss; 5 s of simulated time is."""
+    simulated = ManualClock()
+    vehicle = make_vehicle(tmp_path, app, manual_clock, failsafe_clock=simulated)
+    net = Net(manual_clock, vehicle, Ground(f"udpout:127.0.0.1:{vehicle.link.local_port}"))
+    try:
+        net.advance(1.5)  # heartbeats at 0 and 1 s of the link's clock
+        net.ground.heartbeat = False
+        net.advance(10.0)
+        assert app.called("gcs_lost") == []
+        simulated.advance(4.9)
+        net.advance(0.1)
+        assert app.called("gcs_lost") == []
+        simulated.advance(0.2)
+        net.advance(0.1)
+        assert app.called("gcs_lost") == [("stop",)]
+    finally:
+        net.close()
+
+
 class TestWatchdog:
     def test_arms_on_the_first_heartbeat_and_fires_once(self) -> None:
         watchdog = GcsWatchdog(timeout_ns=3 * S)
