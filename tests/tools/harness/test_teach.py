@@ -38,11 +38,14 @@ def world(world_file: Path) -> World:
 @pytest.fixture(scope="module")
 def stored(tmp_path_factory: pytest.TempPathFactory, world: World,
            world_file: Path) -> tuple[Path, TaughtMemory]:
-    """``east_a`` then ``east_b`` taught, joined, into a folder."""
+    """``east_a`` then ``east_b`` taught, joined, into a folder, in this process (one
+    CPU, as if the machine had one)."""
     folder = tmp_path_factory.mktemp("taught")
-    taught = teach_memory(world, ["east_a", "east_b"], CONFIG,
-                          SimConfig(world=str(world_file), seed=1), CAMERA, join=True,
-                          folder=folder)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid: {0})
+        taught = teach_memory(world, ["east_a", "east_b"], CONFIG,
+                              SimConfig(world=str(world_file), seed=1), CAMERA, join=True,
+                              folder=folder)
     return folder, taught
 
 
@@ -107,21 +110,19 @@ def test_unjoined_paths_in_memory_only(world: World) -> None:
 
 
 def test_routes_driven_in_parallel_give_the_memory_driven_one_after_another(
-        world: World, world_file: Path, monkeypatch: pytest.MonkeyPatch,
-        caplog: pytest.LogCaptureFixture) -> None:
-    taught = {}
-    for cpus in ({0}, {0, 1}):  # one CPU: this process; two: a pool of two processes
-        monkeypatch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid, c=cpus: c)
-        caplog.clear()
-        with caplog.at_level(logging.INFO, logger="tools.harness.teach"):
-            taught[len(cpus)] = teach_memory(world, ["east_a", "east_b"], CONFIG,
-                                             SimConfig(world=str(world_file), seed=1), CAMERA,
-                                             join=True)
-        # Each drive's end is announced as it comes (progress of a long teach).
-        announced = sorted(r.getMessage().split()[2] for r in caplog.records
-                           if r.getMessage().startswith("teach: route "))
-        assert announced == ["east_a", "east_b"]
-    one, two = taught[1], taught[2]
+        world: World, world_file: Path, stored: tuple[Path, TaughtMemory],
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """Two CPUs: a pool of two processes drives the routes; ``stored`` drove them in
+    this process."""
+    monkeypatch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid: {0, 1})
+    with caplog.at_level(logging.INFO, logger="tools.harness.teach"):
+        two = teach_memory(world, ["east_a", "east_b"], CONFIG,
+                           SimConfig(world=str(world_file), seed=1), CAMERA, join=True)
+    # Each drive's end is announced as it comes (progress of a long teach).
+    announced = sorted(r.getMessage().split()[2] for r in caplog.records
+                       if r.getMessage().startswith("teach: route "))
+    assert announced == ["east_a", "east_b"]
+    _, one = stored
     assert one.true_poses == two.true_poses and one.path_ids == two.path_ids
     assert one.memory.junctions == two.memory.junctions
     for key, record in one.memory.keyframes.items():
