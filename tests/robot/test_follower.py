@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from robot.config import VmnavConfig
 from robot.follower import (
     _PARTNERS,
+    _SHORT_BASELINE_M,
     FollowerConfig,
     InitGate,
     RouteFollower,
@@ -57,6 +58,26 @@ class TestPartners:
         path = memory.paths[0].keyframe_ids
         assert [p.id for p, _ in _partners(memory, memory.keyframe(path[0]))] == list(
             path[1:_PARTNERS + 1])
+
+
+def test_a_key_image_pairs_past_a_neighbour_closer_than_the_short_baseline(east_a) -> None:
+    """In ``east_a`` the second key image was taught 14.5 cm after the first: it pairs
+    with the one after it instead, the nearest at least :data:`_SHORT_BASELINE_M` away."""
+    from shared.memory import read_memory
+
+    memory = read_memory(east_a[1])
+    (path,) = memory.paths.values()
+    ids = path.keyframe_ids
+    distance = [memory.keyframes[k].distance_m for k in ids]
+    assert distance[1] - distance[0] < _SHORT_BASELINE_M <= distance[2] - distance[1]
+    config = VmnavConfig()
+    follower = RouteFollower(memory, list(ids), FollowerConfig(
+        features=config.features, path_state=config.path_state, estimator=config.estimator,
+        switching=config.switching, control=config.control, mount=config.camera.mount),
+        np.random.default_rng(0), 0, BASE)
+    segment = follower._segment(1)
+    assert segment is not None
+    assert segment.key_pair.baseline_m == pytest.approx(distance[2] - distance[1], abs=0.02)
 
 
 class TestTargetsFromRoute:
