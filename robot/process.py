@@ -39,8 +39,8 @@ Rules:
    clock in lock-step, where the ground station is outside the simulation). MAVLink
    in and out is logged on the loop's clock: at the I/O round's time when both
    clocks are one, else at the loop clock's reading as the packet passes. The GCS
-   failsafe times the ground's silence on the loop's clock in lock-step (simulated
-   time: a starved process is not a silent ground station), else on the link's.
+   failsafe times the ground's silence on the link's clock, and in lock-step on the
+   loop's too: lost only when silent on both (``robot.vehicle.failsafe`` rule 5).
 4. **Closing** (:meth:`RobotProcess.close`, or leaving its ``with`` block; also when
    opening the link fails) goes in the order the field log needs: the link (no
    request comes in any more), the runtime (the base stops, a mission run ends as the

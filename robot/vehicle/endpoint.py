@@ -53,9 +53,10 @@ Rules:
    faults (rule 9), ``errors_count2`` the messages refused (rule 9).
 7. GCS failsafe (``failsafe``): reported as STATUSTEXT, HEARTBEAT status CRITICAL
    while lost. The silence is timed on the ``now_ns`` the I/O thread gives (the link's
-   clock), or on ``failsafe_clock`` when one is given: a lock-step robot times it in
-   simulated time, so a process starved of CPU (a loaded sweep worker) does not find
-   its own ground station silent. A ``link_warning`` (``vmnav robot --insecure``:
+   clock), and also on ``failsafe_clock`` when one is given (a lock-step robot's
+   simulated time): lost only when silent on both (``failsafe`` rule 5), so neither a
+   process starved of CPU (a loaded sweep worker) nor a simulation running faster than
+   real time finds its own ground station silent. A ``link_warning`` (``vmnav robot --insecure``:
    unsigned and open to the network) goes out as a STATUSTEXT WARNING to every ground
    station that connects: with the first GCS HEARTBEAT, and again each time the link is
    regained.
@@ -218,8 +219,8 @@ class VehicleEndpoint:
         link_warning: told to every ground station that connects (rule 7); None: nothing.
         video: the camera's stream, which its component advertises (rule 10); None: no
             camera component.
-        failsafe_clock: the clock the GCS failsafe times its silence on (rule 7); None:
-            the link's.
+        failsafe_clock: a second clock the GCS failsafe times the silence on (rule 7);
+            None: the link's only.
 
     Raises:
         ConfigError: the parameter file is malformed, or a config value lies outside its
@@ -390,8 +391,8 @@ class VehicleEndpoint:
             return self._now_ns
         timers = [self._streams.get_timer(), self._mission.get_timer(),
                   self._params.get_timer(), self._jobs.get_timer()]
-        if self._failsafe_clock is None:  # else on another clock: checked at every poll
-            timers.append(self._watchdog.get_timer())
+        if self._failsafe_clock is None:  # else its deadline may pass on the link's clock
+            timers.append(self._watchdog.get_timer())  # alone: checked at every poll then
         if self._camera is not None:
             timers.append(self._camera_beat_ns or 0)
         if self._signing_clock is not None:
@@ -470,7 +471,7 @@ class VehicleEndpoint:
             return []
         first, self._gcs_heard = not self._gcs_heard, True
         out: list[Message] = []
-        regained = self._watchdog.heartbeat(self._failsafe_ns(now_ns))
+        regained = self._watchdog.heartbeat(*self._failsafe_ns(now_ns))
         if regained:
             self._app.gcs_regained()
             out += self._notice(mavlink.MAV_SEVERITY_INFO, "GCS heartbeat regained")
@@ -554,7 +555,7 @@ class VehicleEndpoint:
     # -- output -------------------------------------------------------------------------
 
     def _check_gcs(self, t: VehicleTelemetry, now_ns: int) -> list[Message]:
-        silence_ns = self._watchdog.check(self._failsafe_ns(now_ns))
+        silence_ns = self._watchdog.check(*self._failsafe_ns(now_ns))
         if silence_ns is None:
             return []
         action = gcs_lost_action(t.mode, self.config.mavlink.gcs_lost_action)
@@ -563,9 +564,11 @@ class VehicleEndpoint:
                             f"GCS heartbeat lost for {silence_ns / 1e9:.1f} s in "
                             f"{t.mode.name}: {action}")
 
-    def _failsafe_ns(self, now_ns: int) -> int:
-        """The failsafe's time (rule 7), ns."""
-        return now_ns if self._failsafe_clock is None else self._failsafe_clock.now_ns()
+    def _failsafe_ns(self, now_ns: int) -> tuple[int, ...]:
+        """The failsafe's times (rule 7): the link's, then ``failsafe_clock``'s, ns."""
+        if self._failsafe_clock is None:
+            return (now_ns,)
+        return now_ns, self._failsafe_clock.now_ns()
 
     def _heartbeat(self, t: VehicleTelemetry, time_usec: int) -> Message:
         return heartbeat_message(t.mode, t.armed, system_status(t, self._watchdog.lost))

@@ -11,6 +11,12 @@ Rules:
 4. The action on loss depends on the mode (:func:`gcs_lost_action`): MANUAL stops
    (the operator's commands no longer arrive); any other mode does what the
    ``FS_GCS_ACTION`` parameter says ("hold" or "continue").
+5. Timed on several clocks at once (a lock-step robot: the link's wall clock and the
+   simulation's; each call gives one time per clock, the link's first), the link is
+   lost only when it was silent for ``timeout_ns`` on every one: a process starved of
+   CPU (the simulation stood still) or a simulation running faster than real time (the
+   wall clock hardly moved between the ground's heartbeats) is not a silent ground
+   station. A ground station that stopped is silent on both.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ def gcs_lost_action(mode: Mode, configured: str) -> GcsLostAction:
 
 
 class GcsWatchdog:
-    """Times the ground station's heartbeats (module rules 2 and 3).
+    """Times the ground station's heartbeats (module rules 2, 3 and 5).
 
     Args:
         timeout_ns: silence that counts as a lost link, ns.
@@ -40,31 +46,36 @@ class GcsWatchdog:
 
     def __init__(self, timeout_ns: int) -> None:
         self.timeout_ns = timeout_ns
-        self._last_ns: int | None = None
+        self._last_ns: tuple[int, ...] | None = None
         self.lost = False
         """The link is lost now."""
 
-    def heartbeat(self, now_ns: int) -> bool:
-        """Record a GCS heartbeat at ``now_ns``; True if it regains a lost link."""
+    def heartbeat(self, *now_ns: int) -> bool:
+        """Record a GCS heartbeat at ``now_ns`` (one time per clock, rule 5); True if it
+        regains a lost link."""
         self._last_ns = now_ns
         regained, self.lost = self.lost, False
         return regained
 
     def get_timer(self) -> int | None:
-        """When the link will count as lost, ns; None when unarmed or already lost."""
+        """When the link may count as lost on the first clock, ns (timed on several, it
+        may not be lost then: :meth:`check` again later); None when unarmed or already
+        lost."""
         if self._last_ns is None or self.lost:
             return None
-        return self._last_ns + self.timeout_ns
+        return self._last_ns[0] + self.timeout_ns
 
-    def check(self, now_ns: int) -> int | None:
-        """Declare the link lost if the timeout passed.
+    def check(self, *now_ns: int) -> int | None:
+        """Declare the link lost if the timeout passed on every clock (rule 5).
 
         Returns:
-            The silence so far, ns, when the link is lost just now; else None.
+            The silence so far, ns (the shortest of the clocks'), when the link is lost
+            just now; else None.
         """
-        deadline = self.get_timer()
-        if deadline is None or now_ns < deadline:
+        if self._last_ns is None or self.lost:
+            return None
+        silence_ns = min(now - last for now, last in zip(now_ns, self._last_ns, strict=True))
+        if silence_ns < self.timeout_ns:
             return None
         self.lost = True
-        assert self._last_ns is not None
-        return now_ns - self._last_ns
+        return silence_ns

@@ -94,14 +94,15 @@ def test_other_vehicles_heartbeats_do_not_count(net: Net, app: FakeApp) -> None:
 
 def test_a_failsafe_clock_times_the_silence(tmp_path: Path, app: FakeApp,
                                             manual_clock: ManualClock) -> None:
-    """A lock-step robot's failsafe runs on simulated time: 10 s of the link's clock
-    without a ground heartbeat while the simulation stands still (its process starved)
-    is no loss; 5 s of simulated time is."""
+    """A lock-step robot's failsafe times the silence on the link's clock and in
+    simulated time: 10 s of the link's clock while the simulation stands still (its
+    process starved) is no loss, nor 6 s of simulated time in 0.1 s of the link's (a
+    simulation faster than real time); both past 5 s is."""
     simulated = ManualClock()
     vehicle = make_vehicle(tmp_path, app, manual_clock, failsafe_clock=simulated)
     net = Net(manual_clock, vehicle, Ground(f"udpout:127.0.0.1:{vehicle.link.local_port}"))
     try:
-        net.advance(1.5)  # heartbeats at 0 and 1 s of the link's clock
+        net.advance(1.5)  # heartbeats at 0 and 1 s of the link's clock, simulated 0
         net.ground.heartbeat = False
         net.advance(10.0)
         assert app.called("gcs_lost") == []
@@ -109,6 +110,12 @@ def test_a_failsafe_clock_times_the_silence(tmp_path: Path, app: FakeApp,
         net.advance(0.1)
         assert app.called("gcs_lost") == []
         simulated.advance(0.2)
+        net.advance(0.1)
+        assert app.called("gcs_lost") == [("stop",)]
+        net.ground.heartbeat = True
+        net.run(lambda: bool(app.called("gcs_regained")))
+        net.ground.heartbeat = False  # the simulation races on, the wall clock does not
+        simulated.advance(6.0)
         net.advance(0.1)
         assert app.called("gcs_lost") == [("stop",)]
     finally:
@@ -125,6 +132,14 @@ class TestWatchdog:
         assert watchdog.check(14 * S) == 4 * S and watchdog.lost
         assert watchdog.check(20 * S) is None and watchdog.get_timer() is None
         assert watchdog.heartbeat(21 * S) is True and not watchdog.lost
+
+    def test_on_two_clocks_silence_on_both_is_a_loss(self) -> None:
+        watchdog = GcsWatchdog(timeout_ns=3 * S)
+        watchdog.heartbeat(10 * S, 100 * S)  # (link, simulation)
+        assert watchdog.check(30 * S, 101 * S) is None  # the simulation stood still
+        assert watchdog.heartbeat(31 * S, 101 * S) is False
+        assert watchdog.check(32 * S, 200 * S) is None  # the simulation raced on
+        assert watchdog.check(34 * S, 205 * S) == 3 * S and watchdog.lost  # the shorter
 
     @pytest.mark.parametrize(("mode", "configured", "action"), [
         (Mode.MANUAL, "continue", "stop"), (Mode.MANUAL, "hold", "stop"),
