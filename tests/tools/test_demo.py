@@ -8,6 +8,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -109,6 +110,7 @@ def test_it_writes_the_plots(short_demo) -> None:
     _, out, _ = short_demo
     for name in ("topdown.png", "errors_vs_distance.png", "image_errors.png", "matches.png"):
         assert (out / name).stat().st_size > 10_000
+    assert not (out / "demo.mp4").exists()
 
 
 @pytest.mark.slow
@@ -246,15 +248,21 @@ def test_the_summary_rounds_for_people() -> None:
 
 
 @pytest.mark.slow
-def test_the_video_is_h264_with_the_target_key_image(short_demo) -> None:
-    """``demo.mp4`` in H.264 (browsers play it), a frame per :data:`VIDEO_EVERY` cycles."""
+def test_the_video_is_h264_with_the_target_key_image(short_demo, tmp_path) -> None:
+    """On a copy of the short demo's memory: ``demo.mp4`` in H.264 (browsers play it)."""
     import imageio_ffmpeg
 
     _, out, _ = short_demo
-    video = out / "demo.mp4"
+    copy = tmp_path / "seed1"
+    copy.mkdir()
+    shutil.copytree(out / "memory", copy / "memory")
+    shutil.copy(out / "teach.json", copy / "teach.json")
+    assert main(["demo", "--world", str(out.parent / "lab_short.toml"), "--routes",
+                 "east_a,east_b", "--out", str(copy), "--no-log"]) == 0
+    video = copy / "demo.mp4"
     probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(video)],
                            capture_output=True, text=True, check=False).stderr
     assert re.search(r"Video: h264 .*yuv420p.*, 1200x600", probe), probe
     frames, _ = imageio_ffmpeg.count_frames_and_secs(str(video))
-    report = json.loads((out / "report.json").read_text())
+    report = json.loads((copy / "report.json").read_text())
     assert frames >= 0.8 * report["sim_time_s"] * 15 / VIDEO_EVERY  # minus the dispatch
