@@ -286,7 +286,8 @@ class RouteFollower:
                 continue
             if segment.key_pair.baseline_m >= _SHORT_BASELINE_M:
                 return segment
-            nearest = nearest or segment
+            if nearest is None:
+                nearest = segment
         return nearest
 
     def _switch_estimator(self, t_ns: int, next_index: int) -> None:

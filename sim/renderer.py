@@ -167,8 +167,6 @@ class FisheyeRenderer:
         self._figures: PersonFigures | None = None
         self._last_trace: tuple[Scene, bytes, npt.NDArray[np.float32],
                                 npt.NDArray[np.float32]] | None = None
-        #: How many frames went through the ray kernel (:meth:`_trace_again_if_moved`).
-        self.traced = 0
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
@@ -267,7 +265,6 @@ class FisheyeRenderer:
         if last is None or last[0] is not self.scene or last[1] != pose:
             last = (self.scene, pose, *self.trace(T_world_cam, yaw_rad))
             self._last_trace = last
-            self.traced += 1
         return last[2].copy(), last[3].copy()
 
     def trace(

@@ -391,8 +391,8 @@ class VehicleEndpoint:
             return self._now_ns
         timers = [self._streams.get_timer(), self._mission.get_timer(),
                   self._params.get_timer(), self._jobs.get_timer()]
-        if self._failsafe_clock is None:  # else its deadline may pass on the link's clock
-            timers.append(self._watchdog.get_timer())  # alone: checked at every poll then
+        if self._failsafe_clock is None:  # on two clocks, every poll checks it instead:
+            timers.append(self._watchdog.get_timer())  # its link deadline may pass unlost
         if self._camera is not None:
             timers.append(self._camera_beat_ns or 0)
         if self._signing_clock is not None:
