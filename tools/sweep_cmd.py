@@ -94,8 +94,14 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     try:
         rows = run_sweep(cases, lambda case: out / MEMORIES_NAME / case.memory_name, executor,
                          table, version, line)
-    finally:
-        executor.close()
+    except BaseException as e:
+        executor.close(abandon=True)  # the cases running are not awaited
+        if isinstance(e, KeyboardInterrupt | SystemExit):  # Ctrl-C, SIGTERM
+            print(f"vmnav sweep: stopped with {count} of {len(cases)} cases done (in "
+                  f"{table.path}); the same command resumes, running the cases cut short "
+                  "again", file=sys.stderr)
+        raise
+    executor.close()
     ok = [row for row in rows if row["status"] == "ok"]
     reached = sum(bool(row["reached_goal"]) for row in ok)
     print(f"{len(rows)} cases: {reached} reached the goal, {len(ok) - reached} did not, "

@@ -46,7 +46,10 @@ class Executor(Protocol):
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Future[Any]: ...
 
-    def close(self) -> None: ...
+    def close(self, abandon: bool = False) -> None:
+        """Stop; with ``abandon`` (Ctrl-C, SIGTERM) the tasks running are given up too,
+        not awaited."""
+        ...
 
 
 def cpu_count() -> int:
@@ -72,7 +75,7 @@ class InlineExecutor:
         future.set_result(fn(*args))
         return future
 
-    def close(self) -> None:
+    def close(self, abandon: bool = False) -> None:
         """Nothing to stop."""
 
 
@@ -113,8 +116,13 @@ class PoolExecutor:
             self._pool = self._start()
             return self._pool.submit(fn, *args)
 
-    def close(self) -> None:
-        """Stop the processes (tasks not started are cancelled)."""
+    def close(self, abandon: bool = False) -> None:
+        """Stop the processes (tasks not started are cancelled); with ``abandon``, terminate
+        them first, so that a running task does not hold the sweep up for minutes (a SIGTERM
+        reaches this process only, not the workers, as Ctrl-C in a terminal does)."""
+        if abandon:
+            for worker in multiprocessing.active_children():  # the pool's are the only ones
+                worker.terminate()
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -179,6 +187,7 @@ class RayExecutor:
             self._remote[fn] = self._ray.remote(num_cpus=1, max_retries=0)(fn)
         return self._remote[fn].remote(*args).future()  # type: ignore[no-any-return]
 
-    def close(self) -> None:
-        """Disconnect (and stop a local Ray)."""
+    def close(self, abandon: bool = False) -> None:
+        """Disconnect (and stop a local Ray; a cluster ends the tasks of a driver that
+        leaves)."""
         self._ray.shutdown()

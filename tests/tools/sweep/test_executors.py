@@ -1,10 +1,13 @@
-"""The local pool: a worker that dies fails its task, and the pool goes on with a new one."""
+"""The local pool: a worker that dies fails its task, and the pool goes on with a new one; an
+abandoned pool (Ctrl-C, SIGTERM) does not wait for its running tasks."""
 
 from __future__ import annotations
 
 import os
 import sys
+import time
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 
 import pytest
 
@@ -21,6 +24,31 @@ def test_a_dead_worker_fails_its_task_and_the_next_task_runs() -> None:
         assert pid != os.getpid()
     finally:
         pool.close()
+
+
+def sleep_in(started: Path, seconds: float) -> int:
+    """A task that says it started, then sleeps; its process id."""
+    started.touch()
+    time.sleep(seconds)
+    return os.getpid()
+
+
+def test_an_abandoned_pool_stops_its_running_task(tmp_path) -> None:
+    pool = PoolExecutor(1)
+    try:
+        worker = pool.submit(os.getpid).result(timeout=120)
+        running = pool.submit(sleep_in, tmp_path / "started", 600.0)
+        limit = time.monotonic() + 120
+        while not (tmp_path / "started").exists() and time.monotonic() < limit:
+            time.sleep(0.05)
+    finally:
+        began = time.monotonic()
+        pool.close(abandon=True)
+    assert time.monotonic() - began < 120  # not the task's 600 s
+    with pytest.raises(BrokenProcessPool):
+        running.result(timeout=0)
+    with pytest.raises(ProcessLookupError):
+        os.kill(worker, 0)
 
 
 def test_ray_not_installed_says_how_to_install(monkeypatch, tmp_path, capsys) -> None:

@@ -1,6 +1,6 @@
 """A tiny sweep end to end on real processes: the lab's 2.5 m route ``east_a`` taught by the
 sweep, three cases repeating it of which one crashes (a start 40 m off the route, outside
-the lab); interrupted with SIGINT after its first row, then resumed; the same cases on a
+the lab); stopped after its first case (``--cases 1``), then resumed; the same cases on a
 local Ray, on the memory the pool taught, give the same figures as on the pool."""
 
 from __future__ import annotations
