@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
 from shared.clock import ManualClock
 from tests.made_once import made_once
-from tools.threads import one_blas_thread
+from tools.threads import compute_threads, one_blas_thread
+
+if TYPE_CHECKING:
+    from tools.harness.hil_rig import Taught
 
 one_blas_thread()  # as every vmnav command runs (tools/__init__.py)
+compute_threads(1)  # `make test` runs a worker per CPU: threads that wait would burn CPU
 
 
 @pytest.fixture
@@ -40,3 +46,16 @@ def east_a(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
 
     folder, world_file = made_once(tmp_path_factory, "east_a", teach)
     return Path(world_file), folder / "memory"
+
+
+@pytest.fixture(scope="session")
+def east_a_taught(east_a: tuple[Path, Path]) -> Taught:
+    """``east_a`` (above) with the true poses of its key images, as the hardware-in-the-loop
+    rig takes it (its cases work on copies of the memory). Read only."""
+    from shared.memory import read_memory
+    from tools.harness.hil_rig import Taught
+    from tools.harness.teach import TRUTH_NAME, taught_from_truth
+
+    world_file, memory_dir = east_a
+    truth = json.loads((memory_dir.parent / TRUTH_NAME).read_text())
+    return Taught(world_file, memory_dir, taught_from_truth(read_memory(memory_dir), truth))

@@ -1,4 +1,5 @@
-"""The threads a vmnav process computes with: one BLAS thread.
+"""The threads a vmnav process computes with: one BLAS thread, and fewer render and OpenCV
+threads where processes share the CPUs.
 
 OpenBLAS (numpy, scipy and OpenCV each load their own copy) starts one thread per CPU
 and its threads spin while they wait for work. vmnav's matrix products are small (a
@@ -26,3 +27,23 @@ def one_blas_thread() -> None:
     for name in _BLAS_THREAD_VARIABLES:
         os.environ.setdefault(name, "1")
     threadpool_limits(limits=1, user_api="blas")
+
+
+def compute_threads(count: int) -> None:
+    """Render on ``count`` threads and run OpenCV's parallel loops on as many.
+
+    For processes that share the CPUs with others that compute (a sweep's workers, a
+    parallel teach's, the test suite's): OpenCV's and numba's pools, like OpenBLAS's, wait
+    actively for work, so a process's idle threads burn the CPU the others need (a test of
+    a mission in lock-step: 38 s of CPU on two threads each, 34 s on one; the short demo
+    beside other processes: 42 s instead of 24).
+
+    Raises:
+        ValueError: ``count`` is below 1 or above the threads numba started.
+    """
+    import cv2
+
+    from sim.renderer import set_render_threads
+
+    set_render_threads(count)
+    cv2.setNumThreads(count)

@@ -44,7 +44,6 @@ from sim.sim_clock import SimClock
 from sim.simulation import Simulation
 from sim.world import load_world
 from tests.robot.config.test_config import old_layout
-from tests.tools.short_routes import teach_east_a
 from tools.cli import main
 from tools.harness.lockstep_pioneer import lockstep_pioneer
 
@@ -74,12 +73,14 @@ class RememberingFrames:
 
 
 @pytest.fixture(scope="module")
-def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
+def logged(tmp_path_factory: pytest.TempPathFactory, east_a: tuple[Path, Path]) -> Logged:
+    """Two missions on ``east_a`` (tests/conftest.py; read only), logged losslessly and as
+    JPEG."""
     folder = tmp_path_factory.mktemp("replay")
-    world_file, _ = teach_east_a(folder, CONFIG)
+    world_file, memory_dir = east_a
     world = load_world(world_file)
     sim_config = SimConfig(world=str(world_file), seed=1, camera_mount=CONFIG.camera.mount)
-    memory = read_memory(folder / "memory")
+    memory = read_memory(memory_dir)
     camera = memory.camera
 
     sim = Simulation(world, sim_config)
@@ -111,7 +112,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory) -> Logged:
         assert result.reached_goal
     lossless, jpeg = (log.close() for log in logs)
     assert not (lossless.dropped or jpeg.dropped)
-    return Logged(folder / "memory", lossless.files, jpeg.files, tuple(records))
+    return Logged(memory_dir, lossless.files, jpeg.files, tuple(records))
 
 
 def run_cli(*argv: str) -> tuple[int, str, str]:

@@ -225,13 +225,14 @@ class TestRenderThreads:
         _, renderer = make(dataclasses.replace(SimConfig(), sensor=SensorConfig.ideal()),
                            CORRIDOR)
         T = camera_pose_world(CORRIDOR, renderer.mount)
+        before = numba.get_num_threads()
         try:
             set_render_threads(1)
             alone = renderer.trace(T, CORRIDOR.yaw_rad)
             set_render_threads(2)
             shared = renderer.trace(T, CORRIDOR.yaw_rad)
         finally:
-            set_render_threads(numba.config.NUMBA_NUM_THREADS)
+            set_render_threads(before)
         results: list[tuple[np.ndarray, np.ndarray]] = []
         callers = [threading.Thread(
             target=lambda: results.append(renderer.trace(T, CORRIDOR.yaw_rad)))

@@ -5,13 +5,11 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import cv2
-import numba
 import pytest
 
 from shared.camera_model import CameraModel
 from sim.config import SimConfig
-from sim.renderer import FisheyeRenderer, set_render_threads
+from sim.renderer import FisheyeRenderer
 from sim.simulation import Simulation
 from sim.world import load_world
 from tests.made_once import made_once
@@ -34,25 +32,16 @@ def short_demo(tmp_path_factory):
     ``.../lab_short.toml`` beside the output folder. Without video. Returns (exit code,
     output folder ``.../seed1``, CPU time s: of this process, every thread, teach and
     repeat, once the ray kernel is compiled; unlike the wall time, it does not grow when
-    other processes take the cores). The demo runs on one render thread and one OpenCV
-    thread here: thread pools that wait actively for work burn CPU time while other
-    processes hold the cores (42 s instead of 24 on a machine loaded 3 times over).
-    Read only: tests that run again on its memory copy ``memory`` and ``teach.json`` to a
-    folder of their own."""
+    other processes take the cores; one render and one OpenCV thread, as every test
+    process runs: tests/conftest.py). Read only: tests that run again on its memory copy
+    ``memory`` and ``teach.json`` to a folder of their own."""
     def demo(folder: Path) -> tuple[int, float]:
         world = write_short_routes_world(folder)
         render_one_frame(world)
-        threads = cv2.getNumThreads(), numba.get_num_threads()
-        cv2.setNumThreads(1)
-        set_render_threads(1)
-        try:
-            started = time.process_time()
-            code = main(["demo", "--world", str(world), "--routes", "east_a,east_b", "--out",
-                         str(folder / "seed1"), "--no-video"])
-            return code, time.process_time() - started
-        finally:
-            cv2.setNumThreads(threads[0])
-            set_render_threads(threads[1])
+        started = time.process_time()
+        code = main(["demo", "--world", str(world), "--routes", "east_a,east_b", "--out",
+                     str(folder / "seed1"), "--no-video"])
+        return code, time.process_time() - started
 
     folder, (code, cpu_s) = made_once(tmp_path_factory, "follow", demo)
     return code, folder / "seed1", cpu_s

@@ -249,7 +249,8 @@ def test_the_summary_rounds_for_people() -> None:
 
 @pytest.mark.slow
 def test_the_video_is_h264_with_the_target_key_image(short_demo, tmp_path) -> None:
-    """On a copy of the short demo's memory: ``demo.mp4`` in H.264 (browsers play it)."""
+    """On a copy of the short demo's memory, to key image 5 of ``east_a``: ``demo.mp4`` in H.264
+    (browsers play it)."""
     import imageio_ffmpeg
 
     _, out, _ = short_demo
@@ -258,7 +259,7 @@ def test_the_video_is_h264_with_the_target_key_image(short_demo, tmp_path) -> No
     shutil.copytree(out / "memory", copy / "memory")
     shutil.copy(out / "teach.json", copy / "teach.json")
     assert main(["demo", "--world", str(out.parent / "lab_short.toml"), "--routes",
-                 "east_a,east_b", "--out", str(copy), "--no-log"]) == 0
+                 "east_a,east_b", "--goal", "5", "--out", str(copy), "--no-log"]) == 0
     video = copy / "demo.mp4"
     probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(video)],
                            capture_output=True, text=True, check=False).stderr

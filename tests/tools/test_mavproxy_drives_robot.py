@@ -1,23 +1,22 @@
 """Stock MAVProxy drives the real robot: ``wp load`` of a one-goal mission then ``mode AUTO``,
 against ``vmnav robot`` on ``vmnav sim serve`` (ARIA over TCP, camera over HTTP), with a
-memory of ``east_a`` taught in lock-step. The robot must arrive at the goal, as the
-simulator's truth says."""
+copy of the session's memory of ``east_a`` (tests/conftest.py). The robot must arrive at the
+goal, as the simulator's truth says."""
 
 from __future__ import annotations
 
 import json
+import shutil
 import signal
 import socket
 import urllib.request
 
 import pytest
 
-from robot.config import VmnavConfig
 from shared.mavlink.dialect import mavlink
 from shared.memory import read_memory
 from tests.robot.vehicle.mavproxy_console import MavproxyConsole
 from tests.tools.processes import start, wait_for
-from tests.tools.short_routes import teach_east_a
 
 pytest.importorskip("MAVProxy", reason="stock MAVProxy is not installed")
 
@@ -30,8 +29,9 @@ def free_udp_port() -> int:
 
 
 @pytest.mark.slow
-def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(tmp_path) -> None:
-    world, _ = teach_east_a(tmp_path, VmnavConfig())
+def test_wp_load_then_mode_auto_drives_the_robot_to_the_goal(east_a, tmp_path) -> None:
+    world, memory = east_a
+    shutil.copytree(memory, tmp_path / "memory")
     goal = read_memory(tmp_path / "memory").paths[0].keyframe_ids[-1]
     sim_log, robot_log = tmp_path / "sim.out", tmp_path / "robot.out"
     sim = start(["sim", "serve", "--world", str(world), "--aria", "tcp:0", "--video", "http:0",

@@ -11,21 +11,11 @@ import cv2
 import numpy as np
 import pytest
 
-from robot.config import VmnavConfig
 from shared.camera_model import CameraModel
-from tests.tools.short_routes import teach_east_a
 from tools.bench.chance import fitted_to_camera, skimage_paths
 from tools.cli import main
 
 pytestmark = pytest.mark.slow
-
-
-@pytest.fixture(scope="module")
-def taught(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    """(world file, memory folder) of ``east_a`` taught in lock-step."""
-    folder = tmp_path_factory.mktemp("taught")
-    world_file, _ = teach_east_a(folder, VmnavConfig())
-    return world_file, folder / "memory"
 
 
 def snapshot(world_file: Path, out: Path, x: float, y: float, yaw_deg: float) -> Path:
@@ -43,9 +33,9 @@ def localize(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, 
 
 
 def test_a_view_beside_the_route_is_localized(
-    taught: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    east_a: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    world_file, memory = taught
+    world_file, memory = east_a
     image = snapshot(world_file, tmp_path / "q", 3.1, 10.15, 8.0)
     code, out, err = localize([str(image), "--memory", str(memory)], capsys)
     assert code == 0, err
@@ -73,9 +63,9 @@ def test_a_view_beside_the_route_is_localized(
 
 
 def test_a_photograph_of_elsewhere_is_not_localized(
-    taught: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    east_a: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    _, memory = taught
+    _, memory = east_a
     (brick,) = [p for p in skimage_paths() if p.name == "brick.png"]
     photo = fitted_to_camera(cv2.imread(str(brick), cv2.IMREAD_GRAYSCALE),
                              CameraModel.default())
@@ -98,10 +88,10 @@ def test_a_photograph_of_elsewhere_is_not_localized(
     ],
 )
 def test_a_bad_image_is_one_line(
-    taught: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    east_a: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str],
     make: object, message: str,
 ) -> None:
-    _, memory = taught
+    _, memory = east_a
     image = make(tmp_path / "nothing.png")  # type: ignore[operator]
     code, out, err = localize([str(image), "--memory", str(memory)], capsys)
     assert code == 1 and out == ""
@@ -110,9 +100,9 @@ def test_a_bad_image_is_one_line(
 
 
 def test_a_bad_memory_is_one_line(
-    taught: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    east_a: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    world_file, _ = taught
+    world_file, _ = east_a
     image = snapshot(world_file, tmp_path / "q", 3.0, 10.0, 0.0)
     code, out, err = localize([str(image), "--memory", str(tmp_path / "none")], capsys)
     assert code == 1 and out == ""

@@ -320,7 +320,7 @@ def emergency_stop(taught: Taught, folder: Path) -> None:
     """``vmnav ground stop`` mid-route (a forced disarm): the Pioneer gets E_STOP and the body
     comes to rest within :data:`BRAKE_NS`; the mission ends as ``e_stop``; the robot holds
     while disarmed; armed again and restarted, it reaches its goal."""
-    goal = taught.keyframe_ids[-1]
+    goal = taught.keyframe_ids[6]
     with open_hil(taught, folder) as hil:
         hil.start_goal(goal, DRIVEN_BEFORE_FAULT_M)
         since = len(hil.notices())

@@ -223,10 +223,7 @@ def teach_memory(
         stored = _stored_truth(folder, key)
         memory = open_or_create(folder / "memory", camera)
         if stored is not None:
-            return TaughtMemory(
-                memory=memory,
-                true_poses={int(k): Pose2(*v) for k, v in stored["true_poses"].items()},
-                path_ids=tuple(stored["path_ids"]), routes=(), reused=True)
+            return taught_from_truth(memory, stored)
     true_poses: dict[int, Pose2] = {}
     path_ids: list[int] = []
     taught_routes: list[TaughtRoute] = []
@@ -267,10 +264,10 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
     if workers <= 1:
         return [_announce(teach_in_sim(world, route, config, sim_config, camera), started)
                 for route in routes]
-    from sim.renderer import set_render_threads
+    from tools.threads import compute_threads
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=set_render_threads, initargs=(1,)) as pool:
+                             initializer=compute_threads, initargs=(1,)) as pool:
         longest_first = sorted(routes, key=lambda route: -route.length_m)
         drives = {pool.submit(teach_in_sim, world, route, config, sim_config, camera): route.name
                   for route in longest_first}
@@ -285,6 +282,13 @@ def _announce(taught: TaughtRoute, started: float) -> TaughtRoute:
               "since the teach started)", taught.route.name, len(taught.key_images),
               taught.route.length_m, taught.sim_time_s, time.monotonic() - started)
     return taught
+
+
+def taught_from_truth(memory: VisualMemory, truth: dict[str, Any]) -> TaughtMemory:
+    """A memory taught before and its ``teach.json`` (:func:`teach_memory`), as taught."""
+    return TaughtMemory(memory=memory,
+                        true_poses={int(k): Pose2(*v) for k, v in truth["true_poses"].items()},
+                        path_ids=tuple(truth["path_ids"]), routes=(), reused=True)
 
 
 def _truth_key(sim_config: SimConfig, route_names: list[str], camera: CameraModel,

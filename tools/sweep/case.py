@@ -24,13 +24,12 @@ from tools.sweep.results import FIGURES
 
 
 def set_worker_threads(render_threads: int) -> None:
-    """A worker's threads: ``render_threads`` for the renderer's rays, one for BLAS (a pool's
-    initializer; Ray calls it at each task)."""
-    from sim.renderer import set_render_threads
-    from tools.threads import one_blas_thread
+    """A worker's threads: ``render_threads`` for the renderer's rays and OpenCV, one for BLAS
+    (a pool's initializer; Ray calls it at each task)."""
+    from tools.threads import compute_threads, one_blas_thread
 
     one_blas_thread()
-    set_render_threads(render_threads)
+    compute_threads(render_threads)
 
 
 def teach_task(memory_argv: tuple[str, ...], folder: Path, processes: int | None,

@@ -61,7 +61,9 @@ def test_updates_show_the_vehicle_with_its_mode_battery_and_link(
     assert (sample["v"], sample["omega"]) == pytest.approx((0.2, 0.1))
 
 
-@pytest.mark.parametrize("text, error", [
+#: Bad requests and the one line each gets (one page sends them all: a page's vehicle is
+#: heard after its first heartbeat, up to 1 s).
+BAD_REQUESTS = [
     ("not json", "request: not JSON (Expecting value: line 1 column 1 (char 0))"),
     ("[1, 2]", "request: expected a JSON object, got list"),
     ('{"id": 3, "cmd": "fly"}', "cmd: unknown command 'fly' (known: arm, camera, drive, estop, "
@@ -81,16 +83,20 @@ def test_updates_show_the_vehicle_with_its_mode_battery_and_link(
     ('{"id": 10, "cmd": "arm", "system": 9}', "system: vehicle 9 not heard (heard: 1)"),
     ('{"id": 11, "cmd": "drive", "x": 0, "r": 0}',
      "drive: this page is not driving: switch teleop on first"),
-])
+]
+
+
 def test_bad_requests_get_one_line_and_the_server_keeps_serving(
-        app: FakeApp, page: Page, text: str, error: str) -> None:
+        app: FakeApp, page: Page) -> None:
     page.update_where(lambda u: u["vehicles"], "the vehicle heard")
-    page.send(text)
-    reply = page.reply()
-    assert reply["ok"] is False and reply["error"] == error
-    assert reply["id"] == json.loads(text).get("id") if text.startswith("{") else True
-    assert "\n" not in reply["error"] and "Traceback" not in reply["error"]
-    assert page.ask("hold")["ok"] and app.called("set_mode") == [(Mode.HOLD,)]
+    for count, (text, error) in enumerate(BAD_REQUESTS, start=1):
+        page.send(text)
+        reply = page.reply()
+        assert reply["ok"] is False and reply["error"] == error, text
+        assert reply["id"] == json.loads(text).get("id") if text.startswith("{") else True
+        assert "\n" not in reply["error"] and "Traceback" not in reply["error"]
+        assert page.ask("hold")["ok"], text  # still serving
+        assert app.called("set_mode") == [(Mode.HOLD,)] * count, text
 
 
 def test_binary_and_oversized_messages_are_refused(page: Page) -> None:

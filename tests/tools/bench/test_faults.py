@@ -1,8 +1,8 @@
 """Issue 8's faults on the hardware-in-the-loop rig, each case once (``vmnav bench faults``
 repeats them): the cases live in ``tools/harness/fault_cases.py`` and
 ``tools/harness/fault_garbage.py``, the rig in ``tools/harness/hil_rig.py``. The route is
-taught once for the module (about 4 s); each case builds its own rig (``vmnav robot`` as a
-subprocess), 3 to 22 s each."""
+the session's ``east_a`` (tests/conftest.py); each case builds its own rig (``vmnav robot``
+as a subprocess) on a copy of its memory, 3 to 22 s each."""
 
 from __future__ import annotations
 
@@ -12,18 +12,12 @@ import pytest
 
 from tools.bench.faults import CASES, run_case
 from tools.cli import main
-from tools.harness.hil_rig import teach
-
-
-@pytest.fixture(scope="module")
-def taught(tmp_path_factory):
-    return teach(tmp_path_factory.mktemp("taught"))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
-def test_fault_case(name, taught, tmp_path) -> None:
-    run_case(name, taught, tmp_path / name)
+def test_fault_case(name, east_a_taught, tmp_path) -> None:
+    run_case(name, east_a_taught, tmp_path / name)
 
 
 @pytest.mark.slow
