@@ -46,6 +46,8 @@ CUT_S = AriaLinkConfig().link_timeout_ns / NS_PER_S + 1.0
 #: The camera stall and the ground station's silence, s (issue 8).
 STALL_S = 2.0
 SILENCE_S = 10.0
+#: How late a loaded robot may notice a camera stall, past its frame timeout, s.
+NOTICE_LATE_S = 0.5
 #: Time for a mission to reach its goal after the fault, s.
 REACH_S = 45.0
 #: A killed robot's log loses at most this much (DESIGN.md sec. 4 "Logs"), ns.
@@ -165,8 +167,11 @@ def camera_stall(taught: Taught, folder: Path) -> None:
         hil.run_until(lambda: hil.notice("camera back", since) is not None, STALL_S + 10.0,
                       "the robot's 'camera back'")
         # The robot times the stall on its (wall) clock from when it noticed it, so it saw
-        # no longer than this; the stall is in frame time, which lags on a loaded machine.
+        # no longer than this, and no less than this minus its frame timeout and a margin
+        # for noticing late; the stall is in frame time, which lags on a loaded machine (or
+        # skips ahead to catch up, ending the stall sooner on the wall clock).
         seen_s = (hil.station.clock.now_ns() - stalled_wall_ns) / NS_PER_S
+        least_s = seen_s - TeleopConfig().frame_timeout_ns / NS_PER_S - NOTICE_LATE_S
         moving = hil.sim.truth.still(stall_ns + TeleopConfig().frame_timeout_ns + HOLD_AFTER_NS,
                                      stall_ns + stall_length_ns)
         expect(moving is None, f"the base did not hold while the camera stalled: {moving}")
@@ -174,7 +179,7 @@ def camera_stall(taught: Taught, folder: Path) -> None:
                f"no 'camera stalled' notice: {hil.notices()}")
         back = hil.notice(r"camera back after ([\d.]+) s", since)
         lasted = math.nan if back is None else float(back.group(1))
-        expect(STALL_S - 1.0 <= lasted <= seen_s + 0.1,  # 0.1: the notice's rounding
+        expect(least_s <= lasted <= seen_s + 0.1,  # 0.1: the notice's rounding
                f"the robot saw a {lasted} s stall, the camera stalled {STALL_S} s of frame "
                f"time, {seen_s:.2f} s on the wall clock until the robot said it was back")
         hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)
@@ -216,7 +221,8 @@ def gcs_silent_continue(taught: Taught, folder: Path) -> None:
         silence = go_silent(hil, SILENCE_S, MavlinkConfig().gcs_timeout_ns)
         driven = hil.sim.truth.travelled_m(silence.marked_ns + BRAKE_NS,
                                            silence.began_ns + round(SILENCE_S * NS_PER_S))
-        expect(driven > 0.5, f"the robot drove only {driven:.2f} m after the GCS timeout")
+        # Nominally 0.9 m; a robot that held instead would coast a few cm after braking.
+        expect(driven > 0.2, f"the robot drove only {driven:.2f} m after the GCS timeout")
         expect(hil.notice(r"GCS heartbeat lost for [\d.]+ s in AUTO: continue", silence.since)
                is not None, f"no failsafe notice: {hil.notices()}")
         hil.reach(taught, goal, REACH_S, GOAL_TOLERANCE_M)

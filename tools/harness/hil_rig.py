@@ -50,6 +50,9 @@ ROBOT_START_S = 120.0
 #: What ``vmnav robot`` prints once its memory is loaded and its links serve (its MAVLink
 #: thread runs, so a HEARTBEAT may come before it).
 ROBOT_STARTED = re.compile(r"^vmnav robot: .*; memory .*: \d+ paths, \d+ key images$", re.M)
+#: How long a mission may take to drive its first metres, s (2 s at 0.2 m/s on an idle
+#: machine; a starved robot localizes and steers late, and its simulation lags).
+START_DRIVING_S = 60.0
 #: SIGTERM, then SIGKILL after this long, s.
 STOP_GRACE_S = 15.0
 #: Below these the robot's body counts as standing still: m/s, rad/s.
@@ -362,7 +365,7 @@ class Hil:
         has driven ``drive_m`` (it is following the route by then)."""
         self.station.upload_goals([Goal(goal)])
         self.station.start_mission()
-        self.run_until(lambda: self.sim.truth.moved_m() >= drive_m, 20.0,
+        self.run_until(lambda: self.sim.truth.moved_m() >= drive_m, START_DRIVING_S,
                        f"driving {drive_m} m towards key image {goal}")
 
     def reach(self, taught: Taught, goal: int, timeout_s: float, tolerance_m: float) -> None:
