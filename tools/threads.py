@@ -35,8 +35,8 @@ def compute_threads(count: int) -> None:
     For processes that share the CPUs with others that compute (a sweep's workers, a
     parallel teach's, the test suite's): OpenCV's and numba's pools, like OpenBLAS's, wait
     actively for work, so a process's idle threads burn the CPU the others need (a test of
-    a mission in lock-step: 38 s of CPU on two threads each, 34 s on one; the short demo
-    beside other processes: 42 s instead of 24).
+    a mission in lock-step: 38 s of CPU on two threads each, 35 s on one, medians of 3; the
+    short demo beside other processes: 42 s instead of 24).
 
     Raises:
         ValueError: ``count`` is below 1 or above the threads numba started.
