@@ -341,8 +341,12 @@ INIT_AGREEMENT_RAD = math.radians(3.0)
 class InitGate:
     """Whether a vision estimate may initialise the filter (ungated: at a start, after a
     junction crossing or LOST): with ``init_min_points`` points behind it, or with at
-    least ``init_agreeing_points`` when it agrees with the estimates of the
-    ``init_agreeing_frames`` - 1 frames before it (:class:`EstimatorConfig`)."""
+    least ``init_agreeing_points`` when it agrees with the ``init_agreeing_frames`` - 1
+    estimates of as many points before it (:class:`EstimatorConfig`). An estimate of fewer
+    points is no vote and breaks no count: in a dim scene most frames have too few (a robot
+    started 0.3 m beside the lab's route with half the lamps off: 3 or 4 points on 56 frames
+    in 76, 5 or 6 on the others, all agreeing; clearing the count on the weak frames kept
+    it from ever reaching three, and the robot, standing, never started)."""
 
     def __init__(self, config: EstimatorConfig) -> None:
         self._config = config
@@ -360,7 +364,6 @@ class InitGate:
             self._votes.clear()
             return True
         if n_points < cfg.init_agreeing_points:
-            self._votes.clear()
             return False
         vote = (index, y_m, theta_rad)
         kept = self._votes[len(self._votes) + 1 - cfg.init_agreeing_frames:]

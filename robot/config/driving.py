@@ -106,7 +106,8 @@ class EstimatorConfig:
     waits while uninitialised, so a true estimate repeats and a chance one does not. A
     robot started 0.3 m and 10 deg off a textured lab's route saw 5-9 points for 40 s."""
     init_agreeing_frames: int = 3
-    """Consecutive agreeing estimates that initialise the filter (see above), >= 1."""
+    """Agreeing estimates in a row that initialise the filter (see above; frames of fewer
+    points in between do not count), >= 1."""
     lost_timeout_ns: int = 2_000_000_000
     """No accepted vision estimate for this long means LOST, ns (30 frames at 15 Hz, 0.4 m
     of odometry alone at 0.2 m/s)."""

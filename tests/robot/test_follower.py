@@ -193,7 +193,6 @@ class TestInitGate:
         (0, 0.40, 0.17, 6),  # y 10 cm off
         (0, 0.30, 0.25, 6),  # theta 4.6 deg off
         (1, 0.30, 0.17, 6),  # another target
-        (0, 0.30, 0.17, 4),  # too few points: not a vote
     ])
     def test_a_frame_that_disagrees_starts_the_count_again(self, odd) -> None:
         gate = InitGate(self.CONFIG)
@@ -203,3 +202,11 @@ class TestInitGate:
         assert not gate.admits(0, 0.30, 0.17, n_points=6)
         assert not gate.admits(0, 0.30, 0.17, n_points=6)
         assert gate.admits(0, 0.30, 0.17, n_points=6)
+
+    def test_a_frame_of_too_few_points_is_no_vote_and_breaks_no_count(self) -> None:
+        gate = InitGate(self.CONFIG)
+        assert not gate.admits(0, 0.30, 0.170, n_points=5)
+        assert not gate.admits(0, 0.90, 0.500, n_points=4)  # not a vote, right or wrong
+        assert not gate.admits(0, 0.31, 0.175, n_points=6)
+        assert not gate.admits(0, 0.30, 0.170, n_points=3)
+        assert gate.admits(0, 0.29, 0.165, n_points=5)
