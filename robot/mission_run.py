@@ -17,10 +17,14 @@ Rules of a cycle (:meth:`MissionRun.cycle`):
    estimate kept); waiting, its end resumes the route (the follower resumes where
    it stood, the time spent waiting not counted against its LOST timer).
 2. LOCALIZING or LOST: localize the frame in the memory
-   (:class:`robot.memory.localize.Localizer`); a localization plans the route to
-   the goal and starts (or restarts) the follower. Found at the goal key image itself,
-   the robot has arrived (a goal a few centimetres behind it on its path, which no
-   route reaches, is where it stands). A goal the memory does not reach from there
+   (:class:`robot.memory.localize.Localizer`), on every path that runs through the
+   place; a localization plans the route to the goal and starts (or restarts) the
+   follower. The route is the shortest from the key image found and from those of
+   other paths that the junctions confirm are the same place
+   (:func:`robot.memory.junctions.same_place`; a robot relocalized on a corridor that a
+   loop runs along takes the loop, not the long way round). Found at the goal key image
+   itself, the robot has arrived (a goal a few centimetres behind it on its path, which
+   no route reaches, is where it stands). A goal the memory does not reach from there
    fails the mission (``no_route``).
 3. FOLLOWING: one servo cycle, its command to the base; the estimator's LOST, each
    key image reached and the final key image switch go to the mission.
@@ -46,6 +50,7 @@ import numpy.typing as npt
 
 from robot.config import VmnavConfig
 from robot.follower import FollowerConfig, FollowStep, RouteFollower
+from robot.memory.junctions import same_place
 from robot.memory.localize import Localization, Localizer
 from robot.mission import (
     FINAL_STATES,
@@ -302,7 +307,7 @@ class MissionRun:
 
     def _localize(self, t_ns: int, image: npt.NDArray[np.uint8],
                   base: BaseState) -> Localization:
-        found = self._localizer.localize(image)
+        found = self._localizer.localize(image, each_path=True)
         if not found.ok or found.keyframe_id is None:
             detail = f"best {found.detail}"
             self._events.append(AppEvent(t_ns, "localization", "failed", detail))
@@ -311,16 +316,26 @@ class MissionRun:
         self._events.append(AppEvent(t_ns, "localization", "ok", found.detail))
         goal_id = self._mission.goal_id
         assert goal_id is not None  # set by Start
-        start = found.ahead_id  # the first key image ahead: the route's first target
-        assert start is not None  # set with keyframe_id
-        if found.keyframe_id == goal_id != start:  # at the goal, just past it
+        assert found.ahead_id is not None  # set with keyframe_id
+        # (nearest, first ahead: the route's first target) on each path through the place.
+        places = [(found.keyframe_id, found.ahead_id)] + [
+            (nearest, ahead) for nearest, ahead in found.elsewhere
+            if same_place(self._memory, found.keyframe_id, nearest,
+                          self._config.localize.max_yaw_deg)]
+        if any(nearest == goal_id != ahead for nearest, ahead in places):  # just past the goal
             self._feed(ArrivedInput(t_ns, goal_id))
             return found
-        route = self._memory.plan_route(start, goal_id)
+        route = self._memory.plan_route_from([ahead for _, ahead in places], goal_id)
         if not route:
-            self._feed(NoRoute(t_ns, f"no route from key image {start} to "
+            self._feed(NoRoute(t_ns, f"no route from key image {found.ahead_id} to "
                                      f"goal key image {goal_id} in the memory graph"))
             return found
+        start = route[0]
+        if start != found.ahead_id:
+            self._events.append(AppEvent(
+                t_ns, "localization", "same_place",
+                f"key image {start} (path {self._memory.keyframe(start).path_id}) is where key "
+                f"image {found.ahead_id} is, and the route from it is shorter"))
         self._route = tuple(route)
         self._follower = RouteFollower(self._memory, route, self._follower_config, self._rng,
                                        t_ns, base)

@@ -194,6 +194,43 @@ def junction_attempts(
     ]
 
 
+def same_place(memory: VisualMemory, a: int, b: int, max_yaw_deg: float) -> bool:
+    """Whether key images ``a`` and ``b`` of two paths show one place, by the paths' junctions.
+
+    A view localized on both is no proof: a geometric verification cannot tell a place
+    from its look-alike a pattern period away. The pair is taken as the teach would take
+    a new junction between the two paths: it must agree with every junction already
+    between them and with the paths' odometry (the pairwise consistency of the module
+    docstring, each junction's views allowed ``max_yaw_deg`` apart), and stand as far
+    from each junction along one path as along the other (a test the turn allowed
+    between the junction's views does not loosen). Paths no junction joins cannot be
+    compared: never the same place.
+
+    Raises:
+        KeyError: an id is not in the memory.
+    """
+    keys = memory.keyframes
+    paths = {keys[a].path_id, keys[b].path_id}
+    between = [j for j in memory.junctions
+               if {keys[j.from_id].path_id, keys[j.to_id].path_id} == paths]
+    yaw = math.radians(max_yaw_deg)
+    return (len(paths) == 2 and bool(between)
+            and all(_consistent(memory, (j.from_id, j.to_id, yaw), (a, b))
+                    and _equally_far(memory, (j.from_id, j.to_id), (a, b)) for j in between))
+
+
+def _equally_far(memory: VisualMemory, first: tuple[int, int], second: tuple[int, int]) -> bool:
+    """Whether pair ``second`` stands as far from pair ``first`` along one path as along the
+    other (within the odometry's slack and drift): a test no turn between the paths'
+    odometry frames loosens, unlike :func:`_consistent`'s."""
+    offsets = _offsets(memory, first, second)
+    if offsets is None:
+        return True
+    along_one, along_other, driven = offsets
+    return (abs(math.hypot(*along_one) - math.hypot(*along_other))
+            <= ODOMETRY_SLACK_M + ODOMETRY_DRIFT * driven)
+
+
 def junction_lines(
     attempts: Sequence[JunctionAttempt], memory: VisualMemory, directory: Path
 ) -> list[str]:
@@ -231,20 +268,32 @@ def _consistent(memory: VisualMemory, first: tuple[int, int, float],
     Junctions that do not join the same two paths always agree.
     """
     a, b, yaw = first
-    c, d = second
-    path = {k: memory.keyframes[k].path_id for k in (a, b, c, d)}
-    if {path[a], path[b]} != {path[c], path[d]}:
+    offsets = _offsets(memory, (a, b), second)
+    if offsets is None:
         return True
-    if path[a] != path[c]:
-        c, d = d, c
-    keys = memory.keyframes
-    along_one = _offset(keys[a].odom_pose, keys[c].odom_pose)
-    along_other = _offset(keys[b].odom_pose, keys[d].odom_pose)
-    driven = max(abs(keys[c].distance_m - keys[a].distance_m),
-                 abs(keys[d].distance_m - keys[b].distance_m))
+    along_one, along_other, driven = offsets
     allowed = (ODOMETRY_SLACK_M + ODOMETRY_DRIFT * driven
                + 2.0 * math.sin(yaw / 2.0) * math.hypot(*along_one))
     return math.dist(along_one, along_other) <= allowed
+
+
+def _offsets(memory: VisualMemory, first: tuple[int, int], second: tuple[int, int]
+             ) -> tuple[tuple[float, float], tuple[float, float], float] | None:
+    """Where pair ``second``'s key images stand from pair ``first``'s, along each of the two
+    paths they join (first's from-path first; x ahead, y to the left, m), and the longer
+    of the two drives between them, m; None if the pairs do not join the same two paths."""
+    a, b = first
+    c, d = second
+    path = {k: memory.keyframes[k].path_id for k in (a, b, c, d)}
+    if {path[a], path[b]} != {path[c], path[d]}:
+        return None
+    if path[a] != path[c]:
+        c, d = d, c
+    keys = memory.keyframes
+    driven = max(abs(keys[c].distance_m - keys[a].distance_m),
+                 abs(keys[d].distance_m - keys[b].distance_m))
+    return (_offset(keys[a].odom_pose, keys[c].odom_pose),
+            _offset(keys[b].odom_pose, keys[d].odom_pose), driven)
 
 
 def _offset(origin: Pose2, pose: Pose2) -> tuple[float, float]:

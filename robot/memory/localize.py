@@ -49,6 +49,13 @@ each is verified geometrically:
    give nearly equal inliers over several key images, which put the most inliers 2-3
    key images ahead of the nearest in 5 of 200 ``campus`` views; the sign of the
    translation does not fade with distance as the inlier counts' differences do.
+5. **Other paths at the same place** (on request: ``each_path``): where visual paths run
+   together (a loop leaving a corridor along it), the view is also one of another path's
+   key images, and a route from there may be far shorter. Of each other path among the
+   candidates, the one with the most matches is verified and, accepted, walked as in
+   step 4 (``Localization.elsewhere``). Whether it is the same place and not a
+   look-alike is for the memory's junctions to say
+   (:func:`robot.memory.junctions.same_place`), and for the planner to use.
 
 :meth:`Localizer.localize_exhaustive` applies the paper's rule (most matches) to
 every key image and verifies its winner, the baseline the benchmark compares speed
@@ -138,6 +145,8 @@ class Localization:
             a route from the query starts (the walk of step 4): ``keyframe_id`` itself, or
             its next key image when the query lies between the two; None with
             ``keyframe_id``.
+        elsewhere: (nearest, first ahead) of step 5 on each other path that has an
+            accepted candidate, by path id; empty unless asked for.
     """
 
     keyframe_id: int | None
@@ -147,6 +156,7 @@ class Localization:
     candidates: tuple[Candidate, ...]
     query_features: int
     ahead_id: int | None = None
+    elsewhere: tuple[tuple[int, int], ...] = ()
 
     @property
     def verdict(self) -> str:
@@ -255,7 +265,8 @@ class Localizer:
         """The key images this localizer chooses from."""
         return self._ids
 
-    def localize(self, image: GreyImage, verify_all: bool = False) -> Localization:
+    def localize(self, image: GreyImage, verify_all: bool = False,
+                 each_path: bool = False) -> Localization:
         """The key image that best fits ``image``: prefilter, then verification of the candidates.
 
         Candidates are verified lazily (step 3 of the module docstring): one whose
@@ -265,6 +276,8 @@ class Localizer:
         Args:
             image: (H, W) uint8 grey query of the camera's size.
             verify_all: verify every candidate (to show each one's scores).
+            each_path: also find the view on the other paths among the candidates
+                (step 5), at the cost of a verification or more per path.
 
         Raises:
             ValueError: the image has the wrong size or type, or is empty.
@@ -331,10 +344,29 @@ class Localizer:
             return verifications[i]
 
         ranked = _ranked(candidates(), len(query))
-        if not ranked.ok or self._config.bracket_steps == 0:
+        if not ranked.ok:
             return ranked
         nearest, ahead = self._walk(ranked.keyframe_id, verified)  # may verify more candidates
-        return _ranked(candidates(), len(query), first=nearest, ahead=ahead)
+        elsewhere = []
+        if each_path:
+            for other in self._other_paths(ranked.keyframe_id, best, matches):
+                verification = verified(other)
+                if verification is not None and verification.accepted:
+                    elsewhere.append(self._walk(other, verified))
+        return _ranked(candidates(), len(query), first=nearest, ahead=ahead,
+                       elsewhere=tuple(elsewhere))
+
+    def _other_paths(self, winner: int, best: npt.NDArray[np.intp],
+                     matches: Sequence[Matches]) -> list[int]:
+        """Step 5's candidates: of each path but ``winner``'s, the candidate (positions
+        ``best`` into the key images, their ``matches``) with the most matches, by path id."""
+        own = self._places.get(winner, (None, 0))[0]
+        most: dict[int, tuple[int, int]] = {}
+        for k, m in zip(best, matches, strict=True):
+            place = self._places.get(self._ids[k])
+            if place is not None and place[0] != own and len(m) > most.get(place[0], (-1, 0))[0]:
+                most[place[0]] = (len(m), self._ids[k])
+        return [most[path][1] for path in sorted(most)]
 
     def _path_neighbours(self, keyframe_id: int) -> list[int]:
         """The key images before and after one on its path (none without its place)."""
@@ -435,10 +467,12 @@ def verify_matches(
 
 
 def _ranked(candidates: Sequence[Candidate], query_features: int,
-            first: int | None = None, ahead: int | None = None) -> Localization:
+            first: int | None = None, ahead: int | None = None,
+            elsewhere: tuple[tuple[int, int], ...] = ()) -> Localization:
     """The localization of verified candidates in prefilter order (see :class:`Localization`),
-    key image ``first`` (the walk's nearest) ahead of the ranking where given, and ``ahead``
-    the walk's first key image ahead (the winner where not given)."""
+    key image ``first`` (the walk's nearest) ahead of the ranking where given, ``ahead``
+    the walk's first key image ahead (the winner where not given), and step 5's
+    ``elsewhere``."""
     # sorted(reverse=True) is stable: equals keep the prefilter's order (the more similar first).
     ranked = sorted(candidates, key=lambda c: (
         c.keyframe_id == first, c.accepted,
@@ -447,7 +481,7 @@ def _ranked(candidates: Sequence[Candidate], query_features: int,
     winner = ranked[0]
     return Localization(winner.keyframe_id, winner.matches, winner.inliers, winner.accepted,
                         tuple(ranked), query_features,
-                        winner.keyframe_id if ahead is None else ahead)
+                        winner.keyframe_id if ahead is None else ahead, elsewhere)
 
 
 class _Prefilter:

@@ -196,6 +196,30 @@ class RouteGraph:
             walk.append(int(predecessors[walk[-1]]))
         return [int(self.ids[i]) for i in reversed(walk)]
 
+    def plan_route_from(self, start_ids: Sequence[int], goal_id: int) -> list[int]:
+        """The shortest of the visual routes from any of several key images of one place.
+
+        Where visual paths run together, the robot is at a key image of each (relocalized
+        on one path, a co-located key image of another may lead to the goal far sooner).
+
+        Args:
+            start_ids: key images the robot is localized at, the preferred one first.
+            goal_id: the goal key image.
+
+        Returns:
+            :meth:`plan_route` from the start with the shortest route (the first of
+            equals); ``[]`` if none reaches the goal or there is no start.
+
+        Raises:
+            UnknownKeyframeError: an id is not a vertex.
+        """
+        starts = [self.vertex(i) for i in start_ids]
+        to_goal_m = dijkstra(self.lengths_m.T, directed=True, indices=self.vertex(goal_id))
+        lengths_m = [float(to_goal_m[v]) for v in starts]
+        if not starts or not np.isfinite(min(lengths_m)):
+            return []
+        return self.plan_route(start_ids[lengths_m.index(min(lengths_m))], goal_id)
+
     def unreached(self, matrix: sp.csr_array, source: int) -> tuple[int, ...]:
         """Key image ids that no walk over ``matrix`` (``lengths_m`` or its transpose)
         from vertex index ``source`` reaches, sorted."""
@@ -373,6 +397,14 @@ class VisualMemory:
             UnknownKeyframeError: either id is not in the memory.
         """
         return self._graph().plan_route(start_id, goal_id)
+
+    def plan_route_from(self, start_ids: Sequence[int], goal_id: int) -> list[int]:
+        """The shortest visual route from any of ``start_ids`` (:meth:`RouteGraph.plan_route_from`).
+
+        Raises:
+            UnknownKeyframeError: an id is not in the memory.
+        """
+        return self._graph().plan_route_from(start_ids, goal_id)
 
     def unreachable_from(self, keyframe_id: int) -> tuple[int, ...]:
         """Key images that no route from ``keyframe_id`` reaches, sorted.

@@ -18,7 +18,7 @@ from robot.vision.features import pixels_per_radian
 from shared.clock import ManualClock
 from shared.errors import UnknownKeyframeError
 from shared.interfaces import BaseState
-from tests.shared.memory.builders import PATCH_LENGTH, loop_memory
+from tests.shared.memory.builders import PATCH_LENGTH, loop_memory, shared_stretch_memory
 
 PERIOD_NS = 100_000_000
 
@@ -129,7 +129,8 @@ def test_the_route_starts_at_the_first_key_image_ahead_of_the_view(memory, monke
     app, _ = make_app(memory, base, count=2)
     # Localized nearest key image 2, with 3 the first one ahead of the robot.
     monkeypatch.setattr(app.mission._localizer, "localize",
-                        lambda image: Localization(2, 40, 30, True, (), 100, ahead_id=3))
+                        lambda image, each_path: Localization(2, 40, 30, True, (), 100,
+                                                              ahead_id=3))
     result = app.run(5, 10**11)
     localized = [e.detail for e in result.events if e.reason == "localized"]
     assert localized and localized[0].endswith("at key image 3 (40 matches)")
@@ -143,7 +144,39 @@ def test_localized_at_the_goal_just_past_it_has_arrived(memory, monkeypatch) -> 
     app, _ = make_app(memory, base, count=2)
     # Nearest key image 5, the goal, with 6 the first one ahead: no route leads back to 5.
     monkeypatch.setattr(app.mission._localizer, "localize",
-                        lambda image: Localization(5, 40, 30, True, (), 100, ahead_id=6))
+                        lambda image, each_path: Localization(5, 40, 30, True, (), 100,
+                                                              ahead_id=6))
     result = app.run(5, 10**11)
     assert result.state is MissionState.ARRIVED and result.reached_goal
     assert all(command == (0.0, 0.0) for command in base.commands)
+
+
+def test_the_route_starts_on_another_path_at_the_same_place_when_shorter(monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    memory = shared_stretch_memory(np.random.default_rng(3))
+    app, _ = make_app(memory, FakeBase(), count=2)
+    # Seen at corridor key image 6 (ahead: 7), and at the loop's 17 (ahead: 18), 2 m past
+    # their junction on both paths. The goal, the loop's end, is out of the corridor's reach.
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image, each_path: Localization(
+                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((17, 18),)))
+    result = app.run(21, 10**11)
+    assert app.mission._route == (18, 19, 20, 21)
+    same = [e.detail for e in result.events if e.reason == "same_place"]
+    assert same == ["key image 18 (path 1) is where key image 7 is, and the route from it "
+                    "is shorter"]
+
+
+def test_a_look_alike_on_another_path_is_no_start(monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    memory = shared_stretch_memory(np.random.default_rng(3))
+    app, _ = make_app(memory, FakeBase(), count=2)
+    # The loop's 14 looks like the corridor's 6, but stands 1.5 m nearer their junction.
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image, each_path: Localization(
+                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((14, 15),)))
+    result = app.run(21, 10**11)
+    assert result.state is MissionState.FAILED and result.reason == "no_route"
+    assert "no route from key image 7 to goal key image 21" in result.detail

@@ -6,11 +6,16 @@ import numpy as np
 import pytest
 
 from robot.config import LocalizeConfig
-from robot.memory.junctions import JunctionAttempt, JunctionOutcome, junction_attempts
+from robot.memory.junctions import (
+    JunctionAttempt,
+    JunctionOutcome,
+    junction_attempts,
+    same_place,
+)
 from shared.config import CameraMountConfig
 from shared.memory import VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
-from tests.shared.memory.builders import small_camera
+from tests.shared.memory.builders import make_records, shared_stretch_memory, small_camera
 
 CONFIG = LocalizeConfig(candidates=4, min_inliers=10)
 MIN_MATCHES = 20  # the synthetic places share at most 15 chance matches
@@ -112,3 +117,29 @@ class TestJunctionAttempts:
         assert attempts_of(memory, 0) == []
         with pytest.raises(KeyError):
             attempts_of(memory, 7)
+
+
+class TestSamePlace:
+    """Key images of two paths at one place, judged by the junctions between the paths."""
+
+    @pytest.fixture
+    def memory(self) -> VisualMemory:
+        return shared_stretch_memory(np.random.default_rng(3))
+
+    def test_equally_far_from_the_junction_on_both_paths(self, memory: VisualMemory) -> None:
+        assert same_place(memory, 6, 17, 45.0)  # both 2 m past the junction
+        assert same_place(memory, 17, 6, 45.0)
+        assert same_place(memory, 6, 16, 45.0)  # one key image (0.5 m) off: odometry's slack
+
+    def test_a_look_alike_metres_away_is_not(self, memory: VisualMemory) -> None:
+        assert not same_place(memory, 12, 17, 45.0)  # 5 m and 2 m past it: a pattern period
+        # 3 m apart: within the allowance of a turn of 45 degrees between the paths' frames
+        # at the junction, not within the odometry's slack along them.
+        assert not same_place(memory, 8, 13, 45.0)
+
+    def test_one_path_or_paths_no_junction_joins_are_never_one_place(
+            self, memory: VisualMemory) -> None:
+        rng = np.random.default_rng(4)
+        memory.add_path("apart", make_records(rng, memory.camera, [0.5] * 4, t0_ns=10**12))
+        assert not same_place(memory, 4, 6, 45.0)
+        assert not same_place(memory, 6, 24, 45.0)

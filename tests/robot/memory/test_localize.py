@@ -287,3 +287,39 @@ class TestWalkAlongThePath:
                                      {**self.ALONG, 4: math.nan}, monkeypatch)
         result = localizer.localize(places[3].query)
         assert (result.keyframe_id, result.ahead_id) == (4, 4)
+
+
+class TestOtherPaths:
+    """Step 5: the view found on the other paths too, each walked as the winner is."""
+
+    def scripted(self, places: list[Place], memory: VisualMemory, inliers: dict[int, int],
+                 along: dict[int, float], monkeypatch: pytest.MonkeyPatch
+                 ) -> tuple[Localizer, list[int]]:
+        config = dataclasses.replace(CONFIG, candidates=len(places))
+        return scripted_localizer(memory, config, inliers, along, monkeypatch)
+
+    # Path "a" holds key images 0-6, path "b" 7-11. The query lies between a's 3 and 4,
+    # and between b's 9 and 10 (nearer 9).
+    INLIERS: ClassVar[dict[int, int]] = {3: 30, 4: 35, 9: 25, 10: 20}
+    ALONG: ClassVar[dict[int, float]] = {3: 0.2, 4: -0.6, 9: 0.3, 10: -0.4}
+
+    def test_each_other_path_is_walked_from_its_most_matched_candidate(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, verified = self.scripted(places, memory, self.INLIERS, self.ALONG,
+                                            monkeypatch)
+        result = localizer.localize(places[3].query, each_path=True)
+        assert (result.keyframe_id, result.ahead_id) == (3, 4)
+        assert result.elsewhere == ((9, 10),)
+        assert verified[-2:] == [9, 10]
+
+    def test_only_on_request_and_only_accepted(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        localizer, verified = self.scripted(places, memory, self.INLIERS, self.ALONG,
+                                            monkeypatch)
+        assert localizer.localize(places[3].query).elsewhere == ()
+        assert 9 not in verified
+        refused = {3: 30, 4: 35}  # path b's candidates refused
+        localizer, _ = self.scripted(places, memory, refused, self.ALONG, monkeypatch)
+        assert localizer.localize(places[3].query, each_path=True).elsewhere == ()

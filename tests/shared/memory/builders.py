@@ -83,6 +83,17 @@ def loop_memory(rng: np.random.Generator, camera: CameraModel | None = None) -> 
     return memory
 
 
+def shared_stretch_memory(rng: np.random.Generator) -> VisualMemory:
+    """A corridor, 6 m (ids 0-12, 0.5 m steps), and a loop that leaves it at its key image 2
+    and runs along it for 4 m (ids 13-21, its own odometry frame from 0): junction 2 <-> 13,
+    so key images 2 m past it on each path (6 and 17) are one place."""
+    memory = VisualMemory(small_camera())
+    memory.add_path("corridor", make_records(rng, memory.camera, [0.5] * 12))
+    memory.add_path("loop", make_records(rng, memory.camera, [0.5] * 8, t0_ns=10**11))
+    memory.add_junction(Junction(from_id=2, to_id=13, matches=90))
+    return memory
+
+
 def folder_bytes(folder: Path) -> dict[str, bytes]:
     """Every file under ``folder``, at any depth, by path relative to it: its bytes (to show
     that a command changed none)."""

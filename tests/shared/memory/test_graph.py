@@ -117,6 +117,26 @@ class TestPlanRoute:
         assert memory.plan_route(0, 5) == [0, 1, *shortcut.keyframe_ids, 5]
         assert memory.plan_route(2, 5) == [2, 3, 4, 5]
 
+    def test_from_several_starts_the_shortest_route_wins(self, rng: np.random.Generator) -> None:
+        memory = loop_memory(rng)
+        # Corridor 0-3, "back" 4-6, junctions 3 <-> 4 and 6 <-> 0: from 2 or 5 to 6.
+        assert memory.plan_route_from([2, 5], 6) == [5, 6]
+        assert memory.plan_route_from([5, 2], 1) == [5, 6, 0, 1]
+        # Equal lengths: the first start. Junctions are zero-length, so 3 and 4 tie.
+        assert memory.plan_route_from([4, 3], 5) == [4, 5]
+        assert memory.plan_route_from([3, 4], 5) == [3, 4, 5]
+        assert memory.plan_route_from([6, 1], 6) == [6]
+
+    def test_from_several_starts_none_reaching_is_no_route(self,
+                                                           rng: np.random.Generator) -> None:
+        memory = VisualMemory(small_camera())
+        memory.add_path("corridor", make_records(rng, memory.camera, [0.5, 0.5, 0.5]))
+        assert memory.plan_route_from([3, 2], 1) == []
+        assert memory.plan_route_from([], 1) == []
+        assert memory.plan_route_from([3, 0], 1) == [0, 1]
+        with pytest.raises(UnknownKeyframeError, match="99"):
+            memory.plan_route_from([0, 99], 1)
+
     @pytest.mark.parametrize(("start", "goal"), [(99, 0), (0, 99)])
     def test_unknown_id_is_named(self, rng: np.random.Generator, start: int, goal: int) -> None:
         with pytest.raises(UnknownKeyframeError, match="no key image with id 99") as error:
