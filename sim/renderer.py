@@ -122,6 +122,16 @@ class RenderedFrame:
     depth_m: npt.NDArray[np.float32] | None = None
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class _Trace:
+    """The last :meth:`FisheyeRenderer.trace`: the scene and camera pose it saw, its images."""
+
+    scene: Scene
+    pose: bytes  #: the camera pose and heading, as bytes to compare
+    radiance: npt.NDArray[np.float32]
+    depth: npt.NDArray[np.float32]
+
+
 class FisheyeRenderer:
     """Renders grey fisheye frames of a :class:`~sim.simulation.Simulation`.
 
@@ -165,8 +175,7 @@ class FisheyeRenderer:
         self.effects = CameraEffects(camera, mount, sensor, rng.spawn(1)[0])
         self._illumination_phase = float(rng.uniform(0.0, 2.0 * math.pi))
         self._figures: PersonFigures | None = None
-        self._last_trace: tuple[Scene, bytes, npt.NDArray[np.float32],
-                                npt.NDArray[np.float32]] | None = None
+        self._last_trace: _Trace | None = None
 
     @classmethod
     def for_simulation(cls, sim: Simulation, camera: CameraModel) -> FisheyeRenderer:
@@ -262,10 +271,10 @@ class FisheyeRenderer:
         """
         pose = T_world_cam.tobytes() + np.float64(yaw_rad).tobytes()
         last = self._last_trace
-        if last is None or last[0] is not self.scene or last[1] != pose:
-            last = (self.scene, pose, *self.trace(T_world_cam, yaw_rad))
+        if last is None or last.scene is not self.scene or last.pose != pose:
+            last = _Trace(self.scene, pose, *self.trace(T_world_cam, yaw_rad))
             self._last_trace = last
-        return last[2].copy(), last[3].copy()
+        return last.radiance.copy(), last.depth.copy()
 
     def trace(
         self, T_world_cam: FloatArray, yaw_rad: float
