@@ -14,7 +14,7 @@ from robot.memory.junctions import (
 )
 from shared.config import CameraMountConfig
 from shared.memory import VisualMemory
-from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of
+from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of, record_of
 from tests.shared.memory.builders import make_records, shared_stretch_memory, small_camera
 
 CONFIG = LocalizeConfig(candidates=4, min_inliers=10)
@@ -96,6 +96,26 @@ class TestJunctionAttempts:
         assert {(4, 3), (7, 0)} <= ends
         assert len(accepted_pairs(attempts)) == 1
         assert accepted_pairs(attempts)[0] in ({3, 4}, {0, 7})
+        assert JunctionOutcome.INCONSISTENT in {a.outcome for a in attempts}
+
+    def test_a_junction_a_third_path_contradicts_is_refused(self) -> None:
+        # Paths b and c each join a, 3.5 m apart along it (b at its start, c at its end),
+        # and b's end looks like c's start: through that junction the two places would be
+        # 1 m + 1 m apart. Each pair of paths has one junction, so
+        # no pair can disagree; the triangle the three make cannot close.
+        places = make_places(np.random.default_rng(8), 11, small_camera())
+        memory = memory_of({"a": [places[i].key_image for i in range(8)],
+                            "b": [places[0].query, places[8].key_image, places[9].key_image]})
+        for attempt in attempts_of(memory, 1):
+            if attempt.accepted:
+                memory.add_junction(attempt.junction())
+        assert [{j.from_id, j.to_id} for j in memory.junctions] == [{0, 8}]
+        memory.add_path("c", [record_of(image, memory.camera, i) for i, image in enumerate(
+            [places[9].query, places[10].key_image, places[7].query])])
+        attempts = attempts_of(memory, 2)
+        ends = {(a.end_id, a.best_id) for a in attempts}
+        assert {(11, 10), (13, 7)} <= ends
+        assert len(accepted_pairs(attempts)) == 1
         assert JunctionOutcome.INCONSISTENT in {a.outcome for a in attempts}
 
     def test_junctions_already_made_are_not_made_again(self, places: list[Place]) -> None:
