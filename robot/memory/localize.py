@@ -40,8 +40,9 @@ each is verified geometrically:
 4. **The walk along the path**: the fitted translation says on which side of the
    winner the query lies (ahead or behind it along the key image's forward axis, up
    to scale); the winner's path neighbours towards that side are verified one after
-   the other (at most ``bracket_steps``) until two consecutive ones bracket the query
-   (the first sees it ahead, the next behind). Of the two, the one the query lies more
+   the other (at most ``bracket_steps``; matched and verified now if the prefilter
+   passed over them) until two consecutive ones bracket the query (the first sees it
+   ahead, the next behind). Of the two, the one the query lies more
    beside than along is the answer (the nearest along the path), and the second, the
    first key image ahead of the query, is where a route from it starts
    (``Localization.ahead_id``: a route started at a key image the robot is level with
@@ -137,8 +138,9 @@ class Localization:
         matches: its number of matches (0 when ``keyframe_id`` is None).
         inliers: its verified inliers (0 when ``keyframe_id`` is None).
         ok: whether it passed the geometric verification (a localization).
-        candidates: the key images matched, best first: the walk's answer, then accepted
-            ones by path support, then by inliers, then by matches (equal ones in
+        candidates: the key images matched (the prefilter's, and those the walks of
+            steps 4 and 5 verified beyond them), best first: the walk's answer, then
+            accepted ones by path support, then by inliers, then by matches (equal ones in
             prefilter order; all key images in id order for the exhaustive baseline).
         query_features: features found in the query.
         ahead_id: the first key image ahead of the query on ``keyframe_id``'s path, where
@@ -219,6 +221,7 @@ class Localizer:
                 f"{len(features)} feature sets: expected one of each per key image",
             )
         self._ids = tuple(int(i) for i in keyframe_ids)
+        self._index = {i: k for k, i in enumerate(self._ids)}
         self._places = {int(i): (int(path), int(index))
                         for i, (path, index) in (places or {}).items()}
         self._at = {place: i for i, place in self._places.items()}
@@ -288,8 +291,8 @@ class Localizer:
         similarity = self._prefilter.similarity(thumbnail_from_image(image), self._descriptors)
         count = min(self._config.candidates, len(self._ids))
         # argpartition picks the best `count` in O(N); only those are sorted.
-        best = np.argpartition(-similarity, count - 1)[:count]
-        best = best[np.argsort(-similarity[best], kind="stable")]
+        chosen = np.argpartition(-similarity, count - 1)[:count]
+        best = [int(k) for k in chosen[np.argsort(-similarity[chosen], kind="stable")]]
         matches = [self._front_end.match(query, self._features[k], self._config.matching)
                    for k in best]
         verifications: list[Verification | None] = [None] * count
@@ -312,7 +315,7 @@ class Localizer:
 
         if verify_all:
             for i in range(count):
-                verifications[i] = self._verify(query, int(best[i]), matches[i], rng)
+                verifications[i] = self._verify(query, best[i], matches[i], rng)
         while True:
             # Branch and bound: the candidate whose support could be the highest (match
             # counts standing in for unverified inliers) is verified with its neighbours,
@@ -327,7 +330,7 @@ class Localizer:
             if not pending:
                 break
             for j in pending:
-                verifications[j] = self._verify(query, int(best[j]), matches[j], rng)
+                verifications[j] = self._verify(query, best[j], matches[j], rng)
 
         def candidates() -> list[Candidate]:
             return [Candidate(self._ids[k], float(similarity[k]), len(m), v,
@@ -335,12 +338,21 @@ class Localizer:
                     for i, (k, m, v) in enumerate(zip(best, matches, verifications, strict=True))]
 
         def verified(keyframe_id: int) -> Verification | None:
-            """A candidate's verification (verified now if it was not); None if not one."""
+            """A key image's verification, verified now if it was not (a key image the
+            prefilter passed over joins the candidates); None if it is not one of ours."""
             i = position.get(keyframe_id)
             if i is None:
-                return None
+                k = self._index.get(keyframe_id)
+                if k is None:
+                    return None
+                i = position[keyframe_id] = len(best)
+                best.append(k)
+                matches.append(self._front_end.match(query, self._features[k],
+                                                     self._config.matching))
+                verifications.append(None)
+                around.append([])
             if verifications[i] is None:
-                verifications[i] = self._verify(query, int(best[i]), matches[i], rng)
+                verifications[i] = self._verify(query, best[i], matches[i], rng)
             return verifications[i]
 
         ranked = _ranked(candidates(), len(query))
@@ -356,7 +368,7 @@ class Localizer:
         return _ranked(candidates(), len(query), first=nearest, ahead=ahead,
                        elsewhere=tuple(elsewhere))
 
-    def _other_paths(self, winner: int, best: npt.NDArray[np.intp],
+    def _other_paths(self, winner: int, best: Sequence[int],
                      matches: Sequence[Matches]) -> list[int]:
         """Step 5's candidates: of each path but ``winner``'s, the candidate (positions
         ``best`` into the key images, their ``matches``) with the most matches, by path id."""
