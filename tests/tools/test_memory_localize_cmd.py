@@ -61,7 +61,8 @@ class TestLocalize:
         first, second = out.splitlines()
         assert first.startswith("key image 4 (path 1 'east', index 1, 0.50 m along): ")
         assert first.endswith(" verified inliers") and "not localized" not in first
-        assert " ms for 6 key images (3 matched, " in second
+        # The prefilter's 3 candidates and the walk's path neighbour beyond them.
+        assert " ms for 6 key images (4 matched, " in second
         assert " verified; localizer built in " in second
 
     def test_json_and_the_exhaustive_baseline(
