@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -9,11 +11,12 @@ from robot.config import LocalizeConfig
 from robot.memory.junctions import (
     JunctionAttempt,
     JunctionOutcome,
+    _largest_consistent,
     junction_attempts,
     same_place,
 )
 from shared.config import CameraMountConfig
-from shared.memory import VisualMemory
+from shared.memory import Junction, VisualMemory
 from tests.robot.memory.textured import FEATURES, Place, make_places, memory_of, record_of
 from tests.shared.memory.builders import make_records, shared_stretch_memory, small_camera
 
@@ -163,3 +166,37 @@ class TestSamePlace:
         memory.add_path("apart", make_records(rng, memory.camera, [0.5] * 4, t0_ns=10**12))
         assert not same_place(memory, 4, 6, 45.0)
         assert not same_place(memory, 6, 24, 45.0)
+
+
+class TestLargestConsistentSet:
+    """Of a new path's junctions, the most that agree win, not the first tried."""
+
+    @pytest.fixture
+    def memory(self) -> VisualMemory:
+        rng = np.random.default_rng(6)
+        memory = VisualMemory(small_camera())
+        # A corridor, 8 m (ids 0-16); a path along it from its 3 m to its 7 m (17-25).
+        memory.add_path("corridor", make_records(rng, memory.camera, [0.5] * 16))
+        memory.add_path("along", make_records(rng, memory.camera, [0.5] * 8, t0_ns=10**11))
+        return memory
+
+    def test_two_that_agree_beat_a_look_alike_tried_first(self, memory: VisualMemory) -> None:
+        # Tried first (two path ends): the corridor's start looks like the path's start,
+        # 3 m away. The path's two true junctions, in the corridor's middle, come after.
+        look_alike, start, end = (0, 17, 0.05), (17, 6, 0.05), (25, 14, 0.05)
+        assert _largest_consistent(memory, [look_alike, start, end], [], set()) == [1, 2]
+
+    def test_of_equally_large_sets_the_first_tried(self, memory: VisualMemory) -> None:
+        # The two starts reuse a link (the path's start joins the corridor once).
+        assert _largest_consistent(memory, [(0, 17, 0.05), (17, 6, 0.05)], [], set()) == [0]
+        assert _largest_consistent(memory, [(17, 6, 0.05), (0, 17, 0.05)], [], set()) == [0]
+        assert _largest_consistent(memory, [], [], set()) == []
+
+    def test_junctions_already_made_bind_the_choice(self, memory: VisualMemory) -> None:
+        memory.add_junction(Junction(from_id=0, to_id=17, matches=50))
+        joined = [(0, 17, math.radians(45.0))]
+        links = {(0, 1), (17, 0)}
+        # The path's start has joined the corridor: it cannot again. Its end is judged
+        # against that junction, allowed 45 degrees between its views (not recorded): 3 m
+        # off at 7 m from it passes.
+        assert _largest_consistent(memory, [(17, 6, 0.05), (25, 14, 0.05)], joined, links) == [1]
