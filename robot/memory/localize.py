@@ -46,7 +46,9 @@ each is verified geometrically:
    beside than along is the answer (the nearest along the path), and the second, the
    first key image ahead of the query, is where a route from it starts
    (``Localization.ahead_id``: a route started at a key image the robot is level with
-   begins with a target the follower cannot see ahead). Forward views of a far scene
+   begins with a target the follower cannot see ahead). Without a bracketing pair the
+   winner stays the nearest, and the first ahead is the key image after the last one
+   walked if the query lies ahead of them all. Forward views of a far scene
    give nearly equal inliers over several key images, which put the most inliers 2-3
    key images ahead of the nearest in 5 of 200 ``campus`` views; the sign of the
    translation does not fade with distance as the inlier counts' differences do.
@@ -391,7 +393,9 @@ class Localizer:
     def _walk(self, winner: int,
               verified: Callable[[int], Verification | None]) -> tuple[int, int]:
         """Step 4: the key images of ``winner``'s path nearest the query and first ahead of
-        it (module docstring); ``winner`` twice when no pair near it brackets the query."""
+        it (module docstring). When no pair near it brackets the query, ``winner`` is the
+        nearest, and the first ahead is ``winner`` too, unless the query lies ahead of
+        every key image walked: then the one after the last of them."""
         own = verified(winner)
         if own is None or winner not in self._places or math.isnan(own.along):
             return winner, winner
@@ -410,7 +414,8 @@ class Localizer:
                 nearest = previous if abs(previous_along) <= abs(v.along) else k
                 return nearest, previous if previous_along < 0 else k
             previous, previous_along = k, v.along
-        return winner, winner
+        beyond = self._at.get((path, self._places[previous][1] + 1)) if step > 0 else None
+        return winner, winner if beyond is None else beyond
 
     def localize_exhaustive(self, image: GreyImage) -> Localization:
         """The paper's rule over every key image: the one with the most matches (the baseline),

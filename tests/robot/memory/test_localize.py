@@ -268,6 +268,19 @@ class TestWalkAlongThePath:
         result = localizer.localize(places[3].query)
         assert (result.keyframe_id, result.ahead_id) == (3, 3)
 
+    def test_a_query_ahead_of_every_key_image_walked_starts_after_them(
+            self, places: list[Place], memory: VisualMemory,
+            monkeypatch: pytest.MonkeyPatch) -> None:
+        # 1 and 2 see the query ahead; 3, refused, cannot bracket it: 3 is the first ahead.
+        inliers = {1: 40, 2: 35}
+        along = {1: 0.9, 2: 0.5}
+        localizer, _ = self.scripted(places, memory, inliers, along, monkeypatch)
+        result = localizer.localize(places[3].query)
+        assert (result.keyframe_id, result.ahead_id) == (1, 3)
+        # At the end of its path (6 is path a's last), the winner stays.
+        localizer, _ = self.scripted(places, memory, {6: 40}, {6: 0.9}, monkeypatch)
+        assert localizer.localize(places[6].query).ahead_id == 6
+
     @pytest.mark.parametrize(("change", "steps"), [
         ({"inliers": {4: 0}}, 3),      # the next key image towards the query is refused
         ({"along": {5: math.nan}}, 3),  # the winner's fit has no translation: it stands there
