@@ -22,7 +22,9 @@ Rules of a cycle (:meth:`MissionRun.cycle`):
    follower. The route is the shortest from the key image found and from those of
    other paths that the junctions confirm are the same place
    (:func:`robot.memory.junctions.same_place`; a robot relocalized on a corridor that a
-   loop runs along takes the loop, not the long way round). Found at the goal key image
+   loop runs along takes the loop, not the long way round), but not from a key image of
+   another path from which it was lost before reaching any (the short way may be where
+   it cannot see: it takes its own path's way then). Found at the goal key image
    itself, the robot has arrived (a goal a few centimetres behind it on its path, which
    no route reaches, is where it stands). A goal the memory does not reach from there
    fails the mission (``no_route``).
@@ -181,6 +183,7 @@ class MissionRun:
         self._route: tuple[int, ...] = ()
         self._last: Transition | None = None
         self._reached = 0
+        self._lost_from: set[int] = set()  # route starts lost from before their first key image
 
     @property
     def state(self) -> MissionState:
@@ -320,8 +323,9 @@ class MissionRun:
         # (nearest, first ahead: the route's first target) on each path through the place.
         places = [(found.keyframe_id, found.ahead_id)] + [
             (nearest, ahead) for nearest, ahead in found.elsewhere
-            if same_place(self._memory, found.keyframe_id, nearest,
-                          self._config.localize.max_yaw_deg)]
+            if ahead not in self._lost_from
+            and same_place(self._memory, found.keyframe_id, nearest,
+                           self._config.localize.max_yaw_deg)]
         if any(nearest == goal_id != ahead for nearest, ahead in places):  # just past the goal
             self._feed(ArrivedInput(t_ns, goal_id))
             return found
@@ -356,6 +360,8 @@ class MissionRun:
                 f"reached key image {key} ({switch.reached_index + 1}/{len(follower.targets)})"))
             self._feed(ArrivedInput(t_ns, key) if switch.final else KeyImageReached(t_ns, key))
         if step.lost is not None:
+            if self._reached == 0:
+                self._lost_from.add(self._route[0])
             self._events.append(AppEvent(t_ns, "lost", step.lost.reason, step.lost.message))
             self._feed(LostInput(t_ns, step.lost.message))
         return step

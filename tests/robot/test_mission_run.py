@@ -180,3 +180,21 @@ def test_a_look_alike_on_another_path_is_no_start(monkeypatch) -> None:
     result = app.run(21, 10**11)
     assert result.state is MissionState.FAILED and result.reason == "no_route"
     assert "no route from key image 7 to goal key image 21" in result.detail
+
+
+def test_another_path_lost_from_before_its_first_key_image_is_not_taken_again(
+        monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    memory = shared_stretch_memory(np.random.default_rng(3))
+    app, _ = make_app(memory, FakeBase())
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image, each_path: Localization(
+                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((17, 18),)))
+    # Noise frames give the follower no estimate: lost from 18 before reaching it.
+    result = app.run(21, 10**11)
+    kinds = [(e.kind, e.reason) for e in result.events]
+    assert kinds.index(("localization", "same_place")) < kinds.index(("lost", "no_estimate"))
+    assert kinds.count(("localization", "same_place")) == 1
+    assert result.state is MissionState.FAILED and result.reason == "no_route"
+    assert "no route from key image 7 to goal key image 21" in result.detail
