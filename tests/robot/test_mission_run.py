@@ -151,16 +151,23 @@ def test_localized_at_the_goal_just_past_it_has_arrived(memory, monkeypatch) -> 
     assert all(command == (0.0, 0.0) for command in base.commands)
 
 
-def test_the_route_starts_on_another_path_at_the_same_place_when_shorter(monkeypatch) -> None:
+def stretch_app(monkeypatch, elsewhere: tuple[tuple[int, int], ...],
+                count: int | None = None) -> App:
+    """A run on :func:`shared_stretch_memory` whose every localization is the corridor's key
+    image 6 (7 the first ahead), and ``elsewhere`` on the loop."""
     from robot.memory.localize import Localization
 
-    memory = shared_stretch_memory(np.random.default_rng(3))
-    app, _ = make_app(memory, FakeBase(), count=2)
-    # Seen at corridor key image 6 (ahead: 7), and at the loop's 17 (ahead: 18), 2 m past
-    # their junction on both paths. The goal, the loop's end, is out of the corridor's reach.
+    app, _ = make_app(shared_stretch_memory(np.random.default_rng(3)), FakeBase(), count)
     monkeypatch.setattr(app.mission._localizer, "localize",
                         lambda image, each_path: Localization(
-                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((17, 18),)))
+                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=elsewhere))
+    return app
+
+
+def test_the_route_starts_on_another_path_at_the_same_place_when_shorter(monkeypatch) -> None:
+    # The loop's 17 (ahead: 18) is 2 m past the junction, as the corridor's 6 is. The goal,
+    # the loop's end, is out of the corridor's reach.
+    app = stretch_app(monkeypatch, ((17, 18),), count=2)
     result = app.run(21, 10**11)
     assert app.mission._route == (18, 19, 20, 21)
     same = [e.detail for e in result.events if e.reason == "same_place"]
@@ -169,30 +176,16 @@ def test_the_route_starts_on_another_path_at_the_same_place_when_shorter(monkeyp
 
 
 def test_a_look_alike_on_another_path_is_no_start(monkeypatch) -> None:
-    from robot.memory.localize import Localization
-
-    memory = shared_stretch_memory(np.random.default_rng(3))
-    app, _ = make_app(memory, FakeBase(), count=2)
     # The loop's 14 looks like the corridor's 6, but stands 1.5 m nearer their junction.
-    monkeypatch.setattr(app.mission._localizer, "localize",
-                        lambda image, each_path: Localization(
-                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((14, 15),)))
-    result = app.run(21, 10**11)
+    result = stretch_app(monkeypatch, ((14, 15),), count=2).run(21, 10**11)
     assert result.state is MissionState.FAILED and result.reason == "no_route"
     assert "no route from key image 7 to goal key image 21" in result.detail
 
 
 def test_another_path_lost_from_before_its_first_key_image_is_not_taken_again(
         monkeypatch) -> None:
-    from robot.memory.localize import Localization
-
-    memory = shared_stretch_memory(np.random.default_rng(3))
-    app, _ = make_app(memory, FakeBase())
-    monkeypatch.setattr(app.mission._localizer, "localize",
-                        lambda image, each_path: Localization(
-                            6, 40, 30, True, (), 100, ahead_id=7, elsewhere=((17, 18),)))
     # Noise frames give the follower no estimate: lost from 18 before reaching it.
-    result = app.run(21, 10**11)
+    result = stretch_app(monkeypatch, ((17, 18),)).run(21, 10**11)
     kinds = [(e.kind, e.reason) for e in result.events]
     assert kinds.index(("localization", "same_place")) < kinds.index(("lost", "no_estimate"))
     assert kinds.count(("localization", "same_place")) == 1
