@@ -24,7 +24,10 @@ Rules of a cycle (:meth:`MissionRun.cycle`):
    (:func:`robot.memory.junctions.same_place`; a robot relocalized on a corridor that a
    loop runs along takes the loop, not the long way round), but not from a key image of
    another path from which it was lost before reaching any (the short way may be where
-   it cannot see: it takes its own path's way then). Found at the goal key image
+   it cannot see: it takes its own path's way then). LOST, a localization counts only
+   within ``MissionConfig.relocalize_radius_m`` of the key image the robot was heading
+   for (it stood, or drove blind a metre at most: a key image farther away is a
+   look-alike, a failed attempt). Found at the goal key image
    itself, the robot has arrived (a goal a few centimetres behind it on its path, which
    no route reaches, is where it stands). A goal the memory does not reach from there
    fails the mission (``no_route``).
@@ -184,6 +187,7 @@ class MissionRun:
         self._last: Transition | None = None
         self._reached = 0
         self._lost_from: set[int] = set()  # route starts lost from before their first key image
+        self._lost_near: int | None = None  # LOST: the key image the robot was heading for
 
     @property
     def state(self) -> MissionState:
@@ -316,16 +320,26 @@ class MissionRun:
             self._events.append(AppEvent(t_ns, "localization", "failed", detail))
             self._feed(LocalizationFailed(t_ns, detail))
             return found
-        self._events.append(AppEvent(t_ns, "localization", "ok", found.detail))
-        goal_id = self._mission.goal_id
-        assert goal_id is not None  # set by Start
         assert found.ahead_id is not None  # set with keyframe_id
         # (nearest, first ahead: the route's first target) on each path through the place.
         places = [(found.keyframe_id, found.ahead_id)] + [
             (nearest, ahead) for nearest, ahead in found.elsewhere
-            if ahead not in self._lost_from
-            and same_place(self._memory, found.keyframe_id, nearest,
-                           self._config.localize.max_yaw_deg)]
+            if same_place(self._memory, found.keyframe_id, nearest,
+                          self._config.localize.max_yaw_deg)]
+        radius_m = self._config.mission.relocalize_radius_m
+        near = (None if self._lost_near is None
+                else self._memory.within(self._lost_near, radius_m))
+        if near is not None and not any(nearest in near for nearest, _ in places):
+            detail = (f"{found.detail}: more than {radius_m:g} m from key image "
+                      f"{self._lost_near}, where the robot was lost")
+            self._events.append(AppEvent(t_ns, "localization", "too_far", detail))
+            self._feed(LocalizationFailed(t_ns, detail))
+            return found
+        self._events.append(AppEvent(t_ns, "localization", "ok", found.detail))
+        self._lost_near = None
+        goal_id = self._mission.goal_id
+        assert goal_id is not None  # set by Start
+        places = places[:1] + [place for place in places[1:] if place[1] not in self._lost_from]
         if any(nearest == goal_id != ahead for nearest, ahead in places):  # just past the goal
             self._feed(ArrivedInput(t_ns, goal_id))
             return found
@@ -362,6 +376,7 @@ class MissionRun:
         if step.lost is not None:
             if self._reached == 0:
                 self._lost_from.add(self._route[0])
+            self._lost_near = self._route[min(self._reached, len(self._route) - 1)]
             self._events.append(AppEvent(t_ns, "lost", step.lost.reason, step.lost.message))
             self._feed(LostInput(t_ns, step.lost.message))
         return step

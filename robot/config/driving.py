@@ -186,12 +186,18 @@ class MissionConfig:
     """Lost this many times without reaching a key image in between fails the mission
     (each relocalization led nowhere; a campus robot once went LOST 579 times and drove
     57 m)."""
+    relocalize_radius_m: float = 2.5
+    """LOST, the robot relocalizes only at key images within this distance of the one it
+    was heading for, m, along the memory's paths and junctions either way: it stands, or
+    drives blind at most the estimator's ``lost_distance_m``, so a key image farther away
+    is a look-alike (in the dark lab one 10 m back along the corridor sent a robot 288 m
+    astray)."""
     base_lost_action: str = "continue"
     """One of ``BASE_LOST_ACTIONS``: what a mission run does when the base stops reporting."""
 
     def __post_init__(self) -> None:
         for name in ("localize_timeout_ns", "localize_attempts", "relocalize_timeout_ns",
-                     "relocalize_attempts", "lost_limit"):
+                     "relocalize_attempts", "lost_limit", "relocalize_radius_m"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         require(self.base_lost_action in BASE_LOST_ACTIONS,
                 f"base_lost_action must be one of {', '.join(BASE_LOST_ACTIONS)}, "

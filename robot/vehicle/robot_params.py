@@ -98,6 +98,8 @@ ROBOT_PARAMS: tuple[ParamBinding, ...] = (
                  "LOST this long without relocalizing fails the mission, s", Kind.SECONDS),
     ParamBinding("MIS_RELOC_TRIES", "mission", "relocalize_attempts", 1, 100,
                  "Failed relocalizations in one LOST episode that fail the mission", Kind.INT),
+    ParamBinding("MIS_RELOC_RAD", "mission", "relocalize_radius_m", 0.5, 100.0,
+                 "LOST, relocalize only this near the key image the robot was heading for, m"),
     ParamBinding("FS_GCS_ACTION", "mavlink", "gcs_lost_action", 0, len(GCS_LOST_ACTIONS) - 1,
                  "What the robot does when the ground heartbeat stops", Kind.CHOICE,
                  GCS_LOST_ACTIONS),

@@ -220,6 +220,17 @@ class RouteGraph:
             return []
         return self.plan_route(start_ids[lengths_m.index(min(lengths_m))], goal_id)
 
+    def within(self, keyframe_id: int, radius_m: float) -> frozenset[int]:
+        """Key images at most ``radius_m`` from ``keyframe_id`` along paths and junctions,
+        either way (teach odometric distance; itself included).
+
+        Raises:
+            UnknownKeyframeError: not a vertex.
+        """
+        distances_m = dijkstra(self.lengths_m, directed=False, indices=self.vertex(keyframe_id),
+                               limit=radius_m)
+        return frozenset(int(self.ids[i]) for i in np.flatnonzero(np.isfinite(distances_m)))
+
     def unreached(self, matrix: sp.csr_array, source: int) -> tuple[int, ...]:
         """Key image ids that no walk over ``matrix`` (``lengths_m`` or its transpose)
         from vertex index ``source`` reaches, sorted."""
@@ -405,6 +416,14 @@ class VisualMemory:
             UnknownKeyframeError: an id is not in the memory.
         """
         return self._graph().plan_route_from(start_ids, goal_id)
+
+    def within(self, keyframe_id: int, radius_m: float) -> frozenset[int]:
+        """Key images near ``keyframe_id`` (:meth:`RouteGraph.within`).
+
+        Raises:
+            UnknownKeyframeError: not in the memory.
+        """
+        return self._graph().within(keyframe_id, radius_m)
 
     def unreachable_from(self, keyframe_id: int) -> tuple[int, ...]:
         """Key images that no route from ``keyframe_id`` reaches, sorted.

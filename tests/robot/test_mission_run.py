@@ -191,3 +191,20 @@ def test_another_path_lost_from_before_its_first_key_image_is_not_taken_again(
     assert kinds.count(("localization", "same_place")) == 1
     assert result.state is MissionState.FAILED and result.reason == "no_route"
     assert "no route from key image 7 to goal key image 21" in result.detail
+
+
+def test_lost_a_look_alike_far_from_where_the_robot_was_lost_is_refused(monkeypatch) -> None:
+    from robot.memory.localize import Localization
+
+    app, _ = make_app(shared_stretch_memory(np.random.default_rng(3)), FakeBase())
+    answers = iter([Localization(6, 40, 30, True, (), 100, ahead_id=7)])
+    # Then, lost heading for 7, the corridor's start 3.5 m back, again and again.
+    monkeypatch.setattr(app.mission._localizer, "localize",
+                        lambda image, each_path: next(answers, Localization(
+                            0, 40, 30, True, (), 100, ahead_id=0)))
+    result = app.run(12, 10**11)
+    refused = [e.detail for e in result.events if e.reason == "too_far"]
+    assert len(refused) == MissionConfig().relocalize_attempts
+    assert refused[0].endswith("more than 2.5 m from key image 7, where the robot was lost")
+    assert result.state is MissionState.FAILED and "too_far" not in result.reason
+    assert [e.reason for e in result.events].count("relocalized") == 0

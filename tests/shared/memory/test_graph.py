@@ -137,6 +137,15 @@ class TestPlanRoute:
         with pytest.raises(UnknownKeyframeError, match="99"):
             memory.plan_route_from([0, 99], 1)
 
+    def test_key_images_within_a_radius_either_way(self, rng: np.random.Generator) -> None:
+        memory = loop_memory(rng)
+        # Corridor 0-3 (0.5 m steps), "back" 4-6 (1 m steps), junctions 3 <-> 4 and 6 <-> 0.
+        assert memory.within(2, 0.6) == {1, 2, 3, 4}  # 4 is 3 across a junction
+        assert memory.within(3, 1.0) == {1, 2, 3, 4, 5}  # across a junction, both ways
+        assert memory.within(0, 0.0) == {0, 6}
+        with pytest.raises(UnknownKeyframeError, match="99"):
+            memory.within(99, 1.0)
+
     @pytest.mark.parametrize(("start", "goal"), [(99, 0), (0, 99)])
     def test_unknown_id_is_named(self, rng: np.random.Generator, start: int, goal: int) -> None:
         with pytest.raises(UnknownKeyframeError, match="no key image with id 99") as error:
