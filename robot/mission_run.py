@@ -22,9 +22,7 @@ Rules of a cycle (:meth:`MissionRun.cycle`):
    follower. The route is the shortest from the key image found and from those of
    other paths that the junctions confirm are the same place
    (:func:`robot.memory.junctions.same_place`; a robot relocalized on a corridor that a
-   loop runs along takes the loop, not the long way round), but not from a key image of
-   another path from which it was lost before reaching any (the short way may be where
-   it cannot see: it takes its own path's way then). LOST, a localization counts only
+   loop runs along takes the loop, not the long way round). LOST, a localization counts only
    within ``MissionConfig.relocalize_radius_m`` of the key image the robot was heading
    for (it stood, or drove blind a metre at most: a key image farther away is a
    look-alike, a failed attempt). Found at the goal key image
@@ -186,7 +184,6 @@ class MissionRun:
         self._route: tuple[int, ...] = ()
         self._last: Transition | None = None
         self._reached = 0
-        self._lost_from: set[int] = set()  # route starts lost from before their first key image
         self._lost_near: int | None = None  # LOST: the key image the robot was heading for
 
     @property
@@ -339,7 +336,6 @@ class MissionRun:
         self._lost_near = None
         goal_id = self._mission.goal_id
         assert goal_id is not None  # set by Start
-        places = places[:1] + [place for place in places[1:] if place[1] not in self._lost_from]
         if any(nearest == goal_id != ahead for nearest, ahead in places):  # just past the goal
             self._feed(ArrivedInput(t_ns, goal_id))
             return found
@@ -374,8 +370,6 @@ class MissionRun:
                 f"reached key image {key} ({switch.reached_index + 1}/{len(follower.targets)})"))
             self._feed(ArrivedInput(t_ns, key) if switch.final else KeyImageReached(t_ns, key))
         if step.lost is not None:
-            if self._reached == 0:
-                self._lost_from.add(self._route[0])
             self._lost_near = self._route[min(self._reached, len(self._route) - 1)]
             self._events.append(AppEvent(t_ns, "lost", step.lost.reason, step.lost.message))
             self._feed(LostInput(t_ns, step.lost.message))

@@ -190,8 +190,7 @@ class MissionConfig:
     """LOST, the robot relocalizes only at key images within this distance of the one it
     was heading for, m, along the memory's paths and junctions either way: it stands, or
     drives blind at most the estimator's ``lost_distance_m``, so a key image farther away
-    is a look-alike (in the dark lab one 10 m back along the corridor sent a robot 288 m
-    astray)."""
+    is a look-alike (a corridor repeats its tiles and lamps every few metres)."""
     base_lost_action: str = "continue"
     """One of ``BASE_LOST_ACTIONS``: what a mission run does when the base stops reporting."""
 

@@ -182,17 +182,6 @@ def test_a_look_alike_on_another_path_is_no_start(monkeypatch) -> None:
     assert "no route from key image 7 to goal key image 21" in result.detail
 
 
-def test_another_path_lost_from_before_its_first_key_image_is_not_taken_again(
-        monkeypatch) -> None:
-    # Noise frames give the follower no estimate: lost from 18 before reaching it.
-    result = stretch_app(monkeypatch, ((17, 18),)).run(21, 10**11)
-    kinds = [(e.kind, e.reason) for e in result.events]
-    assert kinds.index(("localization", "same_place")) < kinds.index(("lost", "no_estimate"))
-    assert kinds.count(("localization", "same_place")) == 1
-    assert result.state is MissionState.FAILED and result.reason == "no_route"
-    assert "no route from key image 7 to goal key image 21" in result.detail
-
-
 def test_lost_a_look_alike_far_from_where_the_robot_was_lost_is_refused(monkeypatch) -> None:
     from robot.memory.localize import Localization
 
