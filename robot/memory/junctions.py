@@ -189,8 +189,8 @@ def junction_attempts(
     for k in sorted(
         range(len(found)), key=lambda k: (found[k][1] not in all_ends, -found[k][2], k)
     ):
-        best = found[k][1]
-        if best is None or found[k][2] < min_matches:
+        _, best, matches = found[k]
+        if best is None or matches < min_matches:
             continue
         if verified[k]:
             eligible.append(k)
