@@ -13,10 +13,21 @@ behaviour of VT&R systems (Furgale & Barfoot 2010 waited for people in the path)
 
 Rules (``SafetyConfig`` holds every distance and time):
 
-1. Echoes. A reading is one point on its sensor's axis at its range (ARIA's
-   ``ArSensorReading`` convention), fixed in the odometry frame where the robot stood
-   when it arrived and seen from where the robot stands now, so a 300 ms old echo
-   does not move with the robot. An echo that moved towards the robot over the same
+1. Echoes. A sonar's echo comes from somewhere on the arc of its cone at its range
+   (``beam_width_rad``). It is placed on the arc's point nearest the sensor's axis
+   (ARIA's ``ArSensorReading`` convention, when nothing says otherwise) that no reading
+   since the echo appeared has seen free: a reading sees nothing nearer than its range in
+   the middle of its cone (``clear_width_rad``), so the readings of the neighbouring
+   sonars, and of every sonar from where the robot stood a moment ago, rule out parts of
+   the arc (the robot's motion is the baseline that tells where on the arc a still
+   object lies: Moravec & Elfes's free-space evidence, without a map). The readings kept
+   for it are those taken within ``carve_distance_m`` of where the robot stands (and in
+   the last ``carve_window_ns``) since the sensor first returned about this range (a new
+   echo is not placed by what the sonars saw before it came); when they rule out the
+   whole arc the axis stands. The echo is fixed in the
+   odometry frame where the robot stood when it arrived and seen from where the robot
+   stands now, so a 300 ms old echo does not move with the robot. An echo whose axis point
+   moved towards the robot over the same
    sonar's last two intervals between readings (each time at least ``approach_min_m_s``,
    and each step shorter than ``approach_gate_m``: a longer one, or a single step, is the
    beam finding another surface) is something walking at it: it counts where it will be
@@ -57,6 +68,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import chain
+from typing import NamedTuple
+
+import numpy as np
 
 from robot.config import SafetyConfig
 from shared.interfaces import BaseState, Blocked, RangeReading
@@ -64,6 +79,14 @@ from shared.interfaces import BaseState, Blocked, RangeReading
 #: A bumper pressed this soon after the robot was last allowed to move is its own hit (it
 #: may still be braking: 0.33 s from 0.2 m/s on a P3-AT), ns.
 MOVING_GRACE_NS = 500_000_000
+#: A reading taken within this distance and heading of the same sensor's last kept one,
+#: with about its range, replaces it (rule 1: the readings of a robot standing still do
+#: not pile up), m and rad.
+SAME_PLACE_M = 0.02
+SAME_HEADING_RAD = math.radians(2.0)
+#: Where on its arc an echo is tried (rule 1), from the axis outwards: fractions of half
+#: the beam's width (every 3.75 degrees of a 30-degree beam).
+ARC_STEPS = np.array([0.0] + [sign * k / 4 for k in range(1, 5) for sign in (1, -1)])
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,6 +122,13 @@ class SafetyGovernor:
         self._stopped_since_ns: int | None = None  # rule 4: forward motion stopped
         self._clear_since_ns: int | None = None
         self._echoes: dict[tuple[float, float, float], _Echo] = {}  # rule 1, per sensor
+        # rule 1: per sensor, its readings taken near where the robot stands, (t_ns, x_m,
+        # y_m, heading_rad, range_m) of the sensor in the odometry frame; how many were
+        # ever kept
+        self._seen: dict[tuple[float, float, float], list[_Seen]] = {}
+        self._seen_count = 0
+        # rule 1: the last placements, keyed by the readings they were made from
+        self._placed: tuple[tuple[int, tuple[int, ...]], list[tuple[float, float]]] | None = None
 
     @property
     def config(self) -> SafetyConfig:
@@ -131,7 +161,7 @@ class SafetyGovernor:
         if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
-        points = self._echo_points(state, now_ns)
+        points = self._echo_points(state, now_ns, reverse=v_m_s < 0)
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, cfg, reverse=False)
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
@@ -188,18 +218,21 @@ class SafetyGovernor:
         return Blocked("obstacle", ahead_m, self._stopped_since_ns)
 
 
-    def _echo_points(self, state: BaseState, now_ns: int) -> list[tuple[float, float]]:
-        """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, moved
-        ahead in time when it comes towards the robot."""
+    def _echo_points(self, state: BaseState, now_ns: int,
+                     reverse: bool) -> list[tuple[float, float]]:
+        """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, placed on
+        its arc, moved ahead in time when it comes towards the robot; the robot is asked to
+        reverse or not (rule 2 looks behind or ahead)."""
         cfg = self._config
         x0, y0, yaw0 = state.odom_pose
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
+        fresh = [(r, self._track(r)) for r in state.ranges]
+        fresh = [(r, echo) for r, echo in fresh if now_ns - r.t_ns <= cfg.sonar_stale_ns]
+        self._forget(state.odom_pose, now_ns)
+        placed = self._placements([echo for _, echo in fresh], [
+            _faces(r, reverse) for r, _ in fresh])
         points = []
-        for r in state.ranges:
-            echo = self._track(r)
-            if now_ns - r.t_ns > cfg.sonar_stale_ns:
-                continue
-            wx, wy = echo.x_m, echo.y_m
+        for (r, echo), (wx, wy) in zip(fresh, placed, strict=True):
             to_x, to_y = x0 - wx, y0 - wy
             gap = math.hypot(to_x, to_y)
             if echo.approach_m_s >= cfg.approach_min_m_s and gap > 1e-9:
@@ -213,18 +246,20 @@ class SafetyGovernor:
         return points
 
     def _track(self, reading: RangeReading) -> _Echo:
-        """The reading's echo in the odometry frame and how fast it came towards where the
-        robot stood, from the same sensor's previous reading (rule 1)."""
+        """The reading's echo on its axis in the odometry frame, since when the sensor has
+        seen it, and how fast it came towards where the robot stood, from the same sensor's
+        previous reading (rule 1). A new reading joins the readings kept."""
         ox, oy, oyaw = reading.odom_pose
         sx, sy, sh = reading.sensor_pose
         c, s = math.cos(oyaw), math.sin(oyaw)
-        ex = sx + reading.range_m * math.cos(sh)
-        ey = sy + reading.range_m * math.sin(sh)
-        x, y = ox + c * ex - s * ey, oy + s * ex + c * ey
+        at_x, at_y, heading = ox + c * sx - s * sy, oy + s * sx + c * sy, oyaw + sh
+        x = at_x + reading.range_m * math.cos(heading)
+        y = at_y + reading.range_m * math.sin(heading)
         before = self._echoes.get(reading.sensor_pose)
         if before is not None and (before.t_ns, before.x_m, before.y_m) == (reading.t_ns, x, y):
             return before  # the same reading as at the last command
         step = 0.0
+        since_ns = reading.t_ns
         if before is not None and reading.t_ns > before.t_ns:
             moved_x, moved_y = x - before.x_m, y - before.y_m
             to_x, to_y = ox - before.x_m, oy - before.y_m
@@ -232,23 +267,157 @@ class SafetyGovernor:
             if math.hypot(moved_x, moved_y) <= self._config.approach_gate_m and gap > 1e-9:
                 towards = (moved_x * to_x + moved_y * to_y) / gap
                 step = max(0.0, towards * 1e9 / (reading.t_ns - before.t_ns))
+            travel = math.hypot(at_x - before.at_x_m, at_y - before.at_y_m)
+            turned = abs(math.remainder(heading - before.heading_rad, math.tau))
+            if (abs(reading.range_m - before.range_m) <= travel + self._config.free_margin_m
+                    and turned <= self._config.clear_width_rad / 2):
+                since_ns = before.since_ns  # still the same thing
         approach = 0.0 if before is None else min(step, before.step_m_s)
-        echo = _Echo(reading.t_ns, x, y, step, approach)
+        echo = _Echo(reading.t_ns, x, y, step, approach, at_x, at_y, heading, reading.range_m,
+                     since_ns, math.hypot(sx, sy))
         self._echoes[reading.sensor_pose] = echo
+        self._keep(reading.sensor_pose, _Seen(reading.t_ns, at_x, at_y, heading,
+                                              reading.range_m))
         return echo
+
+    def _keep(self, sensor: tuple[float, float, float], seen: _Seen) -> None:
+        """Keep a reading for rule 1; one that says what the sensor's last kept reading
+        said, from about the same place, only brings that one's time up to date."""
+        kept = self._seen.setdefault(sensor, [])
+        if kept:
+            last = kept[-1]
+            if (math.hypot(seen.x_m - last.x_m, seen.y_m - last.y_m) < SAME_PLACE_M
+                    and abs(math.remainder(seen.heading_rad - last.heading_rad, math.tau))
+                    < SAME_HEADING_RAD
+                    and abs(seen.range_m - last.range_m) < self._config.free_margin_m / 2):
+                kept[-1] = seen
+                return
+        kept.append(seen)
+        self._seen_count += 1
+
+    def _forget(self, odom_pose: tuple[float, float, float], now_ns: int) -> None:
+        """Drop the readings rule 1 no longer uses: taken more than ``carve_distance_m``
+        from where the robot stands now, or longer than ``carve_window_ns`` ago."""
+        cfg = self._config
+        x, y, _ = odom_pose
+        for sensor, kept in self._seen.items():
+            if kept and (now_ns - kept[0].t_ns > cfg.carve_window_ns or math.hypot(
+                    kept[0].x_m - x, kept[0].y_m - y) > cfg.carve_distance_m):
+                self._seen[sensor] = [
+                    r for r in kept if now_ns - r.t_ns <= cfg.carve_window_ns
+                    and math.hypot(r.x_m - x, r.y_m - y) <= cfg.carve_distance_m]
+
+    def _placements(self, echoes: list[_Echo], ahead: list[bool]) -> list[tuple[float, float]]:
+        """Rule 1: each echo's point of its arc nearest its axis that no reading kept since
+        the echo appeared saw free, (x_m, y_m) in the odometry frame. The axis point when
+        every point was seen free, or when the echo is too far to matter wherever it lies on
+        its arc: beyond the slow-down distance from the body for a sensor facing the way
+        the robot goes (``ahead``), beyond the circle rule 6 watches for the others."""
+        cfg = self._config
+        body = max(cfg.front_m, cfg.rear_m)
+        reach_ahead = body + cfg.slow_distance_m + cfg.half_width_m + cfg.side_margin_m
+        reach_turning = math.hypot(body, cfg.half_width_m) + cfg.turn_margin_m
+        points = [(echo.x_m, echo.y_m) for echo in echoes]
+        near = [i for i, echo in enumerate(echoes) if echo.range_m < echo.mount_m + (
+            reach_ahead if ahead[i] else reach_turning)]
+        if not near:
+            return points
+        key = (self._seen_count, tuple(echoes[i].t_ns for i in near))
+        if self._placed is not None and self._placed[0] == key:
+            for i, point in zip(near, self._placed[1], strict=True):
+                points[i] = point
+            return points
+        count = sum(len(kept) for kept in self._seen.values())
+        seen = np.fromiter(chain.from_iterable(chain.from_iterable(self._seen.values())),
+                           float, count=5 * count).reshape(count, 5)
+        arcs = np.array([(echoes[i].at_x_m, echoes[i].at_y_m, echoes[i].heading_rad,
+                          echoes[i].range_m, echoes[i].since_ns) for i in near])
+        placed = [(float(x), float(y)) for x, y in _unseen_points(arcs, seen, cfg)]
+        for i, (x, y) in zip(near, placed, strict=True):
+            if not math.isnan(x):
+                points[i] = (x, y)
+        self._placed = (key, [points[i] for i in near])
+        return points
+
+
+def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> np.ndarray:
+    """Rule 1's placement: each echo's point of its arc nearest its axis that no reading
+    since the echo appeared saw free.
+
+    Args:
+        arcs: (E, 5) the echoes: their sensor's x_m, y_m and heading_rad in the odometry
+            frame, their range_m, and since when (ns) the sensor returned about that range.
+        seen: (N, 5) the readings kept: t_ns, the sensor's x_m, y_m, heading_rad, range_m.
+        config: the beam's and the free view's widths and the range margin.
+
+    Returns:
+        (E, 2) the points, odometry frame, m; NaN where every point was seen free.
+    """
+    half_clear = config.clear_width_rad / 2
+    # Which readings can see any of an echo's arc: the arc lies within the circle around
+    # its axis point through its ends (E, N)
+    mx = arcs[:, 0] + arcs[:, 3] * np.cos(arcs[:, 2])
+    my = arcs[:, 1] + arcs[:, 3] * np.sin(arcs[:, 2])
+    radius = 2.0 * arcs[:, 3] * math.sin(config.beam_width_rad / 4)
+    dx = mx[:, None] - seen[:, 1]
+    dy = my[:, None] - seen[:, 2]
+    gap = np.hypot(dx, dy)
+    off = np.abs(np.remainder(np.arctan2(dy, dx) - seen[:, 3] + math.pi, math.tau) - math.pi)
+    spread = np.arcsin(np.minimum(1.0, radius[:, None] / np.maximum(gap, 1e-9)))
+    echo, reading = np.nonzero((gap - radius[:, None] < seen[:, 4] - config.free_margin_m)
+                               & (off <= half_clear + spread)
+                               & (seen[:, 0] >= arcs[:, 4:5]))
+    # The points of the arc (E, K), and which of them each of those readings saw free (P, K)
+    angles = arcs[:, 2:3] + ARC_STEPS * (config.beam_width_rad / 2)
+    qx = arcs[:, 0:1] + arcs[:, 3:4] * np.cos(angles)
+    qy = arcs[:, 1:2] + arcs[:, 3:4] * np.sin(angles)
+    seen = seen[reading]
+    dx = qx[echo] - seen[:, 1:2]
+    dy = qy[echo] - seen[:, 2:3]
+    squared = dx * dx + dy * dy
+    along = dx * np.cos(seen[:, 3:4]) + dy * np.sin(seen[:, 3:4])  # on the reading's axis
+    nearer = np.maximum(seen[:, 4:5] - config.free_margin_m, 0.0)
+    free = ((squared < nearer * nearer) & (along > 0.0)
+            & (along * along >= squared * math.cos(half_clear) ** 2))
+    carved = np.zeros(qx.shape, bool)
+    np.logical_or.at(carved, echo, free)
+    first = np.argmax(~carved, axis=1)
+    rows = np.arange(len(arcs))
+    placed = np.stack([qx[rows, first], qy[rows, first]], axis=1)
+    placed[carved[rows, first]] = np.nan
+    return placed
+
+
+class _Seen(NamedTuple):
+    """A reading kept for rule 1: when (ns), the sensor's place and heading in the
+    odometry frame (m, rad), its range (m)."""
+
+    t_ns: int
+    x_m: float
+    y_m: float
+    heading_rad: float
+    range_m: float
 
 
 @dataclass(frozen=True, slots=True)
 class _Echo:
-    """One sensor's latest echo: when (ns), where in the odometry frame (m), how fast it
-    came towards the robot since the sensor's previous echo, and the slower of that and
-    the interval before (m/s, >= 0)."""
+    """One sensor's latest echo: when (ns), its axis point in the odometry frame (m), how
+    fast it came towards the robot since the sensor's previous echo, and the slower of that
+    and the interval before (m/s, >= 0); the sensor's place and heading in the odometry
+    frame (m, rad), the range (m), since when the sensor has returned about this range
+    (ns), and how far the sensor sits from the robot's centre (m)."""
 
     t_ns: int
     x_m: float
     y_m: float
     step_m_s: float
     approach_m_s: float
+    at_x_m: float
+    at_y_m: float
+    heading_rad: float
+    range_m: float
+    since_ns: int
+    mount_m: float
 
 
 def _faces(reading: RangeReading, reverse: bool) -> bool:

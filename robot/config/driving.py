@@ -255,20 +255,38 @@ class SafetyConfig:
     approach_gate_m: float = 0.7
     """Two successive echoes of one sonar further apart than this are different things
     (the beam swept onto another surface), not one thing moving, m."""
+    beam_width_rad: float = math.radians(30.0)
+    """A sonar's cone: its echo comes from somewhere on the arc this wide at its range, rad
+    (30 degrees: the P3's Polaroid transducers)."""
+    clear_width_rad: float = math.radians(15.0)
+    """A reading shows free space (nothing nearer than its range) only in the middle of its
+    cone this wide, rad (15 degrees: where even a thin object echoes)."""
+    free_margin_m: float = 0.05
+    """A point counts as seen free by a reading only this much nearer than its range, m
+    (range noise and odometry drift over ``carve_window_ns``)."""
+    carve_distance_m: float = 1.0
+    """Readings taken within this distance of where the robot stands place an echo on its
+    arc (``robot.safety`` rule 1): the robot's motion is the baseline, m."""
+    carve_window_ns: int = 20_000_000_000
+    """...and only readings this recent (odometry drifts, turning most), ns."""
 
     def __post_init__(self) -> None:
         for name in ("stop_distance_m", "slow_distance_m", "front_m", "rear_m",
                      "half_width_m", "sonar_stale_ns", "wait_ns", "approach_min_m_s",
-                     "approach_gate_m"):
+                     "approach_gate_m", "beam_width_rad", "clear_width_rad"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "turn_margin_m",
-                     "approach_horizon_ns"):
+                     "approach_horizon_ns", "free_margin_m", "carve_distance_m",
+                     "carve_window_ns"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
         require(self.slow_distance_m > self.stop_distance_m,
                 f"slow_distance_m must be > stop_distance_m ({self.stop_distance_m}), "
                 f"got {self.slow_distance_m}")
         require(0 < self.min_speed_ratio <= 1,
                 f"min_speed_ratio must be in (0, 1], got {self.min_speed_ratio}")
+        require(self.clear_width_rad <= self.beam_width_rad,
+                f"clear_width_rad must be <= beam_width_rad ({self.beam_width_rad}), "
+                f"got {self.clear_width_rad}")
 
 
 @dataclass(frozen=True, slots=True)

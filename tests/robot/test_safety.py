@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -117,6 +118,47 @@ class TestForward:
         assert a.ahead_m == pytest.approx(0.35) and a.v_m_s == 0.0
 
 
+class TestArcs:
+    """Rule 1's placement on the arc: the +30 deg sonar (2) reads 0.5 m. On its axis the echo
+    is 0.35 m ahead of the front, 0.33 m left (inside the corridor's 0.35 m): a stop. The
+    object is at the cone's left edge (45 deg), 0.43 m left: beside the corridor."""
+
+    EDGE = (SONAR_POSES[2].x_m + 0.5 * math.cos(math.radians(45.0)),
+            SONAR_POSES[2].y_m + 0.5 * math.sin(math.radians(45.0)))
+    BACK = Pose2(-0.55, 0.0, 0.0)  # where the robot stood a second before
+
+    def range_from_back(self) -> float:
+        x, y, _ = SONAR_POSES[2]
+        return math.hypot(self.EDGE[0] - (x + self.BACK.x_m), self.EDGE[1] - y)
+
+    def test_on_its_axis_the_echo_stops_the_robot(self) -> None:
+        a = SafetyGovernor(CONFIG).assess(0, state({2: 0.5}), 0.2, 0.0)
+        assert a.blocked is not None and a.ahead_m == pytest.approx(0.347, abs=0.005)
+
+    def test_a_still_object_goes_where_the_neighbours_saw_nothing(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        # 0.55 m back, the +10 deg sonar (3) saw nothing through the axis point, and the
+        # +30 deg one already saw the object (its range shrank by less than the way driven)
+        governor.assess(0, state({2: self.range_from_back()}, at=self.BACK), 0.2, 0.0)
+        t = ns_from_s(1.0)
+        a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
+        assert a.blocked is None and a.v_m_s == 0.2 and a.ahead_m == math.inf
+
+    def test_a_new_echo_is_not_placed_by_what_the_sonars_saw_before_it(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        governor.assess(0, state(at=self.BACK), 0.2, 0.0)  # nothing then: it came since
+        t = ns_from_s(1.0)
+        a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
+        assert a.blocked is not None and a.ahead_m == pytest.approx(0.347, abs=0.005)
+
+    def test_readings_from_too_far_back_are_forgotten(self) -> None:
+        far = dataclasses.replace(CONFIG, carve_distance_m=0.3)
+        governor = SafetyGovernor(far)
+        governor.assess(0, state({2: self.range_from_back()}, at=self.BACK), 0.2, 0.0)
+        t = ns_from_s(1.0)
+        assert governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0).blocked is not None
+
+
 class TestHysteresis:
     def test_the_way_clears_after_the_margin_and_the_dwell(self) -> None:
         governor = SafetyGovernor(CONFIG)
@@ -215,6 +257,7 @@ class TestConfig:
         ({"slow_distance_m": 0.3}, "slow_distance_m must be > stop_distance_m"),
         ({"min_speed_ratio": 0.0}, "min_speed_ratio must be in"),
         ({"clear_dwell_ns": -1}, "clear_dwell_ns must be >= 0"),
+        ({"clear_width_rad": 0.6}, "clear_width_rad must be <= beam_width_rad"),
     ])
     def test_bad_values_are_refused(self, changes: dict[str, float], problem: str) -> None:
         with pytest.raises(ValueError, match=problem):

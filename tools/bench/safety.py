@@ -13,8 +13,9 @@ Four parts, each a key of the JSON:
 * ``e_stop``: ``--estops`` emergency stops on the hardware-in-the-loop rig
   (``vmnav robot`` as a process, the emulated Pioneer on TCP, the ground station on UDP):
   from the ground's send to the Pioneer's E_STOP, and to the body at rest, p50/p95/max;
-* ``governor``: the safety layer's cost per servo frame (one
-  :meth:`~robot.safety.SafetyGovernor.assess` on 16 fresh sonar readings), ms.
+* ``governor``: the safety layer's cost per servo frame (two
+  :meth:`~robot.safety.SafetyGovernor.assess` calls, the readings arriving as a P3 sends
+  them), ms.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ TARGETS: dict[str, tuple[str, float | str]] = {
     "blind_m_over_bound": ("<=", 0.0),
     "e_stop_latency_ms_p95": ("<", 100.0),
     "e_stop_at_rest_s_max": ("<=", 0.5),
-    "governor_ms_p95": ("<", 0.5),
+    "governor_frame_ms_p95": ("<", 0.5),
 }
 #: Braking allowed past the lost distance before the body stands: one frame at the route's
 #: 0.2 m/s and the Pioneer's deceleration to rest, m.
@@ -192,27 +193,56 @@ def e_stop_part(out: Path, repeats: int) -> dict[str, Any]:
 
 
 def governor_part(frames: int = 2000) -> dict[str, float]:
-    """The cost of one assessment with the 16 sonars of a P3-AT reading, ms."""
+    """The cost of the safety layer per frame and per assessment, the 16 sonars of a P3-AT
+    reading, ms.
+
+    As on the robot: two assessments per frame at 15 frames/s (the servo's command and the
+    base's), the readings arriving as the P3 sends them (each array fires one transducer
+    every 40 ms, a SIP every 100 ms carries those fired since), the robot driving at 0.2
+    m/s along the middle of a corridor 2 m wide. ``frame_ms``: a frame's two assessments;
+    ``ms``: one assessment; ``placing_ms``: the assessments that came with new readings
+    (their echoes placed on their arcs, rule 1 of ``robot.safety``).
+    """
     from robot.config import SafetyConfig
     from robot.safety import SafetyGovernor
-    from shared.aria.p3at import SONAR_POSES
+    from shared.aria.p3at import SONAR_POSES, SONARS_PER_ARRAY
     from shared.interfaces import BaseState, RangeReading
     from shared.pose import Pose2
 
     governor = SafetyGovernor(SafetyConfig())
-    times = []
-    for k in range(frames):
-        t_ns = k * 66_666_667
-        pose = Pose2(0.01 * k, 0.0, 0.001 * k)
-        readings = tuple(RangeReading(i, p, 0.5 + 0.2 * i, t_ns - 40_000_000 * (i % 8), pose)
-                         for i, p in enumerate(SONAR_POSES))
-        state = BaseState(pose, 0.01 * k, False, False, 13.0, True, ranges=readings)
+    frame_ns, sip_ns, ping_ns = 66_666_667, 100_000_000, 40_000_000
+    latest: dict[int, RangeReading] = {}
+    times, placing = [], []
+    for k in range(2 * frames):
+        t_ns = k * frame_ns // 2
+        pose = Pose2(0.2 * t_ns / 1e9, 0.0, 0.0)
+        sip_t = t_ns // sip_ns * sip_ns
+        at_sip = Pose2(0.2 * sip_t / 1e9, 0.0, 0.0)
+        # the pings each array fired (its transducers in turn) since the SIP before
+        for ping in range(max(0, (sip_t - sip_ns) // ping_ns), sip_t // ping_ns):
+            for array in range(2):
+                number = array * SONARS_PER_ARRAY + ping % SONARS_PER_ARRAY
+                _, y, heading = SONAR_POSES[number]
+                s = math.sin(heading)  # to the wall on its side (y = +-1 m)
+                wall_m = (math.copysign(1.0, s) - y) / s if abs(s) > 1e-3 else 5.0
+                latest[number] = RangeReading(number, SONAR_POSES[number], min(wall_m, 5.0),
+                                              sip_t, at_sip)
+        readings = tuple(latest[i] for i in sorted(latest))
+        state = BaseState(pose, 0.2, False, False, 13.0, True, ranges=readings)
         started = time.perf_counter_ns()
         governor.assess(t_ns, state, 0.2, 0.05)
-        times.append((time.perf_counter_ns() - started) / 1e6)
+        elapsed = (time.perf_counter_ns() - started) / 1e6
+        times.append(elapsed)
+        if t_ns - sip_t < frame_ns // 2 and readings:
+            placing.append(elapsed)
+    frame_times = sorted(a + b for a, b in zip(times[::2], times[1::2], strict=True))
     times.sort()
-    return {"ms_p50": round(times[len(times) // 2], 4),
-            "ms_p95": round(times[int(0.95 * len(times))], 4)}
+    placing.sort()
+    return {"frame_ms_p50": round(frame_times[len(frame_times) // 2], 4),
+            "frame_ms_p95": round(frame_times[int(0.95 * len(frame_times))], 4),
+            "ms_p50": round(times[len(times) // 2], 4),
+            "ms_p95": round(times[int(0.95 * len(times))], 4),
+            "placing_ms_p50": round(placing[len(placing) // 2], 4)}
 
 
 def summary(result: dict[str, Any]) -> dict[str, Any]:
@@ -234,7 +264,7 @@ def summary(result: dict[str, Any]) -> dict[str, Any]:
         figures["e_stop_latency_ms_p95"] = result["e_stop"]["latency_ms_p95"]
         figures["e_stop_at_rest_s_max"] = result["e_stop"]["at_rest_s_max"]
     if "governor" in result:
-        figures["governor_ms_p95"] = result["governor"]["ms_p95"]
+        figures["governor_frame_ms_p95"] = result["governor"]["frame_ms_p95"]
     return figures
 
 

@@ -121,6 +121,9 @@ class ScenarioResult:
     transitions: tuple[tuple[float, str, str], ...]
 
 
+#: The "beside" scenario's bin: its near face 9 cm outside the swept corridor of
+#: ``east_a`` (the robot's half width, 0.2525 m, plus the side margin, 0.1 m), m.
+BESIDE = (3.6, 10.0 + 0.2525 + 0.1 + 0.09 + 0.175)
 #: Where a scripted person waits before their walk: the corridor's far east end.
 PARKED = (26.0, 10.0)
 
@@ -144,12 +147,12 @@ def _person(person: int, wait_at: tuple[float, float], until_s: float,
 
 
 def _box(at: tuple[float, float], remove_at_s: float | None, *, sonar: bool = True,
-         size: tuple[float, float] = (0.4, 0.4)) -> Script:
+         size: tuple[float, float] = (0.4, 0.4), height_m: float = 0.8) -> Script:
     """A box placed at ``at`` when the mission starts, taken away at ``remove_at_s``."""
     def script(stage: Stage, t_s: float) -> None:
         if t_s == 0.0:
             stage.boxes["box"] = stage.sim.add_object(
-                PlacedObject("box", at, size, 0.8, sonar=sonar))
+                PlacedObject("box", at, size, height_m, sonar=sonar))
         elif remove_at_s is not None and t_s >= remove_at_s and "box" in stage.boxes:
             stage.sim.remove_object(stage.boxes.pop("box"))
     return script
@@ -172,6 +175,9 @@ def scenarios(stand_s: float = 90.0) -> dict[str, Scenario]:
         Scenario("towards", "a person walks along the corridor towards the robot and passes "
                  "it by a hand's breadth (the paper's Fig. 12)", "arrived", 1,
                  _person(0, PARKED, 0.5, (6.5, 10.55), (0.8, 10.55)), 60.0, False),
+        Scenario("beside", "a bin stands by the corridor's wall, 9 cm outside the robot's "
+                 "swept corridor (the building world's bin_corridor)", "arrived", 0,
+                 _box(BESIDE, None, size=(0.35, 0.35), height_m=0.55), 40.0, False),
         Scenario("glass_door", "a glass door the sonar does not hear closes the corridor",
                  "bumper", 0, _box((3.6, 10.0), None, sonar=False, size=(0.05, 1.9)),
                  40.0, False),

@@ -28,5 +28,7 @@ def test_scenario(name: str, east_a: tuple[Path, Path]) -> None:
     if name == "standing_long":
         assert result.detail.startswith("blocked: blocked for 5.")
         assert result.detail.endswith("s: holding")
+    if name == "beside":
+        assert result.waits == 0, "a bin beside the corridor stopped the robot"
     if name == "glass_door":
         assert result.detail.startswith("bumper")
