@@ -17,12 +17,12 @@ def add_parser(bench_sub: argparse._SubParsersAction,  # type: ignore[type-arg]
         help="issue 17: obstacle scenarios, people walking into the route, the emergency "
              "stop, the safety layer's cost",
         description="Run the safety scenarios (a person crossing, standing 10 s and 90 s, "
-        "walking towards the robot, a box on the route, a glass door the sonar misses) on "
-        "the lab's short route; repeat the demo's mission per world and seed with people "
-        "who do not avoid the robot and without them (contacts the robot caused, goals "
-        "reached, lateral RMS, distance driven without verified localization, from the "
-        "simulator's truth); time emergency stops on the hardware-in-the-loop rig; time "
-        "the safety layer per frame. Prints JSON; progress on stderr.")
+        "walking towards the robot, a box on the route, a bin beside it, a glass door the "
+        "sonar misses) on the lab's short route; repeat the demo's mission per world and "
+        "seed with people who do not avoid the robot and without them (contacts the robot "
+        "caused, goals reached, lateral RMS, distance driven without verified localization, "
+        "from the simulator's truth); time emergency stops on the hardware-in-the-loop rig; "
+        "time the safety layer per frame. Prints JSON; progress on stderr.")
     safety.add_argument("--config", metavar="FILE", help="vmnav TOML config file")
     safety.add_argument("--calibration", metavar="FILE",
                         help="camera calibration JSON [default: 800x600, 185 deg]")
