@@ -354,19 +354,21 @@ def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> 
         (E, 2) the points, odometry frame, m; NaN where every point was seen free.
     """
     half_clear = config.clear_width_rad / 2
-    # Which readings can see any of an echo's arc: the arc lies within the circle around
-    # its axis point through its ends (E, N)
+    cos_h, sin_h = np.cos(seen[:, 3]), np.sin(seen[:, 3])
+    # Which readings can see any of an echo's arc (E, N): the arc lies within the circle
+    # around its axis point through its ends, which must reach into the reading's free
+    # view (nearer than its range, and not farther from its middle than half_clear)
     mx = arcs[:, 0] + arcs[:, 3] * np.cos(arcs[:, 2])
     my = arcs[:, 1] + arcs[:, 3] * np.sin(arcs[:, 2])
-    radius = 2.0 * arcs[:, 3] * math.sin(config.beam_width_rad / 4)
+    radius = (2.0 * arcs[:, 3] * math.sin(config.beam_width_rad / 4))[:, None]
     dx = mx[:, None] - seen[:, 1]
     dy = my[:, None] - seen[:, 2]
-    gap = np.hypot(dx, dy)
-    off = np.abs(np.remainder(np.arctan2(dy, dx) - seen[:, 3] + math.pi, math.tau) - math.pi)
-    spread = np.arcsin(np.minimum(1.0, radius[:, None] / np.maximum(gap, 1e-9)))
-    echo, reading = np.nonzero((gap - radius[:, None] < seen[:, 4] - config.free_margin_m)
-                               & (off <= half_clear + spread)
-                               & (seen[:, 0] >= arcs[:, 4:5]))
+    along = dx * cos_h + dy * sin_h
+    across = np.abs(dy * cos_h - dx * sin_h)
+    echo, reading = np.nonzero(
+        (along > -radius) & (along - radius < seen[:, 4] - config.free_margin_m)
+        & (across * math.cos(half_clear) - along * math.sin(half_clear) <= radius)
+        & (seen[:, 0] >= arcs[:, 4:5]))
     # The points of the arc (E, K), and which of them each of those readings saw free (P, K)
     angles = arcs[:, 2:3] + ARC_STEPS * (config.beam_width_rad / 2)
     qx = arcs[:, 0:1] + arcs[:, 3:4] * np.cos(angles)
@@ -375,7 +377,7 @@ def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> 
     dx = qx[echo] - seen[:, 1:2]
     dy = qy[echo] - seen[:, 2:3]
     squared = dx * dx + dy * dy
-    along = dx * np.cos(seen[:, 3:4]) + dy * np.sin(seen[:, 3:4])  # on the reading's axis
+    along = dx * cos_h[reading, None] + dy * sin_h[reading, None]  # on the reading's axis
     nearer = np.maximum(seen[:, 4:5] - config.free_margin_m, 0.0)
     free = ((squared < nearer * nearer) & (along > 0.0)
             & (along * along >= squared * math.cos(half_clear) ** 2))
