@@ -266,14 +266,24 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
                 for route in routes]
     from tools.threads import compute_threads
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=compute_threads, initargs=(1,)) as pool:
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=compute_threads, initargs=(1,))
+    try:
         longest_first = sorted(routes, key=lambda route: -route.length_m)
         drives = {pool.submit(teach_in_sim, world, route, config, sim_config, camera): route.name
                   for route in longest_first}
         taught = {drives[drive]: _announce(drive.result(), started)
                   for drive in as_completed(drives)}
         return [taught[route.name] for route in routes]
+    except BaseException:
+        # Ctrl-C, SIGTERM (``tools.cli`` raises SystemExit) or a drive that failed: the
+        # other drives would run on for minutes, and outlive this process if it is then
+        # killed. The pool's are this process's only children while it teaches.
+        for worker in multiprocessing.active_children():
+            worker.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _announce(taught: TaughtRoute, started: float) -> TaughtRoute:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import socket
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -101,7 +102,7 @@ class PoolExecutor:
     def _start(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
             self.workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=set_worker_threads, initargs=(max(1, cpu_count() // self.workers),))
+            initializer=_start_worker, initargs=(max(1, cpu_count() // self.workers),))
 
     def teach_processes(self, memories: int) -> int | None:
         """The workers shared out: fewer memories than workers each drive routes in
@@ -124,6 +125,21 @@ class PoolExecutor:
             for worker in multiprocessing.active_children():  # the pool's are the only ones
                 worker.terminate()
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _start_worker(render_threads: int) -> None:
+    """A pool worker's start: its threads (:func:`set_worker_threads`), and SIGTERM (the
+    sweep abandoning its tasks, :meth:`PoolExecutor.close`) ending it with its own
+    children: a teach running in it drives its routes in processes of its own
+    (``tools.harness.teach``), which would otherwise run on for minutes, orphaned."""
+    set_worker_threads(render_threads)
+    signal.signal(signal.SIGTERM, _end_worker)
+
+
+def _end_worker(signum: int, frame: object) -> None:
+    for child in multiprocessing.active_children():
+        child.terminate()
+    os._exit(128 + signum)
 
 
 def check_reachable(address: str) -> None:

@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 import logging
 import math
+import multiprocessing
+import signal
 from pathlib import Path
 
 import numpy as np
@@ -128,3 +130,28 @@ def test_routes_driven_in_parallel_give_the_memory_driven_one_after_another(
     for key, record in one.memory.keyframes.items():
         assert np.array_equal(record.image, two.memory.keyframes[key].image)
 
+
+
+def test_an_interrupted_parallel_teach_stops_its_drives(
+        world: World, world_file: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C (or SIGTERM, which ``tools.cli`` turns into SystemExit) while the pool drives:
+    its processes are terminated, not awaited for minutes nor left behind when the command
+    is killed next."""
+    monkeypatch.setattr("tools.harness.teach.os.sched_getaffinity", lambda _pid: {0, 1})
+    drivers: list[multiprocessing.process.BaseProcess] = []
+
+    def interrupt(signum: int, frame: object) -> None:
+        drivers.extend(multiprocessing.active_children())
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 1.0)
+        with pytest.raises(KeyboardInterrupt):
+            teach_memory(world, ["east_a", "east_b"], CONFIG,
+                         SimConfig(world=str(world_file), seed=1), CAMERA, join=True)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+    assert len(drivers) == 2 and multiprocessing.active_children() == []
+    assert all(d.exitcode == -signal.SIGTERM for d in drivers), [d.exitcode for d in drivers]

@@ -1,8 +1,10 @@
 """The local pool: a worker that dies fails its task, and the pool goes on with a new one; an
-abandoned pool (Ctrl-C, SIGTERM) does not wait for its running tasks."""
+abandoned pool (Ctrl-C, SIGTERM) does not wait for its running tasks, nor leave their own
+processes behind."""
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import sys
 import time
@@ -49,6 +51,40 @@ def test_an_abandoned_pool_stops_its_running_task(tmp_path) -> None:
         running.result(timeout=0)
     with pytest.raises(ProcessLookupError):
         os.kill(worker, 0)
+
+
+def sleep_with_a_child(started: Path, seconds: float) -> None:
+    """A task that starts a process of its own (as a teach drives its routes), says so with
+    the child's process id, then sleeps."""
+    child = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(seconds,))
+    child.start()
+    started.write_text(str(child.pid))
+    time.sleep(seconds)
+
+
+def ended(pid: int) -> bool:
+    """The process is gone, or a zombie waiting for its new parent to reap it."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+def test_an_abandoned_pool_stops_the_processes_of_its_running_task(tmp_path) -> None:
+    pool = PoolExecutor(1)
+    started = tmp_path / "started"
+    try:
+        pool.submit(sleep_with_a_child, started, 600.0)
+        limit = time.monotonic() + 120
+        while not (started.exists() and started.read_text()) and time.monotonic() < limit:
+            time.sleep(0.05)
+    finally:
+        pool.close(abandon=True)
+    child = int(started.read_text())
+    limit = time.monotonic() + 60
+    while not ended(child) and time.monotonic() < limit:
+        time.sleep(0.05)
+    assert ended(child)
 
 
 def test_ray_not_installed_says_how_to_install(monkeypatch, tmp_path, capsys) -> None:
