@@ -98,9 +98,22 @@ def test_a_simulated_robot_goes_where_a_key_image_is_clicked(
                 " document.getElementById('target-caption').textContent"
                 ".includes(\"points matched with the camera's\");"),
                      "the matched points drawn on the target key image")
+            # The points' canvas covers the key image exactly, however wide its caption
+            # makes the figure (points once fell beside the image).
+            image, canvas = chromium.execute_script(
+                "return ['target-image', 'target-matches'].map(id => {"
+                " const r = document.getElementById(id).getBoundingClientRect();"
+                " return [r.left, r.top, r.width, r.height]; });")
+            assert canvas == pytest.approx(image, abs=1.0), (image, canvas)
             if path := os.environ.get("VMNAV_WEB_SCREENSHOT"):
                 time.sleep(3)  # a few seconds of plots for the picture (not a synchronisation)
-                chromium.find_element("id", "vehicle").screenshot(path)
+                wait_for(lambda: chromium.execute_script(
+                    "return document.getElementById('target-matches').dataset.points > 0;")
+                         and chromium.find_element("id", "vehicle").text.split("\n")[0]
+                         .endswith("following"), "the robot following, its points drawn")
+                vehicle = chromium.find_element("id", "vehicle")
+                chromium.execute_script("arguments[0].scrollIntoView();", vehicle)
+                vehicle.screenshot(path)
 
             chromium.find_element("id", "estop").click()
             wait_for(lambda: "emergency stop accepted" in
