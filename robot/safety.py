@@ -128,7 +128,8 @@ class SafetyGovernor:
         self._seen: dict[tuple[float, float, float], list[_Seen]] = {}
         self._seen_count = 0
         # rule 1: the last placements, keyed by the readings they were made from
-        self._placed: tuple[tuple[int, tuple[int, ...]], list[tuple[float, float]]] | None = None
+        self._placed: tuple[tuple[int, tuple[tuple[int, int], ...]],
+                            list[tuple[float, float]]] | None = None
 
     @property
     def config(self) -> SafetyConfig:
@@ -322,7 +323,7 @@ class SafetyGovernor:
             reach_ahead if ahead[i] else reach_turning)]
         if not near:
             return points
-        key = (self._seen_count, tuple(echoes[i].t_ns for i in near))
+        key = (self._seen_count, tuple((i, echoes[i].t_ns) for i in near))
         if self._placed is not None and self._placed[0] == key:
             for i, point in zip(near, self._placed[1], strict=True):
                 points[i] = point

@@ -151,6 +151,16 @@ class TestArcs:
         a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
         assert a.blocked is not None and a.ahead_m == pytest.approx(0.347, abs=0.005)
 
+    def test_reversing_places_the_echoes_behind_not_those_ahead(self) -> None:
+        # the front +10 deg and the rear -170 deg sonars (3 and 11) read 1 m at the same
+        # time: driving forward places the first, reversing the second (0.9 m behind)
+        both = state({3: 1.0, 11: 1.0})
+        governor = SafetyGovernor(CONFIG)
+        governor.assess(0, both, 0.2, 0.0)
+        backing = governor.assess(0, both, -0.2, 0.0)
+        alone = SafetyGovernor(CONFIG).assess(0, both, -0.2, 0.0)
+        assert backing.v_m_s == alone.v_m_s and -0.2 < backing.v_m_s < 0.0
+
     def test_readings_from_too_far_back_are_forgotten(self) -> None:
         far = dataclasses.replace(CONFIG, carve_distance_m=0.3)
         governor = SafetyGovernor(far)
