@@ -24,16 +24,16 @@ Rules (``SafetyConfig`` holds every distance and time):
    for it are those taken within ``carve_distance_m`` of where the robot stands (and in
    the last ``carve_window_ns``) since the sensor first returned about this range (a new
    echo is not placed by what the sonars saw before it came); when they rule out the
-   whole arc the axis stands. The echo is fixed in the
-   odometry frame where the robot stood when it arrived and seen from where the robot
-   stands now, so a 300 ms old echo does not move with the robot. An echo whose axis point
-   moved towards the robot over the same
-   sonar's last two intervals between readings (each time at least ``approach_min_m_s``,
-   and each step shorter than ``approach_gate_m``: a longer one, or a single step, is the
-   beam finding another surface) is something walking at it: it counts where it will be
-   ``approach_horizon_ns`` after now at the slower of the two speeds, so the robot stops
-   before a person who walks at it instead of meeting them at its stop line (a sonar sees
-   a person walking at 1 m/s up to 0.4 m late: its ring takes 320 ms).
+   whole arc the axis stands. The echo is fixed in the odometry frame where the robot
+   stood when it arrived and seen from where the robot stands now, so a 300 ms old echo
+   does not move with the robot. An echo whose axis point moved towards the robot over
+   the same sonar's last two intervals between readings (each time at least
+   ``approach_min_m_s``, and each step shorter than ``approach_gate_m``: a longer one, or
+   a single step, is the beam finding another surface) is something walking at it: it
+   counts where it will be ``approach_horizon_ns`` after now at the slower of the two
+   speeds, so the robot stops before a person who walks at it instead of meeting them at
+   its stop line (a sonar sees a person walking at 1 m/s up to 0.4 m late: its ring takes
+   320 ms).
 2. The swept corridor. Driving forward at (v, omega) the robot's centre follows the
    arc of curvature omega / v; its body sweeps the band of half-width ``half_width_m``
    + ``side_margin_m`` around that arc. An echo in the band at arc length s lies
