@@ -17,6 +17,7 @@ from sim._world_checks import place_picture
 from sim.landmarks import Surface
 from sim.renderer import RenderedFrame
 from sim.simulation import OCCLUDER_FILTER, Simulation
+from sim.world import World
 
 _MARGIN_M = 1.0
 _FOV_RAYS = 181
@@ -64,7 +65,8 @@ class MapCanvas:
 
 
 def draw_topdown(
-    sim: Simulation, frame: RenderedFrame, fov_deg: float, px_per_m: float = 30.0
+    sim: Simulation, frame: RenderedFrame, fov_deg: float, px_per_m: float = 30.0,
+    strokes: PictureStrokes | None = None,
 ) -> npt.NDArray[np.uint8]:
     """Draw the world, the robot and the camera's view of the field.
 
@@ -73,6 +75,8 @@ def draw_topdown(
         frame: the frame just rendered (its visible landmarks are highlighted).
         fov_deg: the lens's field of view, degrees (the fan drawn on the floor).
         px_per_m: map scale.
+        strokes: :func:`picture_strokes` of the world, when the caller keeps them for
+            many maps (placing the pictures on their walls is most of a map's cost).
 
     Returns:
         (H, W, 3) uint8 BGR image.
@@ -102,7 +106,7 @@ def draw_topdown(
     if len(sim.landmarks):
         _draw_patches(canvas, sim, frame)
     else:
-        _draw_pictures(canvas, sim, frame)
+        _draw_pictures(canvas, strokes or picture_strokes(sim.world), frame)
 
     positions, radius, _ = sim.people_state()
     for p in canvas.px(positions) if len(positions) else []:
@@ -125,17 +129,30 @@ def _draw_patches(canvas: MapCanvas, sim: Simulation, frame: RenderedFrame) -> N
         cv2.circle(canvas.image, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
 
 
-def _draw_pictures(canvas: MapCanvas, sim: Simulation, frame: RenderedFrame) -> None:
-    """Pictures on the walls as short strokes; those with a corner in view in red."""
-    seen = set((np.asarray(frame.visible_ids) // 4).tolist())
-    for i, picture in enumerate(sim.world.pictures):
-        place = place_picture(sim.world.walls, picture)
-        wall = sim.world.walls[place.wall]
+#: Each picture of a world as a stroke on the plan, a hand's breadth off its wall: (2, 2)
+#: its ends, world frame, m.
+PictureStrokes = list[npt.NDArray[np.float64]]
+
+
+def picture_strokes(world: World) -> PictureStrokes:
+    """The pictures on the walls as :data:`PictureStrokes`, in the world's order."""
+    strokes = []
+    for picture in world.pictures:
+        place = place_picture(world.walls, picture)
+        wall = world.walls[place.wall]
         d = np.subtract(wall.end, wall.start) / wall.length_m
         n = place.side * np.array([-d[1], d[0]]) * 0.12
-        width = (picture.size or sim.world.textures().get(picture.texture).size_m)[0]
+        width = (picture.size or world.textures().get(picture.texture).size_m)[0]
         centre = np.asarray(wall.start) + place.along_m * d + n
-        a, b = canvas.px([centre - 0.5 * width * d, centre + 0.5 * width * d])
+        strokes.append(np.array([centre - 0.5 * width * d, centre + 0.5 * width * d]))
+    return strokes
+
+
+def _draw_pictures(canvas: MapCanvas, strokes: PictureStrokes, frame: RenderedFrame) -> None:
+    """Pictures on the walls as short strokes; those with a corner in view in red."""
+    seen = set((np.asarray(frame.visible_ids) // 4).tolist())
+    for i, stroke in enumerate(strokes):
+        a, b = canvas.px(stroke)
         colour = _VISIBLE if i in seen else _LANDMARK[Surface.WALL]
         cv2.line(canvas.image, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), colour, 2,
                  cv2.LINE_AA)

@@ -32,6 +32,7 @@ from tools.harness.teach import TaughtMemory
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
+    from sim.topdown import PictureStrokes
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # after matplotlib.use: the backend must be chosen first
@@ -163,6 +164,7 @@ class VideoWriter:
         self._trail: list[tuple[float, float]] = []
         self._key_image_shown: tuple[int, npt.NDArray[np.uint8]] | None = None
         self._count = 0
+        self._strokes: PictureStrokes | None = None  # the map's pictures, placed once
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
         """Draw one cycle (called by :func:`tools.harness.demo.repeat_in_sim`)."""
@@ -202,9 +204,12 @@ class VideoWriter:
     def _map(self, sim: Simulation, frame: RenderedFrame,
              size: tuple[int, int]) -> npt.NDArray[np.uint8]:
         """The top-down map with the taught paths and the trail, fitted into ``size``."""
-        from sim.topdown import MapCanvas, draw_topdown
+        from sim.topdown import MapCanvas, draw_topdown, picture_strokes
 
-        top = draw_topdown(sim, frame, self._taught.memory.camera.fov_deg, _MAP_PX_PER_M)
+        if self._strokes is None:
+            self._strokes = picture_strokes(sim.world)
+        top = draw_topdown(sim, frame, self._taught.memory.camera.fov_deg, _MAP_PX_PER_M,
+                           self._strokes)
         canvas = MapCanvas(sim, _MAP_PX_PER_M)
         for path_id in self._taught.path_ids:
             ids = self._taught.memory.paths[path_id].keyframe_ids
