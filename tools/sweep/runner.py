@@ -4,10 +4,13 @@ The loop (the only code here that waits):
 
 1. Cases with a row in the results table are done (resumption); the others are grouped by
    the memory they repeat on (:attr:`tools.sweep.plan.Case.memory_name`).
-2. One teach task per memory is submitted first, so no two workers ever teach the same
-   memory; a memory taught before is found in its folder and reused.
-3. When a memory's teach ends, its cases are submitted; a teach that fails fails each of
-   its cases with the teach's traceback.
+2. One teach task per memory, so no two workers ever teach the same memory; a memory
+   taught before is found in its folder and reused. At most as many teaches are in
+   flight as the executor runs tasks at once, in the plan's order.
+3. When a memory's teach ends, its cases are submitted, then the next memory's teach:
+   rows come as the sweep goes, not only once every memory is taught (a 1,008-case plan
+   teaches 56 memories, hours of work), and a sweep stopped early has the rows of the
+   time it ran. A teach that fails fails each of its cases with the teach's traceback.
 4. Each case's row is appended to the table as it ends (whatever the order), with the
    code version, the case's options and its memory's teach time (the time to find it
    when it was taught before); a case that crashed (or whose worker died) is a
@@ -71,14 +74,23 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
     processes = executor.teach_processes(len(groups))
     teaches: dict[Future[Any], Path] = {}
     running: dict[Future[Any], tuple[Case, float | None]] = {}
+    untaught = list(groups.items())
+    pending: set[Future[Any]] = set()
+
+    def teach_next() -> None:
+        folder, group = untaught.pop(0)
+        future = _submit(executor, teach_task, group[0].memory_argv, folder, processes,
+                         executor.render_threads)
+        teaches[future] = folder
+        pending.add(future)
+
     with Progress(f"{description} on {executor.description}", len(todo)) as bar:
-        for folder, group in groups.items():
-            teaches[_submit(executor, teach_task, group[0].memory_argv, folder, processes,
-                            executor.render_threads)] = folder
-        pending = set(teaches)
         bar.update(0, f"teaching {len(groups)} memories")
+        while untaught and len(teaches) < max(1, executor.workers):
+            teach_next()
         while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            finished = wait(pending, return_when=FIRST_COMPLETED).done
+            pending -= finished
             for future in finished:
                 result = _result(future)
                 if future in running:
@@ -97,6 +109,8 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
                                         executor.render_threads)
                     running[submitted] = (case, result["teach_wall_time_s"])
                     pending.add(submitted)
+                if untaught:
+                    teach_next()
     return [rows[case.case_id] for case in cases]
 
 

@@ -9,13 +9,16 @@ import os
 import shutil
 import subprocess
 import sys
+from concurrent.futures import Future
 from pathlib import Path
 
 import pytest
 
 from tools.cli import main
 from tools.harness.short_routes import write_short_routes_world
+from tools.sweep.plan import read_plan
 from tools.sweep.results import FIGURES, TIMING, read_rows
+from tools.sweep.runner import run_sweep
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -93,3 +96,37 @@ def test_ray_gives_the_pool_s_figures(interrupted_sweep, tmp_path, capsys) -> No
         for key in FIGURES:
             if key not in TIMING:
                 assert row[key] == on_pool[row["case_id"]][key], key
+
+
+class RecordingExecutor:
+    """Runs nothing: each task succeeds at once; the order tasks were submitted in."""
+
+    description = "recording"
+    workers = 1
+    render_threads = None
+
+    def __init__(self) -> None:
+        self.submitted: list[str] = []
+
+    def teach_processes(self, memories: int) -> None:
+        return None
+
+    def submit(self, fn, *args) -> Future:
+        self.submitted.append(fn.__name__)
+        future: Future = Future()
+        future.set_result({"status": "ok", "teach_wall_time_s": 0.0})
+        return future
+
+    def close(self, abandon: bool = False) -> None:
+        pass
+
+
+def test_a_memory_s_cases_run_before_the_next_memory_is_taught(tmp_path) -> None:
+    """Rows come as the sweep goes: with one task at a time, each memory's teach is
+    followed by its cases, not every teach first."""
+    (tmp_path / "plan.toml").write_text("[axes]\nseed = [1, 2]\nlaw = ['paper', 'paper+ff']\n")
+    cases = read_plan(tmp_path / "plan.toml").cases()
+    executor = RecordingExecutor()
+    rows = run_sweep(cases, lambda case: tmp_path / case.memory_name, executor, None, "test")
+    assert [row["status"] for row in rows] == ["ok"] * 4
+    assert executor.submitted == ["teach_task", "case_task", "case_task"] * 2
