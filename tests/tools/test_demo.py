@@ -219,12 +219,41 @@ def test_after_a_relocalization_samples_are_measured_against_the_new_plan() -> N
                sample(3, following, (10, 11, 12), (1.0, 0.97, 0.0)),
                sample(4, following, (10, 11, 12), (2.0, 0.97, 0.0))]
     run = SimpleNamespace(samples=samples)
-    taught = SimpleNamespace(true_poses=true_poses)
+    taught = taught_paths(true_poses, [(0, 1, 2), (10, 11, 12)])
     errors = following_errors(run, taught)  # type: ignore[arg-type]
     assert errors is not None
     assert errors.lateral_m == pytest.approx([0.02, 0.02, -0.03, -0.03])
     assert errors.distance_m == pytest.approx([0.0, 1.0, 1.0, 2.0])
     assert len(plan_references(run, taught)) == 2  # type: ignore[arg-type]
+
+
+def taught_paths(true_poses: dict[int, tuple[float, float, float]],
+                 paths: list[tuple[int, ...]]) -> SimpleNamespace:
+    """A taught memory's stand-in: true poses and paths of key image ids."""
+    where = {k: SimpleNamespace(path_id=p, index=i)
+             for p, ids in enumerate(paths) for i, k in enumerate(ids)}
+    memory = SimpleNamespace(keyframe=where.__getitem__,
+                             paths={p: SimpleNamespace(keyframe_ids=ids)
+                                    for p, ids in enumerate(paths)})
+    return SimpleNamespace(true_poses=true_poses, memory=memory)
+
+
+def test_a_plan_made_between_two_key_images_is_measured_from_the_first() -> None:
+    # Key images 0-3 run north along x = 0, 2 m apart; relocalized 1.5 m before key image
+    # 2, on the taught path (3 cm beside it), the robot heads for 2: the plan is (2, 3).
+    true_poses = {k: (0.0, 2.0 * k, math.pi / 2) for k in range(4)}
+    base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
+                     stalled=False, battery_v=13.0, motors_enabled=True)
+    samples = [CycleSample(record=CycleRecord(
+        t_ns=t, state=MissionState.FOLLOWING, base=base, follow=None, localization=None,
+        route=(2, 3), compute_ns=0), pose_w=(0.03, y, math.pi / 2))
+        for t, y in enumerate((2.5, 3.0, 4.5))]
+    taught = taught_paths(true_poses, [(0, 1, 2, 3)])
+    errors = following_errors(SimpleNamespace(samples=samples), taught)  # type: ignore[arg-type]
+    assert errors is not None
+    assert errors.lateral_m == pytest.approx([-0.03, -0.03, -0.03])  # not 1.5 m, 1 m
+    assert plan_references(SimpleNamespace(samples=samples), taught)[0][0] == pytest.approx(
+        true_poses[1])  # type: ignore[arg-type]
 
 
 def test_the_summary_rounds_for_people() -> None:

@@ -8,7 +8,8 @@ its yaw minus the polyline's yaw interpolated at the closest point. The closest
 segment is searched a few segments ahead of the previous one (progress is
 monotonic; the first sample near the route's start), so a route that passes a
 place twice is measured against the right pass; after a relocalization, samples are
-measured against the route planned then. Errors count after the first settling distance
+measured against the route planned then, from the key image before its first on that
+path (:func:`reference_ids`). Errors count after the first settling distance
 (:func:`robot.control_law.settling_distance_m` of the start offset down to 5 cm).
 """
 
@@ -94,16 +95,28 @@ def track_errors(poses_w: FloatArray, reference_w: FloatArray) -> TrackErrors:
                        distance_m=np.concatenate([[0.0], np.cumsum(steps)]))
 
 
+def reference_ids(route: tuple[int, ...], taught: TaughtMemory) -> tuple[int, ...]:
+    """The key images a plan is measured against: the route, after the key image before
+    its first on that path (if any). A plan is made where the robot stands, between two
+    key images of a path, and heads for the second: the taught path it follows there runs
+    from the first. (Measured from the route's first key image alone, a robot relocalized
+    1.5 m before it, on the taught path, was 1.5 m off: ``building`` seed 2.)"""
+    first = taught.memory.keyframe(route[0])
+    if first.index == 0:
+        return route
+    return (taught.memory.paths[first.path_id].keyframe_ids[first.index - 1], *route)
+
+
 def plan_references(run: RepeatRun, taught: TaughtMemory) -> list[FloatArray]:
-    """(M, 3) true poses of each planned route's key images, in route order, one per plan
+    """(M, 3) true poses of each plan's :func:`reference_ids`, in route order, one per plan
     (a relocalization plans again)."""
     routes: list[tuple[int, ...]] = []
     for sample in run.samples:
         route = sample.record.route
         if route and (not routes or routes[-1] != route):
             routes.append(route)
-    return [np.array([taught.true_poses[k] for k in route], dtype=np.float64)
-            for route in routes]
+    return [np.array([taught.true_poses[k] for k in reference_ids(route, taught)],
+                     dtype=np.float64) for route in routes]
 
 
 def following_errors(run: RepeatRun, taught: TaughtMemory) -> TrackErrors | None:
@@ -122,7 +135,8 @@ def following_errors(run: RepeatRun, taught: TaughtMemory) -> TrackErrors | None
             blocks.append((record.route, []))
         blocks[-1][1].append(sample.pose_w)
     parts = [track_errors(np.array(poses, dtype=np.float64),
-                          np.array([taught.true_poses[k] for k in route], dtype=np.float64))
+                          np.array([taught.true_poses[k] for k in reference_ids(route, taught)],
+                                   dtype=np.float64))
              for route, poses in blocks if len(poses) >= 2]
     if not parts:
         return None
