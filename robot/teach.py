@@ -44,12 +44,15 @@ Rules of this implementation (:class:`KeyImageSelector`):
    image shares enough points (a fast turn, a blank wall), the next frame
    becomes the key image: the path stays connected and the record says how few
    points it shares.
-5. **Turns.** A frame turned (odometric yaw) more than ``max_turn_deg`` from the
-   key image cannot be the next one: it closes the segment as in rule 4. The
+5. **Turns and distance.** A frame turned (odometric yaw) more than ``max_turn_deg``
+   from the key image, or farther than ``max_spacing_m`` from it (odometric
+   distance), cannot be the next one: it closes the segment as in rule 4. The
    repeat matches the next key image in a bounded window, and in a turn the
    points move out of it long before too few of them are tracked (the ``campus``
-   U-turn, facing a bare end wall, had 34 corners and a 50 degree gap). This
-   adds to the paper's rule.
+   U-turn, facing a bare end wall, had 34 corners and a 50 degree gap); facing
+   distant landmarks, points stay tracked over metres, and the repeat's estimate
+   far from its key image drifts (``building``'s yard). This adds to the paper's
+   rule.
 6. **The end.** :meth:`KeyImageSelector.finish` makes the last frame a key
    image (a path must end where the drive ended: another path may join there).
 
@@ -218,13 +221,13 @@ class KeyImageSelector:
             tracks = self._tracks.update(current.features, self._front_end, self._config)
             m = self._threshold
             seen = self._last_seen = _Seen(current, tracks)
-            if self._tracks.alive >= m and not self._turned_too_far(current):
+            if self._tracks.alive >= m and not self._too_far(current):
                 if seen.shared >= m:
                     self._candidate, self._pending = seen, []
                 else:
                     self._pending.append(seen)
                 continue
-            # Rules 4 and 5: too few points live, or turned too far; close the
+            # Rules 4 and 5: too few points live, or turned or moved too far; close the
             # segment at the candidate, or at the first frame after the key image
             # if none shared M points.
             rest = [*self._pending, seen]
@@ -243,12 +246,14 @@ class KeyImageSelector:
             return ()
         return (self._start_from(self._last_seen),)
 
-    def _turned_too_far(self, frame: _Frame) -> bool:
-        """Rule 5: ``frame`` is turned more than ``max_turn_deg`` from the key image."""
+    def _too_far(self, frame: _Frame) -> bool:
+        """Rule 5: ``frame`` is turned more than ``max_turn_deg`` from the key image, or
+        farther than ``max_spacing_m`` from it."""
         assert self._key is not None
         turn = frame.odom_pose[2] - self._key.odom_pose[2]
         turn = math.atan2(math.sin(turn), math.cos(turn))
-        return abs(turn) > math.radians(self._config.max_turn_deg)
+        return (abs(turn) > math.radians(self._config.max_turn_deg)
+                or frame.distance_m - self._key.distance_m > self._config.max_spacing_m)
 
     def _start_from(self, seen: _Seen) -> SelectedKeyImage:
         """Make ``seen``'s frame the key image and restart tracking from its corners."""

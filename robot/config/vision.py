@@ -183,6 +183,12 @@ class TeachConfig:
     the repeat matches the next key image in a window of ``PathStateConfig.matching``'s
     radius (39.6 degrees), so a long
     gap in a turn leaves nothing to match (the ``campus`` U-turn had a 50 deg gap)."""
+    max_spacing_m: float = 1.0
+    """A key image is at most this far (odometric distance) from the previous one, m: far
+    from its key image the repeat's estimate rests on points seen from afar and drifts
+    (the open yard of ``building``, seed 2: key images 1.97 m apart on a straight run; 2 m
+    before the second the vision said 0.29 m to the left with the robot 3 cm from the
+    path, and the filter's gate rejected it until the robot was LOST)."""
     max_missed_frames: int = 2
     """A tracked point survives this many consecutive frames without a match (detector blinks)."""
     tracking: MatchConfig = field(default_factory=_tracking_match_config)
@@ -197,6 +203,8 @@ class TeachConfig:
     def __post_init__(self) -> None:
         require(self.min_path_length_m >= 0,
                 f"min_path_length_m must be >= 0, got {self.min_path_length_m}")
+        require(self.max_spacing_m > 0,
+                f"max_spacing_m must be > 0, got {self.max_spacing_m}")
         require(
             self.min_tracked_points >= 1,
             f"min_tracked_points must be >= 1, got {self.min_tracked_points}",

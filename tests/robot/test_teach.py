@@ -31,8 +31,10 @@ def select(visible: list[list[int]], config: TeachConfig, rng: np.random.Generat
 
 
 def teach_config(m: int, **changes: object) -> TeachConfig:
-    """M exactly (no reduction for key images with few corners), unless ``changes`` say so."""
-    return TeachConfig(min_tracked_points=m, **{"min_tracked_fraction": 1.0, **changes})
+    """M exactly (no reduction for key images with few corners) and no spacing bound (the
+    frames are 0.1 m apart), unless ``changes`` say so."""
+    return TeachConfig(min_tracked_points=m, **{"min_tracked_fraction": 1.0,
+                                                "max_spacing_m": 1e9, **changes})
 
 
 def oracle(
@@ -82,6 +84,15 @@ class TestKeyImageSelection:
                       frames_from_schedule([list(range(40))] * 13, rng))]
         selected = select_key_images(frames, blob_camera(), FEATURES,
                                      teach_config(30, max_turn_deg=15.0))
+        assert [s.frame_index for s in selected] == [0, 3, 6, 9, 12]
+
+    def test_a_long_straight_run_gets_a_key_image_every_max_spacing(
+        self, rng: np.random.Generator
+    ) -> None:
+        # The same 40 points in every frame, 0.1 m apart: the key image is the last frame
+        # within 0.35 m of the previous one.
+        selected = select(staggered(13, 40)[:1] * 13, teach_config(30, max_spacing_m=0.35),
+                          rng)
         assert [s.frame_index for s in selected] == [0, 3, 6, 9, 12]
 
     def test_turning_the_other_way_across_pi_counts_the_short_way(
