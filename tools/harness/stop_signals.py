@@ -13,6 +13,7 @@ the way out of a shutdown that does not end.
 
 from __future__ import annotations
 
+import multiprocessing
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -21,6 +22,14 @@ from types import FrameType
 
 #: The signals that stop a command: Ctrl-C, and a service manager's or `kill`'s stop.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+def terminate_children() -> None:
+    """SIGTERM every child process this process started with :mod:`multiprocessing` (a
+    process pool's workers, which a signal to this process does not reach), without
+    waiting for them."""
+    for child in multiprocessing.active_children():
+        child.terminate()
 
 
 @dataclass

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 from shared.errors import InputError
 from shared.pose import Pose2
+from tools.harness.stop_signals import terminate_children
 
 if TYPE_CHECKING:
     from robot.config import VmnavConfig
@@ -279,8 +280,7 @@ def _drive_routes(world: World, routes: list[Route], config: VmnavConfig,
         # Ctrl-C, SIGTERM (``tools.cli`` raises SystemExit) or a drive that failed: the
         # other drives would run on for minutes, and outlive this process if it is then
         # killed. The pool's are this process's only children while it teaches.
-        for worker in multiprocessing.active_children():
-            worker.terminate()
+        terminate_children()
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

@@ -20,6 +20,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 from shared.errors import InputError
+from tools.harness.stop_signals import terminate_children
 from tools.sweep.case import set_worker_threads
 
 #: Ray's object store on a local cluster, bytes: the tasks pass options and rows only.
@@ -122,8 +123,7 @@ class PoolExecutor:
         them first, so that a running task does not hold the sweep up for minutes (a SIGTERM
         reaches this process only, not the workers, as Ctrl-C in a terminal does)."""
         if abandon:
-            for worker in multiprocessing.active_children():  # the pool's are the only ones
-                worker.terminate()
+            terminate_children()  # the pool's are the only ones
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -137,8 +137,7 @@ def _start_worker(render_threads: int) -> None:
 
 
 def _end_worker(signum: int, frame: object) -> None:
-    for child in multiprocessing.active_children():
-        child.terminate()
+    terminate_children()
     os._exit(128 + signum)
 
 
