@@ -59,7 +59,7 @@ from robot.vision.frame_state import (
     key_segment_from_key_images,
     state_from_frame,
 )
-from robot.vision.front_end import make_front_end
+from robot.vision.front_end import check_front_end, make_front_end
 from robot.vision.path_state import PathCoordinates
 from shared.config import CameraMountConfig
 from shared.errors import DegenerateGeometryError
@@ -158,6 +158,7 @@ class RouteFollower:
     Raises:
         ValueError: the route is empty.
         UnknownKeyframeError: a route id is not in the memory.
+        MemoryFormatError: another front end than the config's described the memory.
     """
 
     def __init__(self, memory: VisualMemory, route: list[int], config: FollowerConfig,
@@ -167,6 +168,7 @@ class RouteFollower:
         self._rng = rng
         self.targets = targets_from_route(memory, route)
         self._front_end = make_front_end(config.features, memory.camera)
+        check_front_end(memory, config.features)
         self._estimator = Estimator(config.estimator, now_ns)
         self._paused_ns: int | None = None
         self._switching = SwitchState(route_length=len(self.targets))

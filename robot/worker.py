@@ -31,6 +31,7 @@ from robot.config import VmnavConfig
 from robot.memory.junctions import join_path
 from robot.memory.localize import Localizer
 from robot.mode_events import Event, PathNotStored, PathStored, PhotoFound, PhotoNotFound
+from robot.vision.front_end import front_end_label
 from shared.camera_model import CameraModel
 from shared.errors import InputError, VmnavError
 from shared.image_decode import photo_pixel_limit, read_grey
@@ -134,7 +135,7 @@ def store_path(memory_dir: Path, camera: CameraModel, name: str,
         check_no_orphans(memory_dir)
         memory = (read_memory(memory_dir) if (memory_dir / "manifest.json").exists()
                   else VisualMemory(camera))
-        path = memory.add_path(name, list(records))
+        path = memory.add_path(name, list(records), front_end_label(config.features, camera))
         attempts = join_path(memory, path, config.camera.mount, config.features,
                              config.localize, teach)
         write_memory(memory_dir, memory)

@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from robot.config import load_config
     from robot.field_log import FieldLog
     from robot.memory.junctions import join_path
+    from robot.vision.front_end import check_front_end, front_end_label
     from shared.memory import open_or_create, write_memory
     from sim.world import load_world
     from tools.harness.teach import find_route, teach_in_sim
@@ -74,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
     world = load_world(sim_config.world)
     route = find_route(world, args.route)
     memory = open_or_create(args.memory, camera)
+    check_front_end(memory, config.features)  # before driving, not after
     started = time.perf_counter()
     teach_log = None if args.log is None else FieldLog(
         dataclasses.replace(config.log, output_dir=str(args.log)), f"teach-{route.name}",
@@ -86,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
                               None if teach_log is None else teach_log.teach_frame)
     finally:
         log_stats = None if teach_log is None else teach_log.close()
-    path = memory.add_path(route.name, [k.record for k in taught.key_images])
+    path = memory.add_path(route.name, [k.record for k in taught.key_images],
+                           front_end_label(config.features, memory.camera))
     attempts = join_path(memory, path, config.camera.mount, config.features, config.localize,
                   config.teach)
     write_memory(args.memory, memory)

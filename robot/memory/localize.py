@@ -78,7 +78,7 @@ import numpy.typing as npt
 from robot.config import FeatureConfig, LocalizeConfig
 from robot.memory.verification import Verification, verify_bearings
 from robot.vision.features import Features, GreyImage
-from robot.vision.front_end import make_front_end
+from robot.vision.front_end import check_front_end, make_front_end
 from robot.vision.matching import Matches
 from shared.camera_model import CameraModel
 from shared.camera_mount import rotation_level_cam
@@ -250,10 +250,13 @@ class Localizer:
 
         Raises:
             UnknownKeyframeError: an id of ``keyframe_ids`` is not in the memory.
+            MemoryFormatError: another front end than ``feature_config``'s described the
+                memory (:func:`robot.vision.front_end.check_front_end`).
         """
         ids = sorted(memory.keyframes) if keyframe_ids is None else list(keyframe_ids)
         keyframes = [memory.keyframe(i) for i in ids]
         front_end = make_front_end(feature_config, memory.camera)
+        check_front_end(memory, feature_config)
         return cls(
             ids,
             [k.thumbnail for k in keyframes],

@@ -218,6 +218,7 @@ def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: st
     """
     from robot.memory.junctions import join_path
     from robot.teach import select_key_images
+    from robot.vision.front_end import front_end_label
     from shared.calibration import read_camera
     from shared.memory import open_or_create, write_memory
 
@@ -230,7 +231,8 @@ def build_path(logs: Sequence[Path], directory: Path, name: str, camera_file: st
     if not key_images:
         raise InputError(series_name(files), f"no camera frame lies within the odometry's span "
                          f"({frames.without_odometry} frames without a pose)")
-    path = memory.add_path(name, [k.record for k in key_images])
+    path = memory.add_path(name, [k.record for k in key_images],
+                           front_end_label(config.features, memory.camera))
     attempts = join_path(memory, path, config.camera.mount, config.features, config.localize,
                   config.teach)
     write_memory(directory, memory)

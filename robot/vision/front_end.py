@@ -11,12 +11,16 @@ and the camera model:
   mutually best pairs in a search window, optionally centred where a predicted
   rotation moves A's points;
 * :meth:`FrontEnd.features_from_keyframe` and :func:`stored_descriptors`: the
-  features a visual memory stores, back and forth.
+  features a visual memory stores, back and forth; :attr:`FrontEnd.label` names what
+  the descriptors are, which the memory records when taught
+  (``VisualMemory.front_end``) and :func:`check_front_end` compares.
 
 The method is ``FeatureConfig.method`` (docs/front-end.md compares them): the paper's
 ``harris-zncc`` (Courbon et al. 2008, sec. III-A) is the baseline and stays selectable.
 A memory keeps the descriptors as float32 rows whatever the method (bit strings as
-their byte values 0-255, exactly), so a memory is read back by the method that wrote it.
+their byte values 0-255, exactly), so a memory is read back by the method that wrote it:
+ORB, TEBLID and BEBLID all make 32 bytes, and a memory taught with one, followed with
+another, would match noise against noise without a word; the label is what refuses it.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ from robot.vision.lens_mask import lens_mask
 from robot.vision.matching import Matches, match_features
 from shared.camera_model import CameraModel
 from shared.errors import MemoryFormatError, check_shape
-from shared.memory import Keyframe
+from shared.memory import Keyframe, VisualMemory
 
 
 class FrontEnd:
@@ -111,6 +115,11 @@ class FrontEnd:
                         np.zeros(n, np.float32) if response is None else response, bearings)
 
     @property
+    def label(self) -> str:
+        """What this front end's descriptors are (:func:`front_end_label`)."""
+        return front_end_label(self.config, self.camera)
+
+    @property
     def descriptor_length(self) -> int:
         """D: values per descriptor (bytes of a bit string, floats of a row)."""
         if self.method == "harris-zncc":
@@ -159,6 +168,36 @@ class FrontEnd:
             matching = dataclasses.replace(
                 matching, min_zncc=1.0 - 2.0 * self.config.max_hamming_fraction)
         return match_features(feats_a, feats_b, matching, predicted)
+
+
+def front_end_label(config: FeatureConfig, camera: CameraModel) -> str:
+    """What the descriptors of ``config``'s front end on ``camera`` are: the method and the
+    window they describe, px on this lens (e.g. ``"orb, 31 px window"``). Descriptors of two
+    front ends with the same label may be compared; a memory records it when taught."""
+    sizes = PixelSizes.for_camera(config, camera)
+    if config.method == "harris-zncc":
+        return f"harris-zncc, {sizes.patch_px} px patches"
+    if config.method in ("sift", "akaze"):
+        return config.method
+    return f"{config.method}, {sizes.descriptor_px} px window"
+
+
+def check_front_end(memory: VisualMemory, config: FeatureConfig) -> None:
+    """Refuse a memory whose key images another front end than ``config``'s described (the
+    :attr:`VisualMemory.front_end` it records; a memory that records none passes).
+
+    Raises:
+        MemoryFormatError: the memory records another front end (one line: both, and what
+            to set).
+    """
+    label = front_end_label(config, memory.camera)
+    if memory.front_end is not None and memory.front_end != label:
+        method = memory.front_end.split(",")[0]
+        raise MemoryFormatError(
+            "visual memory",
+            f"its key images were described by front end {memory.front_end!r}, the config's "
+            f"[features] makes {label!r}: set [features] method = {method!r} (and its window) "
+            f"as when it was taught, or teach again")
 
 
 def make_front_end(config: FeatureConfig, camera: CameraModel,

@@ -248,10 +248,15 @@ class VisualMemory:
 
     Args:
         camera: the calibration of the camera that took every key image.
+        front_end: what described every key image's points, as the robot's front end names
+            itself (``robot.vision.front_end.FrontEnd.label``: its method and descriptor
+            window); None when unknown (a memory written before it was recorded). Set by
+            the first path added with one when the memory has none.
     """
 
-    def __init__(self, camera: CameraModel) -> None:
+    def __init__(self, camera: CameraModel, front_end: str | None = None) -> None:
         self._camera = camera
+        self._front_end = front_end
         self._keyframes: dict[int, Keyframe] = {}
         self._paths: dict[int, VisualPath] = {}
         self._junctions: list[Junction] = []
@@ -265,6 +270,7 @@ class VisualMemory:
         keyframes: Iterable[Keyframe],
         paths: Iterable[VisualPath],
         junctions: Iterable[Junction],
+        front_end: str | None = None,
     ) -> VisualMemory:
         """Assemble a memory from stored records, checking every rule.
 
@@ -273,7 +279,7 @@ class VisualMemory:
                 or on a path that does not list it at its index, or any rule of the
                 module docstring broken; names the record.
         """
-        memory = cls(camera)
+        memory = cls(camera, front_end)
         by_id: dict[int, Keyframe] = {}
         for keyframe in keyframes:
             if keyframe.id in by_id:
@@ -309,6 +315,11 @@ class VisualMemory:
         return self._camera
 
     @property
+    def front_end(self) -> str | None:
+        """What described the key images' points (class docstring), or None: unknown."""
+        return self._front_end
+
+    @property
     def keyframes(self) -> Mapping[int, Keyframe]:
         """Key images by id (read-only view)."""
         return MappingProxyType(self._keyframes)
@@ -334,7 +345,8 @@ class VisualMemory:
         except KeyError:
             raise UnknownKeyframeError(keyframe_id, len(self._keyframes)) from None
 
-    def add_path(self, name: str, records: Sequence[KeyframeRecord]) -> VisualPath:
+    def add_path(self, name: str, records: Sequence[KeyframeRecord],
+                 front_end: str | None = None) -> VisualPath:
         """Add a taught visual path; its key images get fresh ids in driving order.
 
         Thumbnails are made here (:func:`~shared.memory.keyframe.thumbnail_from_image`)
@@ -343,18 +355,27 @@ class VisualMemory:
         Args:
             name: what was taught, e.g. the route's name.
             records: the key images in driving order, at least one.
+            front_end: what described the records' points (class docstring); a memory
+                without paths takes it, a memory with another refuses the path.
 
         Returns:
             The new path (its id and its key image ids).
 
         Raises:
             MemoryFormatError: a record is invalid or breaks a rule (wrong image
-                size, time going backwards, ...); the memory is left unchanged.
+                size, time going backwards, ...), or the path was described by another
+                front end than the memory's key images; the memory is left unchanged.
         """
         path_id = max(self._paths, default=-1) + 1
         first_id = max(self._keyframes, default=-1) + 1
         if not records:
             raise MemoryFormatError(f"path {path_id} {name!r}", "has no key images")
+        if front_end is not None and self._front_end not in (None, front_end):
+            raise MemoryFormatError(
+                f"path {path_id} {name!r}",
+                f"taught with front end {front_end!r}, but the memory's key images were "
+                f"described by {self._front_end!r}: teach with the memory's [features] or "
+                f"into a new memory")
         origin_m = records[0].distance_m
         keyframes = [
             Keyframe(
@@ -374,6 +395,8 @@ class VisualMemory:
         ]
         path = VisualPath(id=path_id, name=name, keyframe_ids=tuple(k.id for k in keyframes))
         self._insert_path(path, keyframes)
+        if front_end is not None and not self._keyframes.keys() - set(path.keyframe_ids):
+            self._front_end = front_end
         return path
 
     def add_junction(self, junction: Junction) -> None:

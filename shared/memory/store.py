@@ -13,8 +13,9 @@ Manifest (all fields required, no others allowed)::
 
     {
      "format": "vmnav-memory",
-     "format_version": 1,
+     "format_version": 2,
      "camera": {... shared.calibration.camera_to_dict ...},
+     "front_end": "orb, 31 px window",
      "paths": [{"id": 0, "name": "corridor", "keyframe_ids": [0, 1, 2]}],
      "keyframes": [{"id": 0, "path_id": 0, "index": 0, "t_ns": 0,
                     "odom_pose": [0.0, 0.0, 0.0], "distance_m": 0.0}, ...],
@@ -23,12 +24,16 @@ Manifest (all fields required, no others allowed)::
 
 ``odom_pose`` is ``[x_m, y_m, yaw_rad]`` in the path's teach odometry frame;
 ``distance_m`` the odometric distance from the path's first key image, m.
+``front_end`` names what described the key images' points (``VisualMemory.front_end``:
+a memory's descriptors are compared only with descriptors of the same kind), or is
+null when unknown. Format version 1 (before ``front_end``) is read as unknown.
 
 Rules of writing (an interrupted write never leaves a memory that fails to load,
 nor one that loads with the wrong content):
 
 1. Writes only add. :func:`write_memory` refuses to drop or change a key image,
-   path or junction that ``DIR`` already holds, or to change its camera.
+   path or junction that ``DIR`` already holds, or to change its camera or a front end
+   it records (an unknown one may become known).
 2. Data files first, manifest last. The data files written are those of key
    images the current manifest does not list, so their names are fresh: no
    manifest on disk refers to them until the new manifest replaces the old one
@@ -78,10 +83,14 @@ from shared.memory.keyframe import (
 )
 
 FORMAT = "vmnav-memory"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+READ_VERSIONS = (1, 2)
+"""Format versions this vmnav reads (1: without ``front_end``)."""
 MANIFEST_NAME = "manifest.json"
 
-_FIELDS = ("format", "format_version", "camera", "paths", "keyframes", "junctions")
+_FIELDS = ("format", "format_version", "camera", "front_end", "paths", "keyframes", "junctions")
+_FIELDS_V1 = tuple(f for f in _FIELDS if f != "front_end")
+_MAX_FRONT_END_CHARS = 200
 _PATH_FIELDS = ("id", "name", "keyframe_ids")
 _KEYFRAME_FIELDS = ("id", "path_id", "index", "t_ns", "odom_pose", "distance_m")
 _JUNCTION_FIELDS = ("from_id", "to_id", "matches")
@@ -129,7 +138,8 @@ def read_memory(directory: str | Path) -> VisualMemory:
         descriptor_length = keyframes[0].descriptor_length if keyframes else None
         keyframes.append(_read_keyframe(directory, entry, i, camera, descriptor_length))
     try:
-        return VisualMemory.from_parts(camera, keyframes, manifest.paths, manifest.junctions)
+        return VisualMemory.from_parts(camera, keyframes, manifest.paths, manifest.junctions,
+                                       manifest.front_end)
     except MemoryFormatError as e:
         raise MemoryFormatError(manifest.path, f"{e.where}: {e.problem}") from None
 
@@ -246,6 +256,7 @@ class _Manifest:
     path: Path
     data: dict[str, Any]  # the parsed JSON, structure checked
     camera: CameraModel
+    front_end: str | None
     paths: tuple[VisualPath, ...]
     junctions: tuple[Junction, ...]
 
@@ -266,11 +277,18 @@ def _read_manifest(directory: Path) -> _Manifest:
     if data.get("format") != FORMAT:
         raise MemoryFormatError(path, f"format: expected {FORMAT!r}, got {data.get('format')!r}")
     version = data.get("format_version")
-    if type(version) is not int or version != FORMAT_VERSION:
+    if type(version) is not int or version not in READ_VERSIONS:
         raise MemoryFormatError(
-            path, f"format_version {version!r} is not supported (this vmnav reads {FORMAT_VERSION})"
+            path, f"format_version {version!r} is not supported (this vmnav reads "
+                  f"{' and '.join(map(str, READ_VERSIONS))})"
         )
-    _check_fields(path, "", data, _FIELDS)
+    _check_fields(path, "", data, _FIELDS if version >= 2 else _FIELDS_V1)
+    front_end = data.get("front_end")
+    if front_end is not None and (not isinstance(front_end, str) or not front_end.isprintable()
+                                  or not 0 < len(front_end) <= _MAX_FRONT_END_CHARS):
+        raise MemoryFormatError(
+            path, f"front_end: expected null or a printable text of 1-{_MAX_FRONT_END_CHARS} "
+                  f"characters, got {front_end!r:.60}")
     try:
         camera = camera_from_dict(data["camera"], "camera")
     except CalibrationError as e:
@@ -290,7 +308,8 @@ def _read_manifest(directory: Path) -> _Manifest:
         _record(path, f"junctions[{i}]", Junction, entry, _JUNCTION_FIELDS)
         for i, entry in enumerate(_array(path, "junctions", data["junctions"]))
     )
-    return _Manifest(path=path, data=data, camera=camera, paths=paths, junctions=junctions)
+    return _Manifest(path=path, data=data, camera=camera, front_end=front_end, paths=paths,
+                     junctions=junctions)
 
 
 def _read_keyframe(
@@ -410,6 +429,7 @@ def _manifest_from_memory(memory: VisualMemory) -> dict[str, Any]:
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "camera": camera_to_dict(memory.camera),
+        "front_end": memory.front_end,
         "paths": [
             {"id": p.id, "name": p.name, "keyframe_ids": list(p.keyframe_ids)}
             for p in sorted(memory.paths.values(), key=lambda p: p.id)
@@ -449,6 +469,9 @@ def _check_extends(where: Path, stored: dict[str, Any], new: dict[str, Any]) -> 
     refuse = "refusing to overwrite the memory stored there: "
     if stored["camera"] != new["camera"]:
         raise InputError(where, refuse + "it was taught with another camera calibration")
+    if stored.get("front_end") not in (None, new["front_end"]):
+        raise InputError(where, refuse + f"its key images were described by front end "
+                                         f"{stored['front_end']!r}, these by {new['front_end']!r}")
     for field, key in (("keyframes", "id"), ("paths", "id")):
         kept = {entry[key]: entry for entry in new[field]}
         for entry in stored[field]:

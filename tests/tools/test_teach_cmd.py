@@ -71,6 +71,20 @@ class TestTeach:
         route = memory.plan_route(start, goal)
         assert route[0] == start and route[-1] == goal and end_of_a in route
 
+    def test_another_front_end_is_refused_before_driving(self, taught: Taught,
+                                                         tmp_path: Path) -> None:
+        config = tmp_path / "teblid.toml"
+        config.write_text('[features]\nmethod = "teblid"\n')
+        before = (taught.memory / "manifest.json").read_bytes()
+        code, out, err = run(["teach", "--sim", "--world", str(taught.world), "--memory",
+                              str(taught.memory), "--route", "corridor", "--config", str(config)])
+        assert code != 0 and out == ""
+        assert err.strip().splitlines() == [
+            "vmnav teach: error: visual memory: its key images were described by front end "
+            "'orb, 31 px window', the config's [features] makes 'teblid, 31 px window': set "
+            "[features] method = 'orb' (and its window) as when it was taught, or teach again"]
+        assert (taught.memory / "manifest.json").read_bytes() == before
+
 
 class TestBadInput:
     @pytest.mark.parametrize(

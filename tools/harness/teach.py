@@ -212,6 +212,7 @@ def teach_memory(
             that does not load.
     """
     from robot.memory.junctions import join_path
+    from robot.vision.front_end import front_end_label
     from shared.memory import VisualMemory, open_or_create, write_memory
 
     routes = (list(world.routes) if route_names is None
@@ -230,7 +231,8 @@ def teach_memory(
     taught_routes: list[TaughtRoute] = []
     for taught in _drive_routes(world, routes, config, sim_config, camera, processes):
         route = taught.route
-        path = memory.add_path(route.name, [k.record for k in taught.key_images])
+        path = memory.add_path(route.name, [k.record for k in taught.key_images],
+                               front_end_label(config.features, memory.camera))
         if join:
             join_path(memory, path, config.camera.mount, config.features, config.localize,
                       config.teach)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from robot.config import FeatureConfig, MatchConfig
-from robot.vision.front_end import FrontEnd, make_front_end, stored_descriptors
+from robot.vision.front_end import FrontEnd, check_front_end, make_front_end, stored_descriptors
 from shared.camera_model import CameraModel
 from shared.errors import MemoryFormatError, ShapeError
 from shared.memory import KeyframeRecord, VisualMemory
@@ -111,3 +111,27 @@ class TestDefault:
         with pytest.raises(MemoryFormatError, match=r"key image 0: descriptors have 121 values, "
                                                     r"the front end 'orb' on this lens makes 32"):
             orb.features_from_keyframe(memory.keyframe(0))
+
+    def test_a_memory_of_another_bit_string_method_is_refused(self) -> None:
+        """ORB and TEBLID both make 32 bytes: only the label the memory records tells them
+        apart, and the follower and the localizer refuse the memory before matching."""
+        from robot.config import VmnavConfig
+        from robot.memory.localize import Localizer
+
+        orb = make_front_end(FeatureConfig(), CAMERA)
+        teblid_config = FeatureConfig(method="teblid")
+        assert orb.label == "orb, 31 px window"
+        assert make_front_end(teblid_config, CAMERA).label == "teblid, 31 px window"
+        image = _textured(7)
+        feats = orb.describe(image)
+        memory = VisualMemory(CAMERA)
+        memory.add_path("p", [KeyframeRecord(t_ns=0, odom_pose=(0.0, 0.0, 0.0), distance_m=0.0,
+                                             image=image, pixels_xy=feats.pixels_xy,
+                                             patches=stored_descriptors(feats))], orb.label)
+        check_front_end(memory, FeatureConfig())
+        config = VmnavConfig()
+        Localizer.from_memory(memory, config.camera.mount, config.features, config.localize)
+        with pytest.raises(MemoryFormatError, match=r"visual memory: its key images were "
+                           r"described by front end 'orb, 31 px window', the config's \[features\]"
+                           r" makes 'teblid, 31 px window': set \[features\] method = 'orb'"):
+            Localizer.from_memory(memory, config.camera.mount, teblid_config, config.localize)

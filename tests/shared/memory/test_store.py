@@ -27,6 +27,7 @@ from tools.bench.hostile_images import large_png
 
 def assert_same_memory(a: VisualMemory, b: VisualMemory) -> None:
     assert camera_to_dict(a.camera) == camera_to_dict(b.camera)
+    assert a.front_end == b.front_end
     assert a.paths == b.paths and a.junctions == b.junctions
     assert a.keyframes.keys() == b.keyframes.keys()
     for i, ka in a.keyframes.items():
@@ -52,7 +53,7 @@ class TestRoundTrip:
         directory, memory = stored
         assert_same_memory(read_memory(directory), memory)
         manifest = json.loads((directory / "manifest.json").read_text())
-        assert (manifest["format"], manifest["format_version"]) == ("vmnav-memory", 1)
+        assert (manifest["format"], manifest["format_version"]) == ("vmnav-memory", 2)
         assert sorted(p.name for p in (directory / "images").iterdir()) == [
             f"{i}.png" for i in range(7)
         ]
@@ -64,6 +65,24 @@ class TestRoundTrip:
     def test_empty_memory(self, tmp_path: Path) -> None:
         write_memory(tmp_path, VisualMemory(small_camera()))
         assert read_memory(tmp_path).keyframes == {}
+
+    def test_front_end_recorded(self, tmp_path: Path, rng: np.random.Generator) -> None:
+        memory = VisualMemory(small_camera())
+        memory.add_path("corridor", make_records(rng, memory.camera, [1.0]), "orb, 31 px window")
+        write_memory(tmp_path, memory)
+        assert read_memory(tmp_path).front_end == "orb, 31 px window"
+
+    def test_version_1_reads_as_unknown_front_end(
+        self, stored: tuple[Path, VisualMemory]
+    ) -> None:
+        directory, memory = stored
+        data = json.loads((directory / "manifest.json").read_text())
+        data["format_version"] = 1
+        del data["front_end"]
+        (directory / "manifest.json").write_text(json.dumps(data))
+        old = read_memory(directory)
+        assert old.front_end is None
+        assert_same_memory(old, memory)
 
 
 class TestAdding:
@@ -89,6 +108,24 @@ class TestAdding:
         with pytest.raises(InputError, match="another camera calibration"):
             add_path_to_disk(stored[0], other, "x", make_records(rng, other, [1.0]))
 
+    def test_path_of_another_front_end_refused(self, tmp_path: Path,
+                                               rng: np.random.Generator) -> None:
+        memory = VisualMemory(small_camera())
+        memory.add_path("corridor", make_records(rng, memory.camera, [1.0]), "orb, 31 px window")
+        with pytest.raises(MemoryFormatError, match="taught with front end 'teblid, 31 px "
+                                                    "window', but the memory's key images"):
+            memory.add_path("hall", make_records(rng, memory.camera, [1.0]),
+                            "teblid, 31 px window")
+        assert len(memory.paths) == 1
+        memory.add_path("hall", make_records(rng, memory.camera, [1.0]), "orb, 31 px window")
+        assert memory.front_end == "orb, 31 px window"
+
+    def test_unknown_front_end_stays_unknown(self, stored: tuple[Path, VisualMemory],
+                                             rng: np.random.Generator) -> None:
+        memory = read_memory(stored[0])
+        memory.add_path("spur", make_records(rng, memory.camera, [0.5]), "orb, 31 px window")
+        assert memory.front_end is None  # its older key images' front end is still unknown
+
     def test_read_modify_write_with_junctions(
         self, stored: tuple[Path, VisualMemory], rng: np.random.Generator
     ) -> None:
@@ -105,13 +142,19 @@ class TestAdding:
         self, stored: tuple[Path, VisualMemory], rng: np.random.Generator
     ) -> None:
         directory, memory = stored
+        described = VisualMemory.from_parts(memory.camera, memory.keyframes.values(),
+                                            memory.paths.values(), memory.junctions, "sift")
+        write_memory(directory, described)  # an unknown front end becomes known
         before = (directory / "manifest.json").read_bytes()
         unjoined = VisualMemory.from_parts(
-            memory.camera, memory.keyframes.values(), memory.paths.values(), memory.junctions[:1]
-        )
+            memory.camera, memory.keyframes.values(), memory.paths.values(), memory.junctions[:1],
+            "sift")
         other = VisualMemory(memory.camera)
-        other.add_path("corridor", make_records(rng, memory.camera, [0.5, 0.5, 0.5]))
+        other.add_path("corridor", make_records(rng, memory.camera, [0.5, 0.5, 0.5]), "sift")
+        relabelled = VisualMemory.from_parts(memory.camera, memory.keyframes.values(),
+                                             memory.paths.values(), memory.junctions, "orb")
         cases = [
+            (relabelled, "described by front end 'sift', these by 'orb'"),
             (unjoined, "its junction 6 -> 0 is missing here"),
             (other, "its key image 0 is missing or different here"),
             (VisualMemory(small_camera(200, 150)), "another camera calibration"),
@@ -239,7 +282,11 @@ BAD_INPUT: dict[str, tuple[Corruption, str]] = {
     ),
     "not an object": (write_file(manifest, lambda p: b"[1, 2]"), "JSON object, got an array"),
     "wrong format": (edit_manifest(lambda d: d.update(format="vmnav-camera")), "format: expected"),
-    "future version": (edit_manifest(lambda d: d.update(format_version=2)), "version 2 is not"),
+    "future version": (edit_manifest(lambda d: d.update(format_version=3)), "version 3 is not"),
+    "front end not text": (edit_manifest(lambda d: d.update(front_end=7)),
+                           "front_end: expected null or a printable text"),
+    "front end in version 1": (edit_manifest(lambda d: d.update(format_version=1)),
+                               "unknown field 'front_end'"),
     "version as text": (edit_manifest(lambda d: d.update(format_version="1")), "version '1' is"),
     "missing field": (edit_manifest(lambda d: d.pop("junctions")), "missing field 'junctions'"),
     "unknown field": (edit_manifest(lambda d: d.update(extra=1)), "unknown field 'extra'"),

@@ -70,7 +70,9 @@ def test_one_path_per_route_and_a_true_pose_per_key_image(
 
 def test_the_folder_holds_the_memory_and_its_truth(stored: tuple[Path, TaughtMemory]) -> None:
     folder, taught = stored
-    assert read_memory(folder / "memory").keyframes.keys() == taught.memory.keyframes.keys()
+    memory = read_memory(folder / "memory")
+    assert memory.keyframes.keys() == taught.memory.keyframes.keys()
+    assert memory.front_end == "orb, 31 px window"  # what described its points
     truth = json.loads((folder / "teach.json").read_text())
     assert truth["key"]["routes"] == ["east_a", "east_b"] and "joined" not in truth["key"]
     assert truth["path_ids"] == list(taught.path_ids)
