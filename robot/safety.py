@@ -39,10 +39,14 @@ Rules (``SafetyConfig`` holds every distance and time):
    + ``side_margin_m`` around that arc. An echo in the band at arc length s lies
    ``d = s - front_m`` ahead of the front. Reversing is the mirror image (rear sensors,
    ``rear_m``). Standing still, the corridor is the straight one ahead.
-3. The bound. The nearest echo ahead at d: at or inside ``stop_distance_m`` forward
-   motion stops; inside ``slow_distance_m`` the speed falls linearly with d, never
-   below ``min_speed_ratio`` of the command short of the stop line, and the turn
-   rate with it (the arc stays the one checked); beyond it the command passes.
+3. The bound. The nearest echo ahead at d: inside ``slow_distance_m`` the speed falls
+   linearly with d, never below ``min_speed_ratio`` of the command, and the turn rate
+   with it (the arc stays the one checked); beyond it the command passes. Forward motion
+   stops at or inside ``stop_distance_m`` only for an echo in the corridor's inner band,
+   within ``side_stop_margin_m`` of the swept body: one farther out, in the margin, lets
+   the robot creep past at the slowest ratio (a safety laser scanner's speed-dependent
+   fields: a bin beside the way, that the sonar cannot place on its cone, does not hold
+   the robot for good). Reversing stops for the whole corridor.
 4. Hysteresis. Once stopped, forward motion stays stopped until the nearest echo
    ahead has stayed beyond ``stop_distance_m`` + ``clear_margin_m`` for
    ``clear_dwell_ns``: a noisy echo near the line does not make the robot jerk.
@@ -97,8 +101,8 @@ class Assessment:
         v_m_s: the forward speed the base may get, m/s.
         omega_rad_s: the turn rate the base may get, rad/s.
         blocked: the hold that stops forward motion now, or None.
-        ahead_m: the nearest echo in the forward corridor, ahead of the front, m
-            (inf when none).
+        ahead_m: the nearest echo in the forward corridor's inner band (rule 3), ahead of
+            the front, m (inf when none).
     """
 
     v_m_s: float
@@ -163,7 +167,8 @@ class SafetyGovernor:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
         points = self._echo_points(state, now_ns, reverse=v_m_s < 0)
-        ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, cfg, reverse=False)
+        ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m,
+                                 cfg.half_width_m + cfg.side_stop_margin_m, reverse=False)
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
         if self._latched is not None:
@@ -171,10 +176,14 @@ class SafetyGovernor:
         if state.bumped:
             return Assessment(0.0, 0.0, blocked, ahead_m)
         v, omega = v_m_s, omega_rad_s
+        half = cfg.half_width_m + cfg.side_margin_m
         if v > 0:
-            ratio = 0.0 if blocked is not None else _speed_ratio(ahead_m, cfg)
+            # slowing down watches the whole corridor, stopping only its inner band
+            ratio = 0.0 if blocked is not None else _speed_ratio(_nearest_ahead(
+                points, v_m_s, omega_rad_s, cfg.front_m, half, reverse=False), cfg)
         elif v < 0:
-            behind_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.rear_m, cfg, reverse=True)
+            behind_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.rear_m, half,
+                                      reverse=True)
             silent = _silent(state, now_ns, cfg, reverse=True)
             ratio = 0.0 if silent or behind_m <= cfg.stop_distance_m else _speed_ratio(
                 behind_m, cfg)
@@ -436,17 +445,17 @@ def _silent(state: BaseState, now_ns: int, config: SafetyConfig, reverse: bool) 
 
 
 def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s: float,
-                   body_m: float, config: SafetyConfig, reverse: bool) -> float:
-    """Rule 2: the distance from the body's end to the nearest echo in the swept corridor,
-    m (0 when one is at or inside the end, inf when the corridor is empty)."""
+                   body_m: float, half_m: float, reverse: bool) -> float:
+    """Rule 2: the distance from the body's end to the nearest echo in the swept corridor
+    of half-width ``half_m``, m (0 when one is at or inside the end, inf when the corridor
+    is empty)."""
     sign = -1.0 if reverse else 1.0
     curvature = omega_rad_s / v_m_s if v_m_s * sign > 1e-6 else 0.0
-    half = config.half_width_m + config.side_margin_m
     nearest = math.inf
     for px, py in points:
         x = px * sign  # mirrored when reversing: the curvature keeps its sign
         s, lateral = _arc_coordinates(x, py, curvature)
-        if s > 0 and abs(lateral) <= half:
+        if s > 0 and abs(lateral) <= half_m:
             nearest = min(nearest, max(0.0, s - body_m))
     return nearest
 

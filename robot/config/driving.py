@@ -231,6 +231,11 @@ class SafetyConfig:
     """...and only after it stayed clear this long, ns."""
     side_margin_m: float = 0.1
     """The swept corridor is the robot's width plus this on each side, m."""
+    side_stop_margin_m: float = 0.03
+    """Only an echo within this of the robot's swept sides stops it (rule 3); one farther
+    out, still in the corridor, slows it no lower than ``min_speed_ratio``: it creeps
+    past, as a safety scanner's speed-dependent fields let a vehicle, m
+    (<= ``side_margin_m``)."""
     turn_margin_m: float = 0.05
     """Turning in place is refused while an echo lies within the circle the robot's
     corners sweep plus this, m."""
@@ -275,7 +280,8 @@ class SafetyConfig:
                      "half_width_m", "sonar_stale_ns", "wait_ns", "approach_min_m_s",
                      "approach_gate_m", "beam_width_rad", "clear_width_rad"):
             require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
-        for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "turn_margin_m",
+        for name in ("clear_margin_m", "clear_dwell_ns", "side_margin_m", "side_stop_margin_m",
+                     "turn_margin_m",
                      "approach_horizon_ns", "free_margin_m", "carve_distance_m",
                      "carve_window_ns"):
             require(getattr(self, name) >= 0, f"{name} must be >= 0, got {getattr(self, name)}")
@@ -284,6 +290,9 @@ class SafetyConfig:
                 f"got {self.slow_distance_m}")
         require(0 < self.min_speed_ratio <= 1,
                 f"min_speed_ratio must be in (0, 1], got {self.min_speed_ratio}")
+        require(self.side_stop_margin_m <= self.side_margin_m,
+                f"side_stop_margin_m must be <= side_margin_m ({self.side_margin_m}), "
+                f"got {self.side_stop_margin_m}")
         require(self.clear_width_rad <= self.beam_width_rad,
                 f"clear_width_rad must be <= beam_width_rad ({self.beam_width_rad}), "
                 f"got {self.clear_width_rad}")

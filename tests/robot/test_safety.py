@@ -105,6 +105,21 @@ class TestForward:
         a = SafetyGovernor(CONFIG).assess(0, state(side), 0.2, 0.0)
         assert a.v_m_s == 0.2 and a.ahead_m == math.inf
 
+    def test_an_echo_in_the_corridors_margin_only_slows_the_robot(self) -> None:
+        # the +30 deg sonar at 0.5 m: on its axis 0.35 m ahead, 0.33 m left: in the margin
+        # (the robot's half width 0.2525 m + 0.03 m stops it, + 0.1 m slows it)
+        a = SafetyGovernor(CONFIG).assess(0, state({2: 0.5}), 0.2, 0.0)
+        assert a.blocked is None and a.ahead_m == math.inf
+        assert a.v_m_s == pytest.approx(0.2 * CONFIG.min_speed_ratio)
+
+    def test_an_echo_within_the_stop_margin_stops_the_robot(self) -> None:
+        # the +10 deg sonar at 0.45 m: 0.69 m ahead of the centre (0.37 m ahead of the
+        # front), 0.10 m left
+        a = SafetyGovernor(CONFIG).assess(0, state({3: 0.45}), 0.2, 0.0)
+        narrow = dataclasses.replace(CONFIG, side_stop_margin_m=0.0, side_margin_m=0.0)
+        assert a.blocked is not None and a.v_m_s == 0.0
+        assert SafetyGovernor(narrow).assess(0, state({3: 0.45}), 0.2, 0.0).blocked is not None
+
     def test_the_corridor_follows_the_arc_of_the_command(self) -> None:
         left = {1: 0.3}  # ahead and to the left: (0.39, 0.35) m
         turning_left = SafetyGovernor(CONFIG).assess(0, state(left), 0.2, 0.4)  # R = 0.5 m
@@ -121,7 +136,11 @@ class TestForward:
 class TestArcs:
     """Rule 1's placement on the arc: the +30 deg sonar (2) reads 0.5 m. On its axis the echo
     is 0.35 m ahead of the front, 0.33 m left (inside the corridor's 0.35 m): a stop. The
-    object is at the cone's left edge (45 deg), 0.43 m left: beside the corridor."""
+    object is at the cone's left edge (45 deg), 0.43 m left: beside the corridor. With one
+    band (an echo anywhere in the corridor stops the robot: rule 3 before its inner band),
+    so that where the echo goes decides whether the robot stops."""
+
+    ONE_BAND = dataclasses.replace(CONFIG, side_stop_margin_m=CONFIG.side_margin_m)
 
     EDGE = (SONAR_POSES[2].x_m + 0.5 * math.cos(math.radians(45.0)),
             SONAR_POSES[2].y_m + 0.5 * math.sin(math.radians(45.0)))
@@ -132,11 +151,11 @@ class TestArcs:
         return math.hypot(self.EDGE[0] - (x + self.BACK.x_m), self.EDGE[1] - y)
 
     def test_on_its_axis_the_echo_stops_the_robot(self) -> None:
-        a = SafetyGovernor(CONFIG).assess(0, state({2: 0.5}), 0.2, 0.0)
+        a = SafetyGovernor(self.ONE_BAND).assess(0, state({2: 0.5}), 0.2, 0.0)
         assert a.blocked is not None and a.ahead_m == pytest.approx(0.347, abs=0.005)
 
     def test_a_still_object_goes_where_the_neighbours_saw_nothing(self) -> None:
-        governor = SafetyGovernor(CONFIG)
+        governor = SafetyGovernor(self.ONE_BAND)
         # 0.55 m back, the +10 deg sonar (3) saw nothing through the axis point, and the
         # +30 deg one already saw the object (its range shrank by less than the way driven)
         governor.assess(0, state({2: self.range_from_back()}, at=self.BACK), 0.2, 0.0)
@@ -145,7 +164,7 @@ class TestArcs:
         assert a.blocked is None and a.v_m_s == 0.2 and a.ahead_m == math.inf
 
     def test_a_new_echo_is_not_placed_by_what_the_sonars_saw_before_it(self) -> None:
-        governor = SafetyGovernor(CONFIG)
+        governor = SafetyGovernor(self.ONE_BAND)
         governor.assess(0, state(at=self.BACK), 0.2, 0.0)  # nothing then: it came since
         t = ns_from_s(1.0)
         a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
@@ -155,14 +174,14 @@ class TestArcs:
         # the front +10 deg and the rear -170 deg sonars (3 and 11) read 1 m at the same
         # time: driving forward places the first, reversing the second (0.9 m behind)
         both = state({3: 1.0, 11: 1.0})
-        governor = SafetyGovernor(CONFIG)
+        governor = SafetyGovernor(self.ONE_BAND)
         governor.assess(0, both, 0.2, 0.0)
         backing = governor.assess(0, both, -0.2, 0.0)
-        alone = SafetyGovernor(CONFIG).assess(0, both, -0.2, 0.0)
+        alone = SafetyGovernor(self.ONE_BAND).assess(0, both, -0.2, 0.0)
         assert backing.v_m_s == alone.v_m_s and -0.2 < backing.v_m_s < 0.0
 
     def test_readings_from_too_far_back_are_forgotten(self) -> None:
-        far = dataclasses.replace(CONFIG, carve_distance_m=0.3)
+        far = dataclasses.replace(self.ONE_BAND, carve_distance_m=0.3)
         governor = SafetyGovernor(far)
         governor.assess(0, state({2: self.range_from_back()}, at=self.BACK), 0.2, 0.0)
         t = ns_from_s(1.0)
