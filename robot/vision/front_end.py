@@ -11,7 +11,7 @@ and the camera model:
   mutually best pairs in a search window, optionally centred where a predicted
   rotation moves A's points;
 * :meth:`FrontEnd.features_from_keyframe` and :func:`stored_descriptors`: the
-  features a visual memory stores, back and forth; :attr:`FrontEnd.label` names what
+  features a visual memory stores, back and forth; :func:`front_end_label` names what
   the descriptors are, which the memory records when taught
   (``VisualMemory.front_end``) and :func:`check_front_end` compares.
 
@@ -20,7 +20,7 @@ The method is ``FeatureConfig.method`` (docs/front-end.md compares them): the pa
 A memory keeps the descriptors as float32 rows whatever the method (bit strings as
 their byte values 0-255, exactly), so a memory is read back by the method that wrote it:
 ORB, TEBLID and BEBLID all make 32 bytes, and a memory taught with one, followed with
-another, would match noise against noise without a word; the label is what refuses it.
+another, would match noise against noise without a word; the label refuses it.
 """
 
 from __future__ import annotations
@@ -113,11 +113,6 @@ class FrontEnd:
         n = pixels_xy.shape[0]
         return Features(pixels_xy, descriptors,
                         np.zeros(n, np.float32) if response is None else response, bearings)
-
-    @property
-    def label(self) -> str:
-        """What this front end's descriptors are (:func:`front_end_label`)."""
-        return front_end_label(self.config, self.camera)
 
     @property
     def descriptor_length(self) -> int:

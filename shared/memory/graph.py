@@ -249,7 +249,7 @@ class VisualMemory:
     Args:
         camera: the calibration of the camera that took every key image.
         front_end: what described every key image's points, as the robot's front end names
-            itself (``robot.vision.front_end.FrontEnd.label``: its method and descriptor
+            itself (``robot.vision.front_end.front_end_label``: its method and descriptor
             window); None when unknown (a memory written before it was recorded). Set by
             the first path added with one when the memory has none.
     """

@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from robot.config import FeatureConfig, MatchConfig
-from robot.vision.front_end import FrontEnd, check_front_end, make_front_end, stored_descriptors
+from robot.vision.front_end import (
+    FrontEnd,
+    check_front_end,
+    front_end_label,
+    make_front_end,
+    stored_descriptors,
+)
 from shared.camera_model import CameraModel
 from shared.errors import MemoryFormatError, ShapeError
 from shared.memory import KeyframeRecord, VisualMemory
@@ -120,14 +126,15 @@ class TestDefault:
 
         orb = make_front_end(FeatureConfig(), CAMERA)
         teblid_config = FeatureConfig(method="teblid")
-        assert orb.label == "orb, 31 px window"
-        assert make_front_end(teblid_config, CAMERA).label == "teblid, 31 px window"
+        label = front_end_label(FeatureConfig(), CAMERA)
+        assert label == "orb, 31 px window"
+        assert front_end_label(teblid_config, CAMERA) == "teblid, 31 px window"
         image = _textured(7)
         feats = orb.describe(image)
         memory = VisualMemory(CAMERA)
         memory.add_path("p", [KeyframeRecord(t_ns=0, odom_pose=(0.0, 0.0, 0.0), distance_m=0.0,
                                              image=image, pixels_xy=feats.pixels_xy,
-                                             patches=stored_descriptors(feats))], orb.label)
+                                             patches=stored_descriptors(feats))], label)
         check_front_end(memory, FeatureConfig())
         config = VmnavConfig()
         Localizer.from_memory(memory, config.camera.mount, config.features, config.localize)
