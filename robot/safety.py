@@ -42,11 +42,12 @@ Rules (``SafetyConfig`` holds every distance and time):
 3. The bound. The nearest echo ahead at d: inside ``slow_distance_m`` the speed falls
    linearly with d, never below ``min_speed_ratio`` of the command, and the turn rate
    with it (the arc stays the one checked); beyond it the command passes. Forward motion
-   stops at or inside ``stop_distance_m`` only for an echo in the corridor's inner band,
-   within ``side_stop_margin_m`` of the swept body: one farther out, in the margin, lets
-   the robot creep past at the slowest ratio (a safety laser scanner's speed-dependent
-   fields: a bin beside the way, that the sonar cannot place on its cone, does not hold
-   the robot for good). Reversing stops for the whole corridor.
+   stops at or inside ``stop_distance_m`` for an echo in the corridor's inner band,
+   within ``side_stop_margin_m`` of the swept body (by default the whole margin); one
+   farther out, in the margin, lets the robot creep past at the slowest ratio (a safety
+   laser scanner's speed-dependent fields: a bin beside the way, that the sonar cannot
+   place on its cone, need not hold the robot for good). Reversing stops for the whole
+   corridor.
 4. Hysteresis. Once stopped, forward motion stays stopped until the nearest echo
    ahead has stayed beyond ``stop_distance_m`` + ``clear_margin_m`` for
    ``clear_dwell_ns``: a noisy echo near the line does not make the robot jerk.
