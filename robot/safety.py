@@ -168,8 +168,9 @@ class SafetyGovernor:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
         points = self._echo_points(state, now_ns, reverse=v_m_s < 0)
-        ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m,
-                                 cfg.half_width_m + cfg.side_stop_margin_m, reverse=False)
+        stop_half = cfg.half_width_m + cfg.side_stop_margin_m
+        ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, stop_half,
+                                 reverse=False)
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
         if self._latched is not None:
@@ -180,8 +181,9 @@ class SafetyGovernor:
         half = cfg.half_width_m + cfg.side_margin_m
         if v > 0:
             # slowing down watches the whole corridor, stopping only its inner band
-            ratio = 0.0 if blocked is not None else _speed_ratio(_nearest_ahead(
-                points, v_m_s, omega_rad_s, cfg.front_m, half, reverse=False), cfg)
+            slow_m = ahead_m if half == stop_half else _nearest_ahead(
+                points, v_m_s, omega_rad_s, cfg.front_m, half, reverse=False)
+            ratio = 0.0 if blocked is not None else _speed_ratio(slow_m, cfg)
         elif v < 0:
             behind_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.rear_m, half,
                                       reverse=True)

@@ -255,8 +255,8 @@ class Localizer:
         """
         ids = sorted(memory.keyframes) if keyframe_ids is None else list(keyframe_ids)
         keyframes = [memory.keyframe(i) for i in ids]
-        front_end = make_front_end(feature_config, memory.camera)
         check_front_end(memory, feature_config)
+        front_end = make_front_end(feature_config, memory.camera)
         return cls(
             ids,
             [k.thumbnail for k in keyframes],
