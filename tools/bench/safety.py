@@ -7,7 +7,8 @@ Four parts, each a key of the JSON:
 * ``people``: per world and seed, the demo's repeat (:func:`tools.harness.demo.repeat_in_sim`)
   with ``--people`` people walking who do not avoid the robot, and the same seed
   without people: goals reached, lateral RMS with and without, contacts the robot
-  caused (moving towards a person) and people walking into a robot that stood still,
+  caused (moving towards a person) and people walking into a robot that stood still
+  (each contact: when, where in the robot frame, how fast the robot moved towards them),
   and the longest distance driven without a verified localization (true metres since
   the last vision estimate the filter took, or the last localization);
 * ``e_stop``: ``--estops`` emergency stops on the hardware-in-the-loop rig
@@ -130,6 +131,7 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
                     "lateral_rms_m": report["lateral_rms_m"],
                     "contacts_moving": truths[0].contacts_moving,
                     "contacts_still": truths[0].contacts_still,
+                    "contacts": [asdict(c) for c in truths[0].contacts],
                     "blind_m": round(blind_distance_m(list(run.samples)), 3),
                     "waits": sum(1 for e in run.result.events if e.reason == "obstacle"),
                 }
