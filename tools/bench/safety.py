@@ -66,23 +66,6 @@ def scenarios_part(out: Path) -> list[dict[str, Any]]:
     return rows
 
 
-def blind_distance_m(samples: list[Any]) -> float:
-    """The longest true distance driven between two verifications (a vision estimate the
-    filter took, or a localization), m, over a repeat's cycle samples."""
-    longest = driven = 0.0
-    previous = None
-    for sample in samples:
-        record = sample.record
-        if previous is not None:
-            driven += math.dist(previous[:2], sample.pose_w[:2])
-        previous = sample.pose_w
-        longest = max(longest, driven)
-        localized = record.localization is not None and record.localization.ok
-        if localized or (record.follow is not None and record.follow.verified):
-            driven = 0.0
-    return longest
-
-
 def people_part(worlds: list[str], seeds: range, people: int, out: Path,
                 args: argparse.Namespace) -> dict[str, Any]:
     """Per world: the seeds' repeats with and without people (module docstring)."""
@@ -95,7 +78,7 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
         repeat_in_sim,
         taught_memory,
     )
-    from tools.harness.safety_scenarios import SafetyTruth
+    from tools.harness.safety_truth import SafetyTruth, blind_distance_m
     from tools.harness.sim_args import sim_config_from_args
 
     config = load_config(args.config)

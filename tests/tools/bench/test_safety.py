@@ -1,15 +1,15 @@
 """Tests of ``vmnav bench safety`` (tools/bench/safety.py): its cheap part through the
-command line, its truth helpers on made-up samples (the scenarios have their own tests in
-tests/tools/harness/test_safety_scenarios.py, the emergency stop its fault case)."""
+command line and its summary (the scenarios have their own tests in
+tests/tools/harness/test_safety_scenarios.py, the truth in test_safety_truth.py, the
+emergency stop its fault case)."""
 
 from __future__ import annotations
 
 import json
-from types import SimpleNamespace
 
 import pytest
 
-from tools.bench.safety import blind_distance_m, summary
+from tools.bench.safety import summary
 from tools.cli import main
 
 
@@ -31,19 +31,6 @@ def test_bad_arguments_are_one_line(args: list[str], message: str,
                                     capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["bench", "safety", *args]) == 1
     assert message in capsys.readouterr().err
-
-
-def sample(x: float, *, verified: bool = False, localized: bool = False) -> SimpleNamespace:
-    follow = SimpleNamespace(verified=verified)
-    localization = SimpleNamespace(ok=True) if localized else None
-    return SimpleNamespace(pose_w=(x, 0.0, 0.0), record=SimpleNamespace(
-        follow=None if localized else follow, localization=localization))
-
-
-def test_blind_distance_restarts_at_each_verification() -> None:
-    samples = [sample(0.0, localized=True), sample(0.3), sample(0.5, verified=True),
-               sample(0.9), sample(1.6), sample(1.7, verified=True), sample(1.8)]
-    assert blind_distance_m(samples) == pytest.approx(1.2)  # 0.5 -> 1.7
 
 
 def test_summary_holds_the_parts_that_ran() -> None:

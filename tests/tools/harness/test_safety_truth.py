@@ -1,17 +1,18 @@
-"""The simulator's judgement of contacts (tools.harness.safety_scenarios.SafetyTruth), in a
-bare room: who moved into whom, where and when."""
+"""The simulator's judgement (tools/harness/safety_truth.py): contacts in a bare room (who
+moved into whom, where and when), the distance driven blind on made-up samples."""
 
 from __future__ import annotations
 
 import json
 from dataclasses import asdict
+from types import SimpleNamespace
 
 import pytest
 
 from robot.config import VmnavConfig
 from tests.sim.rooms import box_room
 from tests.sim.test_people import people_sim
-from tools.harness.safety_scenarios import MOVING_M_S, SafetyTruth
+from tools.harness.safety_truth import MOVING_M_S, SafetyTruth, blind_distance_m
 
 
 def test_a_person_walking_into_the_standing_robot_is_a_contact_of_theirs() -> None:
@@ -58,3 +59,16 @@ def test_a_person_walking_into_the_side_of_the_robot_driving_past_is_not_its_con
     contact = truth.contacts[0]
     assert contact.y_m < 0 and abs(contact.x_m) < sim.config.body.length_m / 2
     assert contact.speed_m_s > 0.1 and not contact.moving
+
+
+def sample(x: float, *, verified: bool = False, localized: bool = False) -> SimpleNamespace:
+    follow = SimpleNamespace(verified=verified)
+    localization = SimpleNamespace(ok=True) if localized else None
+    return SimpleNamespace(pose_w=(x, 0.0, 0.0), record=SimpleNamespace(
+        follow=None if localized else follow, localization=localization))
+
+
+def test_blind_distance_restarts_at_each_verification() -> None:
+    samples = [sample(0.0, localized=True), sample(0.3), sample(0.5, verified=True),
+               sample(0.9), sample(1.6), sample(1.7, verified=True), sample(1.8)]
+    assert blind_distance_m(samples) == pytest.approx(1.2)  # 0.5 -> 1.7
