@@ -7,6 +7,9 @@ What it says, over all cases and per value of each axis that varies:
   goal is one intervention) with its exact Poisson interval (:func:`distance_per_failure`);
 * the lateral error's distribution: the empirical CDF of each case's lateral RMS and max
   after settling (``tools.figures.demo_report.track_metrics``);
+* the safety layer, from the simulator's truth: contacts with a person the robot moved
+  towards, people walking into it, waits for an obstacle; where the ``people`` axis
+  varies, the lateral RMS with people minus the same case without;
 * the worst cases (not reached first, then by lateral max) with the ``vmnav demo``
   command that reruns each alone, with video.
 
@@ -52,10 +55,27 @@ def group_figures(rows: Sequence[Row]) -> dict[str, Any]:
     per_failure = distance_per_failure(km, len(rows) - reached)
     rms = sorted(float(r["lateral_rms_m"]) for r in rows if r["lateral_rms_m"] is not None)
     worst = [float(r["lateral_max_m"]) for r in rows if r["lateral_max_m"] is not None]
+    judged = [r for r in rows if r.get("contacts_moving") is not None]
     return {"runs": len(rows), "reached": reached, "rate": rate, "km": km,
             "km_per_failure": per_failure,
             "lateral_rms_median_m": rms[len(rms) // 2] if rms else None,
-            "lateral_max_worst_m": max(worst) if worst else None}
+            "lateral_max_worst_m": max(worst) if worst else None,
+            "judged": len(judged),
+            "contacts_moving": sum(int(r["contacts_moving"]) for r in judged),
+            "contacts_still": sum(int(r["contacts_still"]) for r in judged),
+            "obstacle_waits": sum(int(r["obstacle_waits"]) for r in judged)}
+
+
+def people_rms_deltas(rows: Sequence[Row]) -> list[float]:
+    """Lateral RMS with people minus without, m: each case with people paired with the case
+    of the same other axes and no people (``people`` 0 or the default), where both have it."""
+    def others(row: Row) -> tuple[str, ...]:
+        return tuple(repr(row.get(name)) for name in AXES if name != "people")
+
+    without = {others(r): r["lateral_rms_m"] for r in rows if not r.get("people")
+               and r["lateral_rms_m"] is not None}
+    return [float(r["lateral_rms_m"]) - float(without[others(r)]) for r in rows
+            if r.get("people") and r["lateral_rms_m"] is not None and others(r) in without]
 
 
 def write_report(rows: Sequence[Row], plan: dict[str, Any], cases_planned: int,
@@ -90,6 +110,11 @@ def write_report(rows: Sequence[Row], plan: dict[str, Any], cases_planned: int,
                   *_table([(value, group_figures(group)) for value, group in groups]), "",
                   f"![success rate by {name}](success_{name}.png) "
                   f"![lateral error by {name}](lateral_{name}.png)", ""]
+        deltas = sorted(people_rms_deltas(done)) if name == "people" else []
+        if deltas:
+            lines += [f"Lateral RMS with people minus the same case without: median "
+                      f"{_cm(deltas[len(deltas) // 2])}, largest {_cm(deltas[-1])} "
+                      f"({len(deltas)} pairs).", ""]
         _plot_rates(out / f"success_{name}.png", name, groups)
         _plot_lateral(out / f"lateral_{name}.png", name, groups)
     lines += _worst_lines(done) + _crashed_lines(crashed)
@@ -114,15 +139,20 @@ def _groups(rows: Sequence[Row], name: str) -> list[tuple[str, list[Row]]]:
 
 def _table(groups: list[tuple[str, dict[str, Any]]]) -> list[str]:
     lines = ["| value | runs | reached | success rate [95 % CI] | km driven | "
-             "km per intervention [95 % CI] | lateral RMS median | lateral max worst |",
-             "|---|---|---|---|---|---|---|---|"]
+             "km per intervention [95 % CI] | lateral RMS median | lateral max worst | "
+             "contacts: robot moving / person walking in | obstacle waits |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for value, f in groups:
         rate, per = f["rate"], f["km_per_failure"]
+        # the safety columns count the cases judged (rows of sweeps run before: none)
+        judged = f"{f['contacts_moving']} / {f['contacts_still']} | {f['obstacle_waits']}" + (
+            f" ({f['judged']} of {f['runs']} runs judged)" if f["judged"] < f["runs"] else "")
         lines.append(
             f"| {value} | {f['runs']} | {f['reached']} | {100 * rate.value:.1f} % "
             f"[{100 * rate.low:.1f}, {100 * rate.high:.1f}] | {f['km']:.3f} | "
             f"{_km(per.value_km)} [{_km(per.low_km)}, {_km(per.high_km)}] | "
-            f"{_cm(f['lateral_rms_median_m'])} | {_cm(f['lateral_max_worst_m'])} |")
+            f"{_cm(f['lateral_rms_median_m'])} | {_cm(f['lateral_max_worst_m'])} | "
+            + (judged if f["judged"] else "- | -") + " |")
     return lines
 
 

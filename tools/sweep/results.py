@@ -11,6 +11,8 @@ Rules:
    files, is refused.
 2. A row is written, flushed and synced when its case ends; an interrupted write leaves at
    most the last line cut short, which is dropped (and its case run again) on resumption.
+   A table written before the safety figures (:data:`SAFETY_FIGURES`, the last columns)
+   reads with them None, and is rewritten with them when the sweep resumes.
 3. Text columns (:data:`TEXT_COLUMNS`) are stored as they are (empty: None); every other
    cell is JSON (numbers, booleans, ``null``, the scene change's object).
 """
@@ -40,11 +42,16 @@ FIGURES = ("goal_key_image", "reached_goal", "reason", "final_position_error_m",
            "lateral_rms_m", "lateral_max_m", "heading_rms_deg", "key_images_route",
            "key_images_reached", "distance_m", "sim_time_s", "wall_time_s", "mean_matches",
            "loop_ms_p50", "loop_ms_p95", "lost_events", "scene_change")
+#: The safety layer's figures of a case, from the simulator's truth
+#: (:mod:`tools.harness.safety_truth`): waits for an obstacle, contacts with a person the
+#: robot moved towards and others (a person walking into it), the longest distance driven
+#: without a verified localization (m). Absent (None) in rows of sweeps run before them.
+SAFETY_FIGURES = ("obstacle_waits", "contacts_moving", "contacts_still", "blind_max_m")
 #: Figures measured on the wall clock: they differ from run to run, the others never.
 TIMING = ("wall_time_s", "loop_ms_p50", "loop_ms_p95", "teach_wall_time_s",
           "worker_peak_rss_mb")
 COLUMNS = ("case_id", "status", *AXES, *FIGURES, "teach_wall_time_s", "worker_peak_rss_mb",
-           "code_version", "options", "error")
+           "code_version", "options", "error", *SAFETY_FIGURES)
 TEXT_COLUMNS = frozenset({"case_id", "status", "world", "lighting", "removed", "doors",
                           "calibration", "law", "reason", "code_version", "options", "error"})
 
@@ -122,7 +129,8 @@ class ResultsTable:
         self.rows.append(row)
 
     def _rewrite_if_cut(self) -> None:
-        """Drop a last line cut short (rule 2) by writing the rows read back."""
+        """Drop a last line cut short, or add the safety columns to a table written before
+        them (rule 2), by writing the rows read back."""
         if not self.path.exists():
             return
         text = self.path.read_text()
@@ -145,15 +153,18 @@ def read_rows(path: Path) -> list[dict[str, Any]]:
         lines = list(csv.reader(io.StringIO(path.read_text(), newline="")))
     except (OSError, UnicodeDecodeError, csv.Error) as e:
         raise InputError(path, f"cannot read a results table: {e}") from None
-    if not lines or tuple(lines[0]) != COLUMNS:
+    header = tuple(lines[0]) if lines else ()
+    if header not in (COLUMNS, COLUMNS[:-len(SAFETY_FIGURES)]):
         raise InputError(path, "is not a sweep's results table (its header differs)")
     rows = []
     for number, line in enumerate(lines[1:], start=2):
         try:
-            if len(line) != len(COLUMNS):
-                raise ValueError(f"{len(line)} cells, not {len(COLUMNS)}")
-            rows.append({name: _value(name, cell) for name, cell in zip(COLUMNS, line,
-                                                                        strict=True)})
+            if len(line) != len(header):
+                raise ValueError(f"{len(line)} cells, not {len(header)}")
+            row = dict.fromkeys(SAFETY_FIGURES)
+            row.update({name: _value(name, cell) for name, cell in zip(header, line,
+                                                                       strict=True)})
+            rows.append(row)
         except ValueError as e:
             if number == len(lines):
                 break

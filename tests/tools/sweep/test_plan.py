@@ -59,7 +59,8 @@ def test_the_shipped_plans_read_and_check(tmp_path: Path) -> None:
     assert counts == {"building-campus-20.toml": 40, "lab-campus-1000.toml": 1008,
                       "front-end-teblid.toml": 12, "lab-changes-20.toml": 20,
                       "lab-dim-relocalize.toml": 12,
-                      "lab-light.toml": 18, "lab-other-lens.toml": 20}
+                      "lab-light.toml": 18, "lab-other-lens.toml": 20,
+                      "safety-people-20.toml": 80}
 
 
 def test_the_plan_is_data_that_compares() -> None:

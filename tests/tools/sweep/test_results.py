@@ -3,13 +3,22 @@ and other files' folders refused."""
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 from pathlib import Path
 
 import pytest
 
 from shared.errors import InputError
-from tools.sweep.results import COLUMNS, PLAN_NAME, ResultsTable, code_version, read_rows
+from tools.sweep.results import (
+    COLUMNS,
+    PLAN_NAME,
+    SAFETY_FIGURES,
+    ResultsTable,
+    code_version,
+    read_rows,
+)
 
 PLAN = {"axes": {"seed": [1, 2]}, "routes": None, "goal": None, "config": None,
         "max_omega_deg": None}
@@ -47,6 +56,30 @@ def test_a_line_cut_short_is_dropped_and_its_case_runs_again(tmp_path: Path) -> 
     assert again.done == {"a"}
     again.append(row("c"))
     assert [r["case_id"] for r in read_rows(table.path)] == ["a", "c"]
+
+
+def test_a_table_written_before_the_safety_figures_reads_and_resumes(tmp_path: Path) -> None:
+    table = ResultsTable(tmp_path, PLAN, "v1")
+    table.append(row("a"))
+    # the table as a sweep before the safety figures wrote it: the same columns without
+    # the last ones
+    old = len(COLUMNS) - len(SAFETY_FIGURES)
+    cells = list(csv.reader(io.StringIO(table.path.read_text(), newline="")))
+    with table.path.open("w", newline="") as f:
+        csv.writer(f).writerows(line[:old] for line in cells)
+    (old_row,) = read_rows(table.path)
+    assert old_row["case_id"] == "a" and old_row["lateral_rms_m"] == 0.012
+    assert all(old_row[k] is None for k in SAFETY_FIGURES)
+    again = ResultsTable(tmp_path, PLAN, "v2")  # resumed: rewritten with the new columns
+    again.append(row("b", contacts_moving=0, contacts_still=1, obstacle_waits=2,
+                     blind_max_m=0.3))
+    first, second = read_rows(table.path)
+    assert first["contacts_moving"] is None and second["contacts_still"] == 1
+    assert table.path.read_text().splitlines()[0] == ",".join(COLUMNS)
+    with table.path.open("w", newline="") as f:  # some other subset is not a results table
+        csv.writer(f).writerows(line[:old - 1] for line in cells)
+    with pytest.raises(InputError, match="its header differs"):
+        read_rows(table.path)
 
 
 def test_another_plan_or_a_foreign_folder_is_refused(tmp_path: Path) -> None:

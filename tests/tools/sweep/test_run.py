@@ -65,6 +65,9 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(interrupted_sweep, tmp_pa
     assert "3 cases: 2 reached the goal, 0 did not, 1 crashed" in summary
     ok = [row for row in rows if row["status"] == "ok"]
     assert all(row["goal_key_image"] == 4 and row["worker_peak_rss_mb"] < 1500 for row in ok)
+    # judged by the simulator's truth: nobody about, nothing in the way, always localized
+    assert all((row["contacts_moving"], row["contacts_still"], row["obstacle_waits"]) == (0, 0, 0)
+               and 0.0 <= row["blind_max_m"] < 1.0 for row in ok)
     assert all(row["code_version"].startswith("vmnav ") for row in rows)
 
 
