@@ -78,7 +78,7 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
         repeat_in_sim,
         taught_memory,
     )
-    from tools.harness.safety_truth import SafetyTruth, blind_distance_m
+    from tools.harness.safety_truth import judge, safety_figures
     from tools.harness.sim_args import sim_config_from_args
 
     config = load_config(args.config)
@@ -97,26 +97,18 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
                 print(f"vmnav bench safety: {world} seed {seed} {label} people",
                       file=sys.stderr, flush=True)
                 sim_config = replace(seeded, people=PeopleConfig(count=count, avoid_robot=False))
-                truths: list[SafetyTruth] = []
-
-                def instrument(sim: Any, truths: list[SafetyTruth] = truths) -> None:
-                    truths.append(SafetyTruth(sim, config))
-                    sim.add_step_hook(truths[-1].step)
-
+                hook, truths = judge(config)
                 started = time.perf_counter()
                 run = repeat_in_sim(taught, goal, config, sim_config, SceneChange(),
-                                    folder / label, on_sim=instrument)
+                                    folder / label, on_sim=hook)
                 truths[0].finish()
                 report = build_report(run, taught, config.control, time.perf_counter() - started)
                 row[label] = {
                     "reached": run.result.reached_goal,
                     "end": f"{run.result.reason}: {run.result.detail}",
                     "lateral_rms_m": report["lateral_rms_m"],
-                    "contacts_moving": truths[0].contacts_moving,
-                    "contacts_still": truths[0].contacts_still,
+                    **safety_figures(truths[0], run),
                     "contacts": [asdict(c) for c in truths[0].contacts],
-                    "blind_m": round(blind_distance_m(list(run.samples)), 3),
-                    "waits": sum(1 for e in run.result.events if e.reason == "obstacle"),
                 }
             rows.append(row)
             print(f"vmnav bench safety: {world} seed {seed}: {json.dumps(row)}", file=sys.stderr,
@@ -133,7 +125,8 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
             "contacts_still": sum(r["contacts_still"] for r in with_rows),
             "lateral_rms_delta_m_median": round(median(deltas), 4) if deltas else None,
             "lateral_rms_delta_m_max": round(max(deltas), 4) if deltas else None,
-            "blind_m_max": max(max(r["with"]["blind_m"], r["without"]["blind_m"]) for r in rows),
+            "blind_m_max": max(max(r["with"]["blind_max_m"], r["without"]["blind_max_m"])
+                               for r in rows),
         }
     return result
 

@@ -19,7 +19,7 @@ people runs and every case of a sweep (:mod:`tools.sweep.case`) are judged by it
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,6 +169,29 @@ def _box_circle_overlap(rx: float, ry: float, half_length: float, half_width: fl
     dx = max(abs(rx) - half_length, 0.0)
     dy = max(abs(ry) - half_width, 0.0)
     return dx * dx + dy * dy <= radius * radius
+
+
+def judge(config: VmnavConfig) -> tuple[Callable[[Simulation], None], list[SafetyTruth]]:
+    """An ``on_sim`` hook of :func:`tools.harness.demo.repeat_in_sim` that judges the
+    repeat's simulation with a :class:`SafetyTruth` of ``config``'s safety settings, and the
+    list the truth is put in."""
+    truths: list[SafetyTruth] = []
+
+    def hook(sim: Simulation) -> None:
+        truths.append(SafetyTruth(sim, config))
+        sim.add_step_hook(truths[-1].step)
+
+    return hook, truths
+
+
+def safety_figures(truth: SafetyTruth, run: Any) -> dict[str, Any]:
+    """A repeat's safety figures, after :meth:`SafetyTruth.finish`: ``obstacle_waits`` (the
+    mission's waits for an obstacle), ``contacts_moving``, ``contacts_still`` and
+    ``blind_max_m`` (:func:`blind_distance_m`, m) of ``run``
+    (:class:`tools.harness.demo.RepeatRun`) judged by ``truth``."""
+    return {"obstacle_waits": sum(1 for e in run.result.events if e.reason == "obstacle"),
+            "contacts_moving": truth.contacts_moving, "contacts_still": truth.contacts_still,
+            "blind_max_m": round(blind_distance_m(run.samples), 3)}
 
 
 def blind_distance_m(samples: Sequence[Any]) -> float:

@@ -18,12 +18,9 @@ import tempfile
 import time
 import traceback
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from tools.sweep.results import FIGURES
-
-if TYPE_CHECKING:
-    from sim.simulation import Simulation
 
 
 def set_worker_threads(render_threads: int) -> None:
@@ -97,7 +94,7 @@ def _repeat(argv: tuple[str, ...], folder: Path) -> dict[str, Any]:
     from tools.figures.demo_report import build_report
     from tools.harness.demo import default_goal, repeat_in_sim, taught_memory
     from tools.harness.repeat_args import parse_repeat_options, repeat_setup_from_args
-    from tools.harness.safety_truth import SafetyTruth, blind_distance_m
+    from tools.harness.safety_truth import judge, safety_figures
     from tools.harness.teach import TRUTH_NAME
 
     if not (folder / TRUTH_NAME).exists():  # a case never teaches: two could teach at once
@@ -106,21 +103,12 @@ def _repeat(argv: tuple[str, ...], folder: Path) -> dict[str, Any]:
     taught = taught_memory(folder, setup.routes, setup.config, setup.sim_config, setup.camera,
                            processes=1)
     goal = default_goal(taught) if setup.goal_id is None else setup.goal_id
-    truths: list[SafetyTruth] = []
-
-    def judge(sim: Simulation) -> None:
-        truths.append(SafetyTruth(sim, setup.config))
-        sim.add_step_hook(truths[-1].step)
-
+    hook, truths = judge(setup.config)
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="vmnav-case-") as vehicle:
         run = repeat_in_sim(taught, goal, setup.config, setup.sim_config, setup.change, folder,
-                            on_sim=judge, start_offset_m=setup.start_offset_m,
+                            on_sim=hook, start_offset_m=setup.start_offset_m,
                             vehicle_dir=Path(vehicle))
     report = build_report(run, taught, setup.config.control, time.perf_counter() - started)
-    truth = truths[0]
-    truth.finish()
-    return {**{key: report[key] for key in FIGURES},
-            "obstacle_waits": sum(1 for e in run.result.events if e.reason == "obstacle"),
-            "contacts_moving": truth.contacts_moving, "contacts_still": truth.contacts_still,
-            "blind_max_m": round(blind_distance_m(run.samples), 3)}
+    truths[0].finish()
+    return {**{key: report[key] for key in FIGURES}, **safety_figures(truths[0], run)}

@@ -12,7 +12,7 @@ import pytest
 from robot.config import VmnavConfig
 from tests.sim.rooms import box_room
 from tests.sim.test_people import people_sim
-from tools.harness.safety_truth import MOVING_M_S, SafetyTruth, blind_distance_m
+from tools.harness.safety_truth import MOVING_M_S, SafetyTruth, blind_distance_m, judge
 
 
 def test_a_person_walking_into_the_standing_robot_is_a_contact_of_theirs() -> None:
@@ -35,8 +35,9 @@ def test_a_person_walking_into_the_standing_robot_is_a_contact_of_theirs() -> No
 
 def test_the_robot_driving_into_a_standing_person_is_its_contact() -> None:
     sim = people_sim(box_room(), count=1, speed=0.0, avoid_robot=False)
-    truth = SafetyTruth(sim, VmnavConfig())
-    sim.add_step_hook(truth.step)
+    hook, truths = judge(VmnavConfig())  # as a repeat's on_sim hook
+    hook(sim)
+    (truth,) = truths
     sim.people.place(0, (6.5, 3.0), (6.5, 3.0))
     sim.body.command(0.3, 0.0)
     sim.step_until(4_000_000_000)
