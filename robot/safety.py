@@ -46,7 +46,9 @@ Rules (``SafetyConfig`` holds every distance and time):
    within ``side_stop_margin_m`` of the swept body (by default the whole margin); one
    farther out, in the margin, lets the robot creep past at the slowest ratio (a safety
    laser scanner's speed-dependent fields: a bin beside the way, that the sonar cannot
-   place on its cone, need not hold the robot for good). Reversing stops for the whole
+   place on its cone, need not hold the robot for good), but only when it cannot lie
+   within the inner band: no point of its arc there went unseen-free by the readings of
+   rule 1, and it is not coming towards the robot. Reversing stops for the whole
    corridor.
 4. Hysteresis. Once stopped, forward motion stays stopped until the nearest echo
    ahead has stayed beyond ``stop_distance_m`` + ``clear_margin_m`` for
@@ -167,10 +169,14 @@ class SafetyGovernor:
         if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
-        points = self._echo_points(state, now_ns, reverse=v_m_s < 0)
+        points, arcs = self._echo_points(state, now_ns, reverse=v_m_s < 0)
         stop_half = cfg.half_width_m + cfg.side_stop_margin_m
+        half = cfg.half_width_m + cfg.side_margin_m
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, stop_half,
                                  reverse=False)
+        if stop_half < half:  # an echo in the margin stops the robot if it may lie within
+            ahead_m = min(ahead_m, _nearest_doubtful(points, arcs, v_m_s, omega_rad_s,
+                                                     cfg.front_m, stop_half, half))
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
         if self._latched is not None:
@@ -178,7 +184,6 @@ class SafetyGovernor:
         if state.bumped:
             return Assessment(0.0, 0.0, blocked, ahead_m)
         v, omega = v_m_s, omega_rad_s
-        half = cfg.half_width_m + cfg.side_margin_m
         if v > 0:
             # slowing down watches the whole corridor, stopping only its inner band
             slow_m = ahead_m if half == stop_half else _nearest_ahead(
@@ -231,24 +236,32 @@ class SafetyGovernor:
         return Blocked("obstacle", ahead_m, self._stopped_since_ns)
 
 
-    def _echo_points(self, state: BaseState, now_ns: int,
-                     reverse: bool) -> list[tuple[float, float]]:
+    def _echo_points(self, state: BaseState, now_ns: int, reverse: bool
+                     ) -> tuple[list[tuple[float, float]], list[np.ndarray | None]]:
         """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, placed on
         its arc, moved ahead in time when it comes towards the robot; the robot is asked to
-        reverse or not (rule 2 looks behind or ahead)."""
+        reverse or not (rule 2 looks behind or ahead). With each, where on its arc it may
+        lie, (K, 2) robot frame, m: the arc's points no reading saw free (rule 3's creep);
+        None where that is not known (an echo too far to place, or one coming towards the
+        robot: it may be anywhere ahead)."""
         cfg = self._config
         x0, y0, yaw0 = state.odom_pose
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
         fresh = [(r, self._track(r)) for r in state.ranges]
         fresh = [(r, echo) for r, echo in fresh if now_ns - r.t_ns <= cfg.sonar_stale_ns]
         self._forget(state.odom_pose, now_ns)
-        placed = self._placements([echo for _, echo in fresh], [
+        placed, spans = self._placements([echo for _, echo in fresh], [
             _faces(r, reverse) for r, _ in fresh])
         points = []
-        for (r, echo), (wx, wy) in zip(fresh, placed, strict=True):
+        arcs: list[np.ndarray | None] = []
+        rotation = np.array([[c0, s0], [-s0, c0]])
+        for (r, echo), (wx, wy), span in zip(fresh, placed, spans, strict=True):
             to_x, to_y = x0 - wx, y0 - wy
             gap = math.hypot(to_x, to_y)
-            if echo.approach_m_s >= cfg.approach_min_m_s and gap > 1e-9:
+            coming = echo.approach_m_s >= cfg.approach_min_m_s
+            arcs.append(None if span is None or coming
+                        else (span - (x0, y0)) @ rotation.T)
+            if coming and gap > 1e-9:
                 # no nearer than the body's inner circle: the echo stays in front of it
                 inner = min(cfg.front_m, cfg.rear_m, cfg.half_width_m)
                 step = min(max(0.0, gap - inner), echo.approach_m_s * (
@@ -256,7 +269,7 @@ class SafetyGovernor:
                 wx, wy = wx + to_x / gap * step, wy + to_y / gap * step
             dx, dy = wx - x0, wy - y0
             points.append((c0 * dx + s0 * dy, -s0 * dx + c0 * dy))
-        return points
+        return points, arcs
 
     def _track(self, reading: RangeReading) -> _Echo:
         """The reading's echo on its axis in the odometry frame, since when the sensor has
@@ -320,42 +333,49 @@ class SafetyGovernor:
                     r for r in kept if now_ns - r.t_ns <= cfg.carve_window_ns
                     and math.hypot(r.x_m - x, r.y_m - y) <= cfg.carve_distance_m]
 
-    def _placements(self, echoes: list[_Echo], ahead: list[bool]) -> list[tuple[float, float]]:
+    def _placements(self, echoes: list[_Echo], ahead: list[bool]
+                    ) -> tuple[list[tuple[float, float]], list[np.ndarray | None]]:
         """Rule 1: each echo's point of its arc nearest its axis that no reading kept since
         the echo appeared saw free, (x_m, y_m) in the odometry frame. The axis point when
         every point was seen free, or when the echo is too far to matter wherever it lies on
         its arc: beyond the slow-down distance from the body for a sensor facing the way
-        the robot goes (``ahead``), beyond the circle rule 6 watches for the others."""
+        the robot goes (``ahead``), beyond the circle rule 6 watches for the others. With
+        each, the points of its arc no reading saw free ((K, 2) odometry frame, m; the axis
+        point alone when every point was seen free), None for an echo too far to matter."""
         cfg = self._config
         body = max(cfg.front_m, cfg.rear_m)
         reach_ahead = body + cfg.slow_distance_m + cfg.half_width_m + cfg.side_margin_m
         reach_turning = math.hypot(body, cfg.half_width_m) + cfg.turn_margin_m
         points = [(echo.x_m, echo.y_m) for echo in echoes]
+        spans: list[np.ndarray | None] = [None] * len(echoes)
         near = [i for i, echo in enumerate(echoes) if echo.range_m < echo.mount_m + (
             reach_ahead if ahead[i] else reach_turning)]
         if not near:
-            return points
+            return points, spans
         key = (self._seen_count, tuple((i, echoes[i].t_ns) for i in near))
         if self._placed is not None and self._placed[0] == key:
-            for i, point in zip(near, self._placed[1], strict=True):
-                points[i] = point
-            return points
+            for i, point, span in zip(near, self._placed[1], self._placed[2], strict=True):
+                points[i], spans[i] = point, span
+            return points, spans
         count = sum(len(kept) for kept in self._seen.values())
         seen = np.fromiter(chain.from_iterable(chain.from_iterable(self._seen.values())),
                            float, count=5 * count).reshape(count, 5)
         arcs = np.array([(echoes[i].at_x_m, echoes[i].at_y_m, echoes[i].heading_rad,
                           echoes[i].range_m, echoes[i].since_ns) for i in near])
-        placed = [(float(x), float(y)) for x, y in _unseen_points(arcs, seen, cfg)]
-        for i, (x, y) in zip(near, placed, strict=True):
+        placed, unseen = _unseen_points(arcs, seen, cfg)
+        for i, (x, y), span in zip(near, placed.tolist(), unseen, strict=True):
             if not math.isnan(x):
                 points[i] = (x, y)
-        self._placed = (key, [points[i] for i in near])
-        return points
+            free = np.isnan(span[:, 0])
+            spans[i] = np.array([points[i]]) if free.all() else span[~free]
+        self._placed = (key, [points[i] for i in near], [spans[i] for i in near])
+        return points, spans
 
 
-def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> np.ndarray:
+def _unseen_points(arcs: np.ndarray, seen: np.ndarray,
+                   config: SafetyConfig) -> tuple[np.ndarray, np.ndarray]:
     """Rule 1's placement: each echo's point of its arc nearest its axis that no reading
-    since the echo appeared saw free.
+    since the echo appeared saw free, and all those points.
 
     Args:
         arcs: (E, 5) the echoes: their sensor's x_m, y_m and heading_rad in the odometry
@@ -365,6 +385,8 @@ def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> 
 
     Returns:
         (E, 2) the points, odometry frame, m; NaN where every point was seen free.
+        (E, K, 2) the arc's points (:data:`ARC_STEPS`), odometry frame, m; NaN where seen
+        free.
     """
     half_clear = config.clear_width_rad / 2
     cos_h, sin_h = np.cos(seen[:, 3]), np.sin(seen[:, 3])
@@ -400,7 +422,9 @@ def _unseen_points(arcs: np.ndarray, seen: np.ndarray, config: SafetyConfig) -> 
     rows = np.arange(len(arcs))
     placed = np.stack([qx[rows, first], qy[rows, first]], axis=1)
     placed[carved[rows, first]] = np.nan
-    return placed
+    unseen = np.stack([qx, qy], axis=2)
+    unseen[carved] = np.nan
+    return placed, unseen
 
 
 class _Seen(NamedTuple):
@@ -460,6 +484,27 @@ def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s:
         s, lateral = _arc_coordinates(x, py, curvature)
         if s > 0 and abs(lateral) <= half_m:
             nearest = min(nearest, max(0.0, s - body_m))
+    return nearest
+
+
+def _nearest_doubtful(points: list[tuple[float, float]], arcs: list[np.ndarray | None],
+                      v_m_s: float, omega_rad_s: float, body_m: float, stop_half_m: float,
+                      half_m: float) -> float:
+    """Rule 3's creep: the distance from the front to the nearest echo placed in the
+    forward corridor's margin (beyond ``stop_half_m`` from its middle, within ``half_m``)
+    that may lie within ``stop_half_m`` after all: a point of its arc no reading saw free
+    is in the inner band ahead, or where it lies is not known (``arcs``' None), m (inf
+    when none)."""
+    curvature = omega_rad_s / v_m_s if v_m_s > 1e-6 else 0.0
+    nearest = math.inf
+    for (px, py), arc in zip(points, arcs, strict=True):
+        s, lateral = _arc_coordinates(px, py, curvature)
+        if s <= 0 or not stop_half_m < abs(lateral) <= half_m or s - body_m >= nearest:
+            continue
+        if arc is None or any(
+                t > 0 and abs(side) <= stop_half_m
+                for t, side in (_arc_coordinates(x, y, curvature) for x, y in arc.tolist())):
+            nearest = max(0.0, s - body_m)
     return nearest
 
 

@@ -110,11 +110,45 @@ class TestForward:
 
     def test_an_echo_in_the_corridors_margin_only_slows_the_robot(self) -> None:
         # the +30 deg sonar at 0.5 m: on its axis 0.35 m ahead, 0.33 m left: in the margin
-        # (the robot's half width 0.2525 m + 0.03 m stops it, + 0.1 m slows it)
+        # (the robot's half width 0.2525 m + 0.03 m stops it, + 0.1 m slows it); 0.45 m
+        # back the +10 deg sonar saw nothing through the inner part of its arc (15 to 22.5
+        # degrees, within 3 cm of the robot's side), but not through the axis point
+        back = Pose2(-0.45, 0.0, 0.0)
+        x, y, heading = SONAR_POSES[2]
+        axis = (x + 0.5 * math.cos(heading), y + 0.5 * math.sin(heading))
+        before = state({2: math.hypot(axis[0] - x - back.x_m, axis[1] - y)}, at=back)
+        t = ns_from_s(1.0)
+        for config, creeps in ((self.INNER, True), (CONFIG, False)):
+            governor = SafetyGovernor(config)
+            governor.assess(0, before, 0.2, 0.0)
+            a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
+            assert (a.blocked is None) is creeps
+            if creeps:
+                assert a.ahead_m == math.inf
+                assert a.v_m_s == pytest.approx(0.2 * CONFIG.min_speed_ratio)
+
+    def test_an_echo_in_the_margin_that_may_lie_nearer_stops_the_robot(self) -> None:
+        # the same echo, with no reading before it: its arc reaches 15 degrees, within 3 cm
+        # of the robot's side, and nothing says it is not there
         a = SafetyGovernor(self.INNER).assess(0, state({2: 0.5}), 0.2, 0.0)
-        assert a.blocked is None and a.ahead_m == math.inf
-        assert a.v_m_s == pytest.approx(0.2 * CONFIG.min_speed_ratio)
-        assert SafetyGovernor(CONFIG).assess(0, state({2: 0.5}), 0.2, 0.0).blocked is not None
+        assert a.blocked is not None and a.ahead_m == pytest.approx(0.347, abs=0.005)
+
+    def test_an_echo_coming_towards_the_robot_in_the_margin_is_not_crept_past(self) -> None:
+        # the first test's echo, its object coming 4 cm nearer per half second as the
+        # robot drives up: slow, but coming (approach_min_m_s 0.05 m/s here), and counted
+        # where it is now (no horizon), in the margin: it may be anywhere ahead next
+        x, y, heading = SONAR_POSES[2]
+        axis = (x + 0.5 * math.cos(heading), y + 0.5 * math.sin(heading))
+        for approach_min, creeps in ((CONFIG.approach_min_m_s, True), (0.05, False)):
+            config = dataclasses.replace(self.INNER, approach_min_m_s=approach_min,
+                                         approach_horizon_ns=0)
+            governor = SafetyGovernor(config)
+            for k, (back_m, nearer_m) in enumerate(((-0.45, 0.08), (-0.225, 0.04), (0.0, 0.0))):
+                t = ns_from_s(0.5 * k)
+                range_m = math.hypot(axis[0] - x - back_m, axis[1] - y) + nearer_m
+                a = governor.assess(t, state({2: range_m}, t_ns=t, at=Pose2(back_m, 0.0, 0.0)),
+                                    0.2, 0.0)
+            assert (a.blocked is None) is creeps, approach_min
 
     def test_an_echo_within_the_stop_margin_stops_the_robot(self) -> None:
         # the +10 deg sonar at 0.45 m: 0.69 m ahead of the centre (0.37 m ahead of the
