@@ -169,9 +169,10 @@ class SafetyGovernor:
         if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
-        points, arcs = self._echo_points(state, now_ns, reverse=v_m_s < 0)
         stop_half = cfg.half_width_m + cfg.side_stop_margin_m
         half = cfg.half_width_m + cfg.side_margin_m
+        points, arcs = self._echo_points(state, now_ns, reverse=v_m_s < 0,
+                                         with_arcs=stop_half < half)
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, stop_half,
                                  reverse=False)
         if stop_half < half:  # an echo in the margin stops the robot if it may lie within
@@ -236,14 +237,14 @@ class SafetyGovernor:
         return Blocked("obstacle", ahead_m, self._stopped_since_ns)
 
 
-    def _echo_points(self, state: BaseState, now_ns: int, reverse: bool
+    def _echo_points(self, state: BaseState, now_ns: int, reverse: bool, with_arcs: bool
                      ) -> tuple[list[tuple[float, float]], list[np.ndarray | None]]:
         """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, placed on
         its arc, moved ahead in time when it comes towards the robot; the robot is asked to
         reverse or not (rule 2 looks behind or ahead). With each, where on its arc it may
         lie, (K, 2) robot frame, m: the arc's points no reading saw free (rule 3's creep);
         None where that is not known (an echo too far to place, or one coming towards the
-        robot: it may be anywhere ahead)."""
+        robot: it may be anywhere ahead), and all None unless ``with_arcs``."""
         cfg = self._config
         x0, y0, yaw0 = state.odom_pose
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
@@ -254,12 +255,12 @@ class SafetyGovernor:
             _faces(r, reverse) for r, _ in fresh])
         points = []
         arcs: list[np.ndarray | None] = []
-        rotation = np.array([[c0, s0], [-s0, c0]])
+        rotation = np.array([[c0, s0], [-s0, c0]]) if with_arcs else None
         for (r, echo), (wx, wy), span in zip(fresh, placed, spans, strict=True):
             to_x, to_y = x0 - wx, y0 - wy
             gap = math.hypot(to_x, to_y)
             coming = echo.approach_m_s >= cfg.approach_min_m_s
-            arcs.append(None if span is None or coming
+            arcs.append(None if span is None or coming or rotation is None
                         else (span - (x0, y0)) @ rotation.T)
             if coming and gap > 1e-9:
                 # no nearer than the body's inner circle: the echo stays in front of it
