@@ -43,7 +43,7 @@ Rules (``SafetyConfig`` holds every distance and time):
    linearly with d, never below ``min_speed_ratio`` of the command, and the turn rate
    with it (the arc stays the one checked); beyond it the command passes. Forward motion
    stops at or inside ``stop_distance_m`` for an echo in the corridor's inner band,
-   within ``side_stop_margin_m`` of the swept body (by default the whole margin); one
+   within ``side_stop_margin_m`` of the swept body (3 cm by default); one
    farther out, in the margin, lets the robot creep past at the slowest ratio (a safety
    laser scanner's speed-dependent fields: a bin beside the way, that the sonar cannot
    place on its cone, need not hold the robot for good), but only when it cannot lie

@@ -231,14 +231,13 @@ class SafetyConfig:
     """...and only after it stayed clear this long, ns."""
     side_margin_m: float = 0.1
     """The swept corridor is the robot's width plus this on each side, m."""
-    side_stop_margin_m: float = 0.1
+    side_stop_margin_m: float = 0.03
     """Only an echo within this of the robot's swept sides stops it (rule 3); one farther
     out, still in the corridor, that cannot lie nearer (the readings saw the nearer part
     of its cone free, and it is not coming at the robot) slows it no lower than
     ``min_speed_ratio``: it creeps past, as a safety scanner's speed-dependent fields let
-    a vehicle, m
-    (<= ``side_margin_m``; the default, the whole margin, creeps past nothing:
-    docs/safety.md says what 0.03 m gains and what it risks)."""
+    a vehicle, m (<= ``side_margin_m``; equal to it, the robot creeps past nothing:
+    docs/safety.md says what the creep gains and what it risks)."""
     turn_margin_m: float = 0.05
     """Turning in place is refused while an echo lies within the circle the robot's
     corners sweep plus this, m."""

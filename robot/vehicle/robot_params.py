@@ -123,7 +123,8 @@ ROBOT_PARAMS: tuple[ParamBinding, ...] = (
                  "The swept corridor's margin on each side of the robot, m"),
     ParamBinding("SAFE_SIDE_STOP", "safety", "side_stop_margin_m", 0.0, 0.5,
                  "Echoes within this of the robot's sides stop it; farther out in the "
-                 "corridor they only slow it, m (<= SAFE_SIDE_MARGIN)"),
+                 "corridor, if they cannot lie nearer, they only slow it, m "
+                 "(<= SAFE_SIDE_MARGIN; equal: no creeping past)"),
     ParamBinding("SAFE_WAIT", "safety", "wait_ns", 1.0, 3600.0,
                  "A mission stopped by an obstacle waits this long, then holds, s",
                  Kind.SECONDS),

@@ -105,8 +105,12 @@ class TestForward:
         a = SafetyGovernor(CONFIG).assess(0, state(side), 0.2, 0.0)
         assert a.v_m_s == 0.2 and a.ahead_m == math.inf
 
-    #: Stopping for the inner 3 cm of the margin only (docs/safety.md: not the default).
+    #: Stopping for the inner 3 cm of the margin only (the default), and for all of it.
     INNER = dataclasses.replace(CONFIG, side_stop_margin_m=0.03)
+    WHOLE = dataclasses.replace(CONFIG, side_stop_margin_m=CONFIG.side_margin_m)
+
+    def test_the_default_stops_for_the_inner_3_cm_of_the_margin(self) -> None:
+        assert CONFIG == self.INNER
 
     def test_an_echo_in_the_corridors_margin_only_slows_the_robot(self) -> None:
         # the +30 deg sonar at 0.5 m: on its axis 0.35 m ahead, 0.33 m left: in the margin
@@ -118,7 +122,7 @@ class TestForward:
         axis = (x + 0.5 * math.cos(heading), y + 0.5 * math.sin(heading))
         before = state({2: math.hypot(axis[0] - x - back.x_m, axis[1] - y)}, at=back)
         t = ns_from_s(1.0)
-        for config, creeps in ((self.INNER, True), (CONFIG, False)):
+        for config, creeps in ((self.INNER, True), (self.WHOLE, False)):
             governor = SafetyGovernor(config)
             governor.assess(0, before, 0.2, 0.0)
             a = governor.assess(t, state({2: 0.5}, t_ns=t), 0.2, 0.0)
