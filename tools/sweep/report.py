@@ -23,6 +23,7 @@ import math
 import shlex
 from collections.abc import Sequence
 from pathlib import Path
+from statistics import median
 from typing import Any
 
 from tools.sweep.plan import AXES
@@ -53,12 +54,12 @@ def group_figures(rows: Sequence[Row]) -> dict[str, Any]:
     rate = wilson_interval(reached, len(rows))
     km = sum(float(row["distance_m"] or 0.0) for row in rows) / 1000.0
     per_failure = distance_per_failure(km, len(rows) - reached)
-    rms = sorted(float(r["lateral_rms_m"]) for r in rows if r["lateral_rms_m"] is not None)
+    rms = [float(r["lateral_rms_m"]) for r in rows if r["lateral_rms_m"] is not None]
     worst = [float(r["lateral_max_m"]) for r in rows if r["lateral_max_m"] is not None]
     judged = [r for r in rows if r.get("contacts_moving") is not None]
     return {"runs": len(rows), "reached": reached, "rate": rate, "km": km,
             "km_per_failure": per_failure,
-            "lateral_rms_median_m": rms[len(rms) // 2] if rms else None,
+            "lateral_rms_median_m": median(rms) if rms else None,
             "lateral_max_worst_m": max(worst) if worst else None,
             "judged": len(judged),
             "contacts_moving": sum(int(r["contacts_moving"]) for r in judged),
@@ -113,7 +114,7 @@ def write_report(rows: Sequence[Row], plan: dict[str, Any], cases_planned: int,
         deltas = sorted(people_rms_deltas(done)) if name == "people" else []
         if deltas:
             lines += [f"Lateral RMS with people minus the same case without: median "
-                      f"{_cm(deltas[len(deltas) // 2])}, largest {_cm(deltas[-1])} "
+                      f"{_cm(median(deltas))}, largest {_cm(deltas[-1])} "
                       f"({len(deltas)} pairs).", ""]
         _plot_rates(out / f"success_{name}.png", name, groups)
         _plot_lateral(out / f"lateral_{name}.png", name, groups)
