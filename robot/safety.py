@@ -47,9 +47,8 @@ Rules (``SafetyConfig`` holds every distance and time):
    farther out, in the margin, lets the robot creep past at the slowest ratio (a safety
    laser scanner's speed-dependent fields: a bin beside the way, that the sonar cannot
    place on its cone, need not hold the robot for good), but only when it cannot lie
-   within the inner band: no point of its arc there went unseen-free by the readings of
-   rule 1, and it is not coming towards the robot. Reversing stops for the whole
-   corridor.
+   within the inner band: rule 1's readings saw every point of its arc there free, and
+   it is not coming towards the robot. Reversing stops for the whole corridor.
 4. Hysteresis. Once stopped, forward motion stays stopped until the nearest echo
    ahead has stayed beyond ``stop_distance_m`` + ``clear_margin_m`` for
    ``clear_dwell_ns``: a noisy echo near the line does not make the robot jerk.
