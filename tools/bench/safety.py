@@ -114,8 +114,10 @@ def people_part(worlds: list[str], seeds: range, people: int, out: Path,
             print(f"vmnav bench safety: {world} seed {seed}: {json.dumps(row)}", file=sys.stderr,
                   flush=True)
         with_rows = [r["with"] for r in rows]
+        # over the seeds both runs followed to the goal: a run cut short has its start's RMS
         deltas = [r["with"]["lateral_rms_m"] - r["without"]["lateral_rms_m"] for r in rows
-                  if r["with"]["lateral_rms_m"] is not None
+                  if r["with"]["reached"] and r["without"]["reached"]
+                  and r["with"]["lateral_rms_m"] is not None
                   and r["without"]["lateral_rms_m"] is not None]
         result[world] = {
             "seeds": rows,

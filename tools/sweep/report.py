@@ -69,14 +69,18 @@ def group_figures(rows: Sequence[Row]) -> dict[str, Any]:
 
 def people_rms_deltas(rows: Sequence[Row]) -> list[float]:
     """Lateral RMS with people minus without, m: each case with people paired with the case
-    of the same other axes and no people (``people`` 0 or the default), where both have it."""
+    of the same other axes and no people (``people`` 0 or the default), where both reached
+    the goal (a run cut short has the RMS of its start, not of the route)."""
     def others(row: Row) -> tuple[str, ...]:
         return tuple(repr(row.get(name)) for name in AXES if name != "people")
 
-    without = {others(r): r["lateral_rms_m"] for r in rows if not r.get("people")
-               and r["lateral_rms_m"] is not None}
+    def followed(row: Row) -> bool:
+        return bool(row["reached_goal"]) and row["lateral_rms_m"] is not None
+
+    without = {others(r): r["lateral_rms_m"] for r in rows
+               if not r.get("people") and followed(r)}
     return [float(r["lateral_rms_m"]) - float(without[others(r)]) for r in rows
-            if r.get("people") and r["lateral_rms_m"] is not None and others(r) in without]
+            if r.get("people") and followed(r) and others(r) in without]
 
 
 def write_report(rows: Sequence[Row], plan: dict[str, Any], cases_planned: int,
@@ -113,7 +117,7 @@ def write_report(rows: Sequence[Row], plan: dict[str, Any], cases_planned: int,
                   f"![lateral error by {name}](lateral_{name}.png)", ""]
         deltas = sorted(people_rms_deltas(done)) if name == "people" else []
         if deltas:
-            lines += [f"Lateral RMS with people minus the same case without: median "
+            lines += [f"Lateral RMS with people minus the same case without (both reached): median "
                       f"{_cm(median(deltas))}, largest {_cm(deltas[-1])} "
                       f"({len(deltas)} pairs).", ""]
         _plot_rates(out / f"success_{name}.png", name, groups)
