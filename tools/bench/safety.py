@@ -7,8 +7,9 @@ Four parts, each a key of the JSON:
 * ``people``: per world and seed, the demo's repeat (:func:`tools.harness.demo.repeat_in_sim`)
   with ``--people`` people walking who do not avoid the robot, and the same seed
   without people: goals reached, lateral RMS with and without, contacts the robot
-  caused (moving towards a person) and people walking into a robot that stood still
-  (each contact: when, where in the robot frame, how fast the robot moved towards them),
+  caused (moving towards a person) and people walking into the robot (standing, or
+  driving past them; each contact: when, where in the robot frame, how fast the robot
+  moved towards them),
   and the longest distance driven without a verified localization (true metres since
   the last vision estimate the filter took, or the last localization);
 * ``e_stop``: ``--estops`` emergency stops on the hardware-in-the-loop rig

@@ -88,7 +88,7 @@ class SafetyTruth:
 
     @property
     def contacts_still(self) -> int:
-        """Contacts of people walking into a robot that stood still."""
+        """Contacts of people walking into the robot (standing, or driving past them)."""
         return len(self.contacts) - self.contacts_moving
 
     def step(self, now_ns: int, dt_ns: int) -> None:
