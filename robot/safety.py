@@ -170,13 +170,13 @@ class SafetyGovernor:
         self._was_bumped = state.bumped
         stop_half = cfg.half_width_m + cfg.side_stop_margin_m
         half = cfg.half_width_m + cfg.side_margin_m
-        points, arcs = self._echo_points(state, now_ns, reverse=v_m_s < 0,
-                                         with_arcs=stop_half < half)
+        points, arcs = self._echo_points(state, now_ns, reverse=v_m_s < 0)
         ahead_m = _nearest_ahead(points, v_m_s, omega_rad_s, cfg.front_m, stop_half,
                                  reverse=False)
         if stop_half < half:  # an echo in the margin stops the robot if it may lie within
-            ahead_m = min(ahead_m, _nearest_doubtful(points, arcs, v_m_s, omega_rad_s,
-                                                     cfg.front_m, stop_half, half))
+            ahead_m = min(ahead_m, _nearest_doubtful(
+                points, arcs, state.odom_pose, v_m_s, omega_rad_s, cfg.front_m, stop_half,
+                half))
         blocked = self._forward_hold(now_ns, ahead_m, _silent(state, now_ns, cfg, reverse=False),
                                      pushed=state.bumped and self._latched is None)
         if self._latched is not None:
@@ -236,14 +236,14 @@ class SafetyGovernor:
         return Blocked("obstacle", ahead_m, self._stopped_since_ns)
 
 
-    def _echo_points(self, state: BaseState, now_ns: int, reverse: bool, with_arcs: bool
+    def _echo_points(self, state: BaseState, now_ns: int, reverse: bool
                      ) -> tuple[list[tuple[float, float]], list[np.ndarray | None]]:
         """Rule 1: each fresh reading's echo, (x_m, y_m) in the robot frame now, placed on
         its arc, moved ahead in time when it comes towards the robot; the robot is asked to
         reverse or not (rule 2 looks behind or ahead). With each, where on its arc it may
-        lie, (K, 2) robot frame, m: the arc's points no reading saw free (rule 3's creep);
-        None where that is not known (an echo too far to place, or one coming towards the
-        robot: it may be anywhere ahead), and all None unless ``with_arcs``."""
+        lie, (K, 2) odometry frame, m: the arc's points no reading saw free (rule 3's
+        creep); None where that is not known (an echo too far to place, or one coming
+        towards the robot: it may be anywhere ahead)."""
         cfg = self._config
         x0, y0, yaw0 = state.odom_pose
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
@@ -254,13 +254,11 @@ class SafetyGovernor:
             _faces(r, reverse) for r, _ in fresh])
         points = []
         arcs: list[np.ndarray | None] = []
-        rotation = np.array([[c0, s0], [-s0, c0]]) if with_arcs else None
         for (r, echo), (wx, wy), span in zip(fresh, placed, spans, strict=True):
             to_x, to_y = x0 - wx, y0 - wy
             gap = math.hypot(to_x, to_y)
             coming = echo.approach_m_s >= cfg.approach_min_m_s
-            arcs.append(None if span is None or coming or rotation is None
-                        else (span - (x0, y0)) @ rotation.T)
+            arcs.append(None if coming else span)
             if coming and gap > 1e-9:
                 # no nearer than the body's inner circle: the echo stays in front of it
                 inner = min(cfg.front_m, cfg.rear_m, cfg.half_width_m)
@@ -488,14 +486,18 @@ def _nearest_ahead(points: list[tuple[float, float]], v_m_s: float, omega_rad_s:
 
 
 def _nearest_doubtful(points: list[tuple[float, float]], arcs: list[np.ndarray | None],
-                      v_m_s: float, omega_rad_s: float, body_m: float, stop_half_m: float,
+                      odom_pose: tuple[float, float, float], v_m_s: float,
+                      omega_rad_s: float, body_m: float, stop_half_m: float,
                       half_m: float) -> float:
     """Rule 3's creep: the distance from the front to the nearest echo placed in the
     forward corridor's margin (beyond ``stop_half_m`` from its middle, within ``half_m``)
     that may lie within ``stop_half_m`` after all: a point of its arc no reading saw free
-    is in the inner band ahead, or where it lies is not known (``arcs``' None), m (inf
-    when none)."""
+    (``arcs``, odometry frame; the robot at ``odom_pose``) is in the inner band ahead, or
+    where it lies is not known (None), m (inf when none). Only the arcs of echoes in the
+    margin are turned into the robot frame."""
     curvature = omega_rad_s / v_m_s if v_m_s > 1e-6 else 0.0
+    x0, y0, yaw = odom_pose
+    c0, s0 = math.cos(yaw), math.sin(yaw)
     nearest = math.inf
     for (px, py), arc in zip(points, arcs, strict=True):
         s, lateral = _arc_coordinates(px, py, curvature)
@@ -503,7 +505,9 @@ def _nearest_doubtful(points: list[tuple[float, float]], arcs: list[np.ndarray |
             continue
         if arc is None or any(
                 t > 0 and abs(side) <= stop_half_m
-                for t, side in (_arc_coordinates(x, y, curvature) for x, y in arc.tolist())):
+                for t, side in (_arc_coordinates(c0 * (x - x0) + s0 * (y - y0),
+                                                 -s0 * (x - x0) + c0 * (y - y0), curvature)
+                                for x, y in arc.tolist())):
             nearest = max(0.0, s - body_m)
     return nearest
 
