@@ -147,7 +147,8 @@ def base_state(where: str, data: Mapping[str, Any]) -> BaseState:
         return BaseState(Pose2(float(data["x_m"]), float(data["y_m"]), float(data["yaw_rad"])),
                          float(data["odom_distance_m"]), bool(data["bumped"]),
                          bool(data["stalled"]), math.nan if battery is None else float(battery),
-                         bool(data["motors_enabled"]), ranges=ranges, blocked=blocked)
+                         bool(data["motors_enabled"]), ranges=ranges, blocked=blocked,
+                         bumped_rear_only=bool(data.get("bumped_rear_only", False)))
     except KeyError as e:
         raise InputError(where, f"base state without {e}") from None
     except (TypeError, ValueError) as e:

@@ -59,10 +59,14 @@ Rules (``SafetyConfig`` holds every distance and time):
    robot's corners sweep, plus ``turn_margin_m``; otherwise it stays allowed, so a
    stopped robot can still face its route.
 7. Bumper and emergency stop hold: a bumper pressed (its rising edge) while the robot
-   moves, or moved in the last :data:`MOVING_GRACE_NS` (it hit something), or
-   :meth:`SafetyGovernor.emergency_stop`, stops everything until
-   :meth:`SafetyGovernor.release` (the operator re-arms or changes mode). A bumper
-   pressed while the robot stood still is someone walking into it ("pushed"): nothing
+   moves it into the world, or did so in the last :data:`MOVING_GRACE_NS` (it hit
+   something), or :meth:`SafetyGovernor.emergency_stop`, stops everything until
+   :meth:`SafetyGovernor.release` (the operator re-arms or changes mode). The rear
+   bumper alone (``BaseState.bumped_rear_only``) is the robot's hit only when a point of
+   it moved outwards faster than :data:`BUMPER_FACE_M_S`: reversing, or the rear corners
+   swinging in a turn (``rear_m`` and ``half_width_m``); driving forward on a gentle arc it
+   moves away from whatever touched it. A bumper pressed while the robot stood still, or
+   the rear one while it drove away, is someone walking into it ("pushed"): nothing
    moves while it stays pressed, then the way must clear as after an obstacle (rule 4),
    and a mission waits instead of ending.
 
@@ -85,6 +89,10 @@ from shared.interfaces import BaseState, Blocked, RangeReading
 #: A bumper pressed this soon after the robot was last allowed to move is its own hit (it
 #: may still be braking: 0.33 s from 0.2 m/s on a P3-AT), ns.
 MOVING_GRACE_NS = 500_000_000
+#: The rear bumper moves into the world when a point of it moves outwards faster than
+#: this (rule 7), m/s: a robot following its route forward turns its rear corners
+#: sideways by a few mm/s.
+BUMPER_FACE_M_S = 0.02
 #: A reading taken within this distance and heading of the same sensor's last kept one,
 #: with about its range, replaces it (rule 1: the readings of a robot standing still do
 #: not pile up), m and rad.
@@ -125,6 +133,7 @@ class SafetyGovernor:
         self._latched: Blocked | None = None  # rule 7
         self._was_bumped = False
         self._moving_until_ns: int | None = None  # rule 7: the robot may still move
+        self._rear_moving_until_ns: int | None = None  # rule 7: and its rear bumper
         self._stopped_since_ns: int | None = None  # rule 4: forward motion stopped
         self._clear_since_ns: int | None = None
         self._echoes: dict[tuple[float, float, float], _Echo] = {}  # rule 1, per sensor
@@ -164,7 +173,8 @@ class SafetyGovernor:
                omega_rad_s: float) -> Assessment:
         """Bound the command (v_m_s, omega_rad_s) at ``now_ns`` for the base in ``state``."""
         cfg = self._config
-        moving = self._moving_until_ns is not None and now_ns < self._moving_until_ns
+        until_ns = self._rear_moving_until_ns if state.bumped_rear_only else self._moving_until_ns
+        moving = until_ns is not None and now_ns < until_ns
         if state.bumped and not self._was_bumped and self._latched is None and moving:
             self._latched = Blocked("bumper", math.nan, now_ns)
         self._was_bumped = state.bumped
@@ -204,6 +214,8 @@ class SafetyGovernor:
             omega = 0.0
         if v != 0.0 or omega != 0.0:
             self._moving_until_ns = now_ns + MOVING_GRACE_NS
+        if max(-v + abs(omega) * cfg.half_width_m, abs(omega) * cfg.rear_m) > BUMPER_FACE_M_S:
+            self._rear_moving_until_ns = now_ns + MOVING_GRACE_NS
         return Assessment(v, omega, blocked, ahead_m)
 
     def _forward_hold(self, now_ns: int, ahead_m: float, silent: bool,

@@ -118,6 +118,9 @@ class BaseState:
         blocked: set by the safety layer's base (``robot.safe_base.SafeBase``) while it
             holds the robot's forward motion; None when the way is clear (and always
             from a bare base).
+        bumped_rear_only: the bumpers pressed now are all at the rear (``bumped`` too): a
+            robot driving forward did not hit anything with them. False where the base
+            cannot tell its front bumper from its rear one.
     """
 
     odom_pose: Pose2
@@ -129,6 +132,7 @@ class BaseState:
     reporting: bool = True
     ranges: tuple[RangeReading, ...] = ()
     blocked: Blocked | None = None
+    bumped_rear_only: bool = False
 
     def __post_init__(self) -> None:
         if len(self.odom_pose) != 3 or not all(math.isfinite(v) for v in self.odom_pose):
@@ -137,6 +141,8 @@ class BaseState:
         if not (math.isfinite(self.odom_distance_m) and self.odom_distance_m >= 0):
             raise ValueError(f"BaseState: odom_distance_m must be finite and >= 0, got "
                              f"{self.odom_distance_m}")
+        if self.bumped_rear_only and not self.bumped:
+            raise ValueError("BaseState: bumped_rear_only needs bumped")
 
 
 @runtime_checkable

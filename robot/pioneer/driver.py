@@ -142,6 +142,7 @@ class PioneerDriver:
             odom_pose=s.odom_pose,
             odom_distance_m=s.odom_distance_m,
             bumped=bool(s.front_bumpers or s.rear_bumpers),
+            bumped_rear_only=bool(s.rear_bumpers and not s.front_bumpers),
             stalled=s.left_stalled or s.right_stalled,
             battery_v=s.battery_v,
             motors_enabled=s.motors_enabled,

@@ -181,6 +181,7 @@ def base_state_fields(t_ns: int, state: BaseState) -> dict[str, Any]:
     distance = None if blocked is None or math.isnan(blocked.distance_m) else blocked.distance_m
     return {"stamp_ns": t_ns, "x_m": x_m, "y_m": y_m, "yaw_rad": yaw_rad,
             "odom_distance_m": state.odom_distance_m, "bumped": state.bumped,
+            "bumped_rear_only": state.bumped_rear_only,
             "stalled": state.stalled, "battery_v": state.battery_v,
             "motors_enabled": state.motors_enabled,
             "blocked_cause": None if blocked is None else blocked.cause,

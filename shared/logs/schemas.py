@@ -250,6 +250,7 @@ BASE_STATE = _object("vmnav.BaseState", "What the mobile base reported "
         "yaw_rad": ("number", "odometry: heading of base_link in odom, rad, counter-clockwise"),
         "odom_distance_m": ("number", "distance driven since the odometry started, m"),
         "bumped": ("boolean", "a bumper is pressed"),
+        "bumped_rear_only": ("boolean", "the bumpers pressed are all at the rear"),
         "stalled": ("boolean", "a motor is stalled"),
         "battery_v": (["number", "null"], "battery, V (null when not a number)"),
         "motors_enabled": ("boolean", "the motors accept velocity commands"),

@@ -22,7 +22,8 @@ ORIGIN = Pose2(0.0, 0.0, 0.0)
 
 def state(ranges: dict[int, float] | None = None, *, t_ns: int = 0,
           at: Pose2 = ORIGIN, read_at: Pose2 | None = None,
-          bumped: bool = False, read_ns: int | None = None) -> BaseState:
+          bumped: bool = False, rear_only: bool = False,
+          read_ns: int | None = None) -> BaseState:
     """The base at ``at`` (odometry frame) whose 16 sonars read ``ranges`` (default: no
     echo), taken at ``read_ns`` (default ``t_ns``) from ``read_at`` (default ``at``)."""
     ranges = ranges or {}
@@ -30,7 +31,8 @@ def state(ranges: dict[int, float] | None = None, *, t_ns: int = 0,
         RangeReading(k, pose, ranges.get(k, NOTHING_M), t_ns if read_ns is None else read_ns,
                      at if read_at is None else read_at)
         for k, pose in enumerate(SONAR_POSES))
-    return BaseState(at, 0.0, bumped, False, 13.0, True, ranges=readings)
+    return BaseState(at, 0.0, bumped, False, 13.0, True, ranges=readings,
+                     bumped_rear_only=rear_only)
 
 
 def echo_ahead(distance_m: float) -> dict[int, float]:
@@ -311,6 +313,30 @@ class TestHolds:
         assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.0
         t += CONFIG.clear_dwell_ns
         assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.2
+
+    def test_someone_walking_into_the_back_of_a_robot_driving_away_is_a_wait(self) -> None:
+        governor = SafetyGovernor(CONFIG)
+        governor.assess(0, state(), 0.2, 0.03)  # forward on a gentle arc, as on a route
+        pushed = governor.assess(1, state(bumped=True, rear_only=True, t_ns=1), 0.2, 0.03)
+        assert (pushed.v_m_s, pushed.blocked.cause) == (0.0, "pushed")
+        assert governor.latched is None
+        t = ns_from_s(0.2)  # released: the way must stay clear for the dwell
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.0
+        t += CONFIG.clear_dwell_ns
+        assert governor.assess(t, state(t_ns=t), 0.2, 0.0).v_m_s == 0.2
+
+    @pytest.mark.parametrize(("v_m_s", "omega_rad_s"), [
+        (-0.2, 0.0),  # reversing into it
+        (0.2, 0.3),  # the rear corners swing sideways at 9 cm/s
+        (0.0, 0.2),  # turning in place
+    ])
+    def test_the_rear_bumper_is_a_hit_when_the_rear_moved_into_the_world(
+            self, v_m_s: float, omega_rad_s: float) -> None:
+        governor = SafetyGovernor(CONFIG)
+        assert governor.assess(0, state(), v_m_s, omega_rad_s).v_m_s == v_m_s
+        t = ns_from_s(0.3)  # braking still, within MOVING_GRACE_NS
+        hit = governor.assess(t, state(bumped=True, rear_only=True, t_ns=t), 0.0, 0.0)
+        assert hit.blocked.cause == "bumper" and governor.latched is not None
 
     def test_the_emergency_stop_holds_until_released(self) -> None:
         governor = SafetyGovernor(CONFIG)

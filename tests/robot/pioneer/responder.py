@@ -51,6 +51,7 @@ class Responder:
         self.battery_v = 12.8
         self.wheels_m_s = (0.0, 0.0)  # (left, right) as the SIP reports them
         self.rot_vel_rad_s: float | None = None  # the optional ROTVEL field
+        self.bumpers = (0, 0)  # (front, rear) segment bits as the SIP reports them
         self.received: list[tuple[int, Event]] = []
 
     def reboot(self) -> None:
@@ -71,7 +72,8 @@ class Responder:
         return Sip(x_counts=wrap_position(self.x_counts), y_counts=wrap_position(self.y_counts),
                    th_counts=(self.th_counts + 2048) % 4096 - 2048,
                    left_vel_m_s=self.wheels_m_s[0], right_vel_m_s=self.wheels_m_s[1],
-                   battery_v=self.battery_v, flags=flags, **tail)
+                   battery_v=self.battery_v, flags=flags, front_bumpers=self.bumpers[0],
+                   rear_bumpers=self.bumpers[1], **tail)
 
     def service(self, now_ns: int) -> None:
         if self.link is None:

@@ -211,6 +211,19 @@ def test_measured_velocities_and_refresh_until_the_wheels_stop() -> None:
         rig.driver.command(math.nan, 0.0)
 
 
+@pytest.mark.parametrize(("bumpers", "bumped", "rear_only"), [
+    ((0, 0), False, False), ((0x01, 0), True, False), ((0, 0x10), True, True),
+    ((0x04, 0x02), True, False)])
+def test_the_state_tells_the_rear_bumper_from_the_front(
+        bumpers: tuple[int, int], bumped: bool, rear_only: bool) -> None:
+    rig = Rig()
+    rig.connect()
+    rig.responder.bumpers = bumpers
+    rig.run(0.2)
+    state = rig.driver.state()
+    assert (state.bumped, state.bumped_rear_only) == (bumped, rear_only)
+
+
 def test_link_loss_stops_reconnects_and_odometry_continues() -> None:
     rig = Rig()
     rig.connect()
