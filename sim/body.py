@@ -64,10 +64,12 @@ def _wrap(angle_rad: float) -> float:
 
 def ramp(current: float, target: float, up: float, down: float) -> float:
     """Move ``current`` towards ``target`` by at most ``up`` away from 0, ``down`` towards 0."""
-    if current != 0 and (target - current) * current < 0:  # slowing down (or reversing)
+    # Signs are compared, not products: the product of two tiny speeds underflows to zero.
+    if target < current if current > 0 else target > current if current < 0 else False:
         step = max(target - current, -down) if current > 0 else min(target - current, down)
         nxt = current + step
-        return 0.0 if nxt * current < 0 else nxt  # a reversal stops at zero for this step
+        crossed = nxt < 0 < current or current < 0 < nxt
+        return 0.0 if crossed else nxt  # a reversal stops at zero for this step
     return current + max(-up, min(up, target - current))
 
 

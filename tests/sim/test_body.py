@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from shared.pose import Pose2
@@ -191,12 +191,13 @@ class TestRamp:
         up=st.floats(0.0, 0.1),
         down=st.floats(0.0, 0.1),
     )
+    @example(current=-5e-324, target=1.0, up=0.0, down=0.0625)  # found by the suite
     def test_moves_towards_the_target_within_the_limits(
         self, current: float, target: float, up: float, down: float
     ) -> None:
         nxt = ramp(current, target, up, down)
         assert min(current, target) - 1e-12 <= nxt <= max(current, target) + 1e-12  # no overshoot
-        assert nxt * current >= 0  # a reversal stops at zero first
+        assert not (nxt < 0 < current or current < 0 < nxt)  # a reversal stops at zero first
         if abs(nxt) > abs(current):  # speeding up
             assert abs(nxt - current) <= up + 1e-12
         else:  # slowing down
