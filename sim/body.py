@@ -65,7 +65,8 @@ def _wrap(angle_rad: float) -> float:
 def ramp(current: float, target: float, up: float, down: float) -> float:
     """Move ``current`` towards ``target`` by at most ``up`` away from 0, ``down`` towards 0."""
     # Signs are compared, not products: the product of two tiny speeds underflows to zero.
-    if target < current if current > 0 else target > current if current < 0 else False:
+    slowing = (current > 0 and target < current) or (current < 0 and target > current)
+    if slowing:  # (or reversing)
         step = max(target - current, -down) if current > 0 else min(target - current, down)
         nxt = current + step
         crossed = nxt < 0 < current or current < 0 < nxt
