@@ -43,6 +43,8 @@ _ROBOT = (200, 80, 20)
 class MapCanvas:
     """Maps world metres to pixels of a canvas covering the world's walls.
 
+    ``image`` is the canvas, blank: (H, W, 3) uint8 BGR.
+
     Args:
         sim: the simulation whose world sets the extent.
         px_per_m: scale, pixels per metre.
@@ -64,69 +66,105 @@ class MapCanvas:
         return np.round(np.column_stack([u, v])).astype(np.int32)
 
 
-def draw_topdown(
-    sim: Simulation, frame: RenderedFrame, fov_deg: float, px_per_m: float = 30.0,
-    strokes: PictureStrokes | None = None,
-) -> npt.NDArray[np.uint8]:
-    """Draw the world, the robot and the camera's view of the field.
+class TopDownMap:
+    """A simulation's top-down map: the world, the robot and the camera's view of the field.
+
+    What does not move is drawn once: the ceilings (the layer under the view's fan) and
+    the furniture, objects, trees and walls (the layer over it, with the mask of its
+    pixels), drawn again only when objects are added or taken away
+    (:attr:`sim.simulation.Simulation.objects_revision`); the pictures' strokes are placed
+    once. A video draws a map every other frame.
 
     Args:
-        sim: the simulation (world, landmarks, people, robot).
-        frame: the frame just rendered (its visible landmarks are highlighted).
-        fov_deg: the lens's field of view, degrees (the fan drawn on the floor).
+        sim: the simulation (its world sets the extent).
         px_per_m: map scale.
-        strokes: :func:`picture_strokes` of the world, when the caller keeps them for
-            many maps (placing the pictures on their walls is most of a map's cost).
+    """
+
+    def __init__(self, sim: Simulation, px_per_m: float = 30.0) -> None:
+        self.canvas = MapCanvas(sim, px_per_m)
+        self._strokes_px = ([] if len(sim.landmarks) else
+                            [self.canvas.px(stroke) for stroke in picture_strokes(sim.world)])
+        self._draw_still(sim)
+
+    def draw(self, sim: Simulation, frame: RenderedFrame, fov_deg: float) -> npt.NDArray[np.uint8]:
+        """The map now.
+
+        Args:
+            sim: the simulation this map was made for (landmarks, people, robot).
+            frame: the frame just rendered (its visible landmarks are highlighted).
+            fov_deg: the lens's field of view, degrees (the fan drawn on the floor).
+
+        Returns:
+            (H, W, 3) uint8 BGR image, the caller's.
+        """
+        if sim.objects_revision != self._revision:
+            self._draw_still(sim)
+        canvas = self.canvas
+        img = self._under.copy()
+        cv2.fillPoly(img, [canvas.px(_fov_polygon(sim, frame, fov_deg))], _FOV,
+                     lineType=cv2.LINE_AA)
+        cv2.copyTo(self._over, self._over_mask, img)
+        if len(sim.landmarks):
+            _draw_patches(canvas, img, sim, frame)
+        else:
+            _draw_pictures(img, self._strokes_px, frame)
+        positions, radius, _ = sim.people_state()
+        for p in canvas.px(positions) if len(positions) else []:
+            cv2.circle(img, (int(p[0]), int(p[1])), max(int(radius * canvas.px_per_m), 2),
+                       _PERSON, -1, cv2.LINE_AA)
+        _draw_robot(canvas, img, sim)
+        return img
+
+    def _draw_still(self, sim: Simulation) -> None:
+        """The layers under and over the view's fan."""
+        canvas = self.canvas
+        under = canvas.image.copy()
+        for ceiling in sim.world.ceilings:
+            (x0, y0), (x1, y1) = ceiling.min_corner, ceiling.max_corner
+            corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+            cv2.fillPoly(under, [canvas.px(corners)], _CEILING)
+        over = under.copy()
+        added = np.array([box_corners(*o.footprint()) for o in sim.added_objects.values()],
+                         dtype=float).reshape(-1, 4, 2)
+        for corners in np.concatenate([sim.world.furniture_corners(),
+                                       sim.world.object_corners(), added]):
+            cv2.fillPoly(over, [canvas.px(corners)], _FURNITURE, lineType=cv2.LINE_AA)
+        px_per_m = canvas.px_per_m
+        for tree in sim.world.trees:
+            (u, v), = canvas.px([tree.at])
+            cv2.circle(over, (int(u), int(v)), max(int(tree.crown_radius_m * px_per_m), 2),
+                       _TREE, 1, cv2.LINE_AA)
+            cv2.circle(over, (int(u), int(v)), max(int(tree.trunk_radius_m * px_per_m), 2),
+                       _FURNITURE, -1, cv2.LINE_AA)
+        for wall in sim.world.walls:
+            a, b = canvas.px([wall.start, wall.end])
+            cv2.line(over, tuple(int(v) for v in a), tuple(int(v) for v in b), _WALL, 3,
+                     cv2.LINE_AA)
+        self._under, self._over = under, over
+        self._over_mask = (over != under).any(axis=2).astype(np.uint8)
+        self._revision = sim.objects_revision
+
+
+def draw_topdown(sim: Simulation, frame: RenderedFrame, fov_deg: float,
+                 px_per_m: float = 30.0) -> npt.NDArray[np.uint8]:
+    """One map of ``sim`` now (:meth:`TopDownMap.draw`; a video keeps a :class:`TopDownMap`).
 
     Returns:
         (H, W, 3) uint8 BGR image.
     """
-    canvas = MapCanvas(sim, px_per_m)
-    img = canvas.image
-    for ceiling in sim.world.ceilings:
-        (x0, y0), (x1, y1) = ceiling.min_corner, ceiling.max_corner
-        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
-        cv2.fillPoly(img, [canvas.px(corners)], _CEILING)
-    cv2.fillPoly(img, [canvas.px(_fov_polygon(sim, frame, fov_deg))], _FOV, lineType=cv2.LINE_AA)
-    added = np.array([box_corners(*o.footprint()) for o in sim.added_objects.values()],
-                     dtype=float).reshape(-1, 4, 2)
-    for corners in np.concatenate([sim.world.furniture_corners(), sim.world.object_corners(),
-                                   added]):
-        cv2.fillPoly(img, [canvas.px(corners)], _FURNITURE, lineType=cv2.LINE_AA)
-    for tree in sim.world.trees:
-        (u, v), = canvas.px([tree.at])
-        cv2.circle(img, (int(u), int(v)), max(int(tree.crown_radius_m * px_per_m), 2), _TREE, 1,
-                   cv2.LINE_AA)
-        cv2.circle(img, (int(u), int(v)), max(int(tree.trunk_radius_m * px_per_m), 2),
-                   _FURNITURE, -1, cv2.LINE_AA)
-    for wall in sim.world.walls:
-        a, b = canvas.px([wall.start, wall.end])
-        cv2.line(img, tuple(int(v) for v in a), tuple(int(v) for v in b), _WALL, 3, cv2.LINE_AA)
-
-    if len(sim.landmarks):
-        _draw_patches(canvas, sim, frame)
-    else:
-        _draw_pictures(canvas, strokes or picture_strokes(sim.world), frame)
-
-    positions, radius, _ = sim.people_state()
-    for p in canvas.px(positions) if len(positions) else []:
-        cv2.circle(
-            img, (int(p[0]), int(p[1])), max(int(radius * px_per_m), 2), _PERSON, -1, cv2.LINE_AA
-        )
-
-    _draw_robot(canvas, sim)
-    return img
+    return TopDownMap(sim, px_per_m).draw(sim, frame, fov_deg)
 
 
-def _draw_patches(canvas: MapCanvas, sim: Simulation, frame: RenderedFrame) -> None:
+def _draw_patches(canvas: MapCanvas, img: npt.NDArray[np.uint8], sim: Simulation,
+                  frame: RenderedFrame) -> None:
     """Legacy landmark patches, coloured by surface; those in view circled."""
     lm = sim.landmarks
     pts = canvas.px(lm.positions_w[:, :2])
     for surface, colour in _LANDMARK.items():
         for u, v in pts[lm.surface == surface]:
-            canvas.image[max(v - 1, 0) : v + 1, max(u - 1, 0) : u + 1] = colour
+            img[max(v - 1, 0) : v + 1, max(u - 1, 0) : u + 1] = colour
     for u, v in pts[np.isin(lm.ids, frame.visible_ids)]:
-        cv2.circle(canvas.image, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
+        cv2.circle(img, (int(u), int(v)), 2, _VISIBLE, -1, cv2.LINE_AA)
 
 
 #: Each picture of a world as a stroke on the plan, a hand's breadth off its wall: (2, 2)
@@ -148,14 +186,14 @@ def picture_strokes(world: World) -> PictureStrokes:
     return strokes
 
 
-def _draw_pictures(canvas: MapCanvas, strokes: PictureStrokes, frame: RenderedFrame) -> None:
-    """Pictures on the walls as short strokes; those with a corner in view in red."""
+def _draw_pictures(img: npt.NDArray[np.uint8], strokes_px: list[npt.NDArray[np.int32]],
+                   frame: RenderedFrame) -> None:
+    """Pictures on the walls as short strokes (their ends (2, 2) in map pixels); those with
+    a corner in view in red."""
     seen = set((np.asarray(frame.visible_ids) // 4).tolist())
-    for i, stroke in enumerate(strokes):
-        a, b = canvas.px(stroke)
+    for i, (a, b) in enumerate(strokes_px):
         colour = _VISIBLE if i in seen else _LANDMARK[Surface.WALL]
-        cv2.line(canvas.image, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), colour, 2,
-                 cv2.LINE_AA)
+        cv2.line(img, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), colour, 2, cv2.LINE_AA)
 
 
 def _fov_polygon(sim: Simulation, frame: RenderedFrame, fov_deg: float) -> npt.NDArray[np.float64]:
@@ -173,7 +211,7 @@ def _fov_polygon(sim: Simulation, frame: RenderedFrame, fov_deg: float) -> npt.N
     return np.array(pts)
 
 
-def _draw_robot(canvas: MapCanvas, sim: Simulation) -> None:
+def _draw_robot(canvas: MapCanvas, img: npt.NDArray[np.uint8], sim: Simulation) -> None:
     """The robot's footprint and a heading arrow."""
     x, y, yaw = sim.body.pose_w
     half_l, half_w = sim.config.body.length_m / 2.0, sim.config.body.width_m / 2.0
@@ -182,11 +220,11 @@ def _draw_robot(canvas: MapCanvas, sim: Simulation) -> None:
         (x + c * dx - s * dy, y + s * dx + c * dy)
         for dx, dy in ((half_l, half_w), (half_l, -half_w), (-half_l, -half_w), (-half_l, half_w))
     ]
-    cv2.fillPoly(canvas.image, [canvas.px(corners)], _ROBOT, lineType=cv2.LINE_AA)
+    cv2.fillPoly(img, [canvas.px(corners)], _ROBOT, lineType=cv2.LINE_AA)
     tip = (x + c * 0.8, y + s * 0.8)
     a, b = canvas.px([(x, y), tip])
     cv2.arrowedLine(
-        canvas.image,
+        img,
         tuple(int(v) for v in a),
         tuple(int(v) for v in b),
         (0, 0, 0),

@@ -20,7 +20,7 @@ from sim.decor import PlacedObject
 from sim.pioneer.sonar import SonarRing
 from sim.renderer import FisheyeRenderer, camera_pose_world, rotation_base_cam, set_render_threads
 from sim.simulation import Simulation
-from sim.topdown import _FURNITURE, MapCanvas, draw_topdown
+from sim.topdown import _FURNITURE, MapCanvas, TopDownMap, draw_topdown
 from sim.world import LandmarkDensity, World, load_world
 from tests.sim.rooms import box_room
 from tools.bench.corners import picture_corner_errors_px
@@ -256,15 +256,18 @@ class TestObjectsPlacedWhileRunning:
         ring = SonarRing(sim.space, EmulatorConfig(sonar_noise_m=0.0), np.random.default_rng(0))
         sim.step()
         before = renderer.render(sim)
+        kept_map = TopDownMap(sim)  # a video's: made before the box, its layers drawn once
         box = sim.add_object(PlacedObject("box", (8.0, 3.0), (0.5, 0.5), 0.8))
         sim.step()
         with_box = renderer.render(sim)
         heard = ring.range_m(3, sim.body.pose_w)
         (u, v), = MapCanvas(sim).px([(8.0, 3.0)])
         assert tuple(draw_topdown(sim, with_box, 180.0)[v, u]) == _FURNITURE  # on the map too
+        assert tuple(kept_map.draw(sim, with_box, 180.0)[v, u]) == _FURNITURE
         sim.remove_object(box)
         sim.step()
         after = renderer.render(sim)
+        assert tuple(kept_map.draw(sim, after, 180.0)[v, u]) != _FURNITURE
 
         # The middle of the box's front face, x = 7.75 m, 0.4 m up.
         T = with_box.T_world_cam

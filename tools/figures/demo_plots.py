@@ -32,7 +32,7 @@ from tools.harness.teach import TaughtMemory
 if TYPE_CHECKING:
     from sim.renderer import RenderedFrame
     from sim.simulation import Simulation
-    from sim.topdown import PictureStrokes
+    from sim.topdown import TopDownMap
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # after matplotlib.use: the backend must be chosen first
@@ -164,7 +164,8 @@ class VideoWriter:
         self._trail: list[tuple[float, float]] = []
         self._key_image_shown: tuple[int, npt.NDArray[np.uint8]] | None = None
         self._count = 0
-        self._strokes: PictureStrokes | None = None  # the map's pictures, placed once
+        self._topdown: TopDownMap | None = None  # made at the first map
+        self._paths_px: list[npt.NDArray[np.int32]] = []
 
     def add(self, sim: Simulation, frame: RenderedFrame, sample: CycleSample) -> None:
         """Draw one cycle (called by :func:`tools.harness.demo.repeat_in_sim`)."""
@@ -204,17 +205,17 @@ class VideoWriter:
     def _map(self, sim: Simulation, frame: RenderedFrame,
              size: tuple[int, int]) -> npt.NDArray[np.uint8]:
         """The top-down map with the taught paths and the trail, fitted into ``size``."""
-        from sim.topdown import MapCanvas, draw_topdown, picture_strokes
+        from sim.topdown import TopDownMap
 
-        if self._strokes is None:
-            self._strokes = picture_strokes(sim.world)
-        top = draw_topdown(sim, frame, self._taught.memory.camera.fov_deg, _MAP_PX_PER_M,
-                           self._strokes)
-        canvas = MapCanvas(sim, _MAP_PX_PER_M)
-        for path_id in self._taught.path_ids:
-            ids = self._taught.memory.paths[path_id].keyframe_ids
-            pts = canvas.px([self._taught.true_poses[k][:2] for k in ids])
-            cv2.polylines(top, [pts], False, (160, 160, 160), 1, cv2.LINE_AA)
+        if self._topdown is None:
+            self._topdown = TopDownMap(sim, _MAP_PX_PER_M)
+            memory, poses = self._taught.memory, self._taught.true_poses
+            self._paths_px = [self._topdown.canvas.px([poses[k][:2] for k in
+                                                       memory.paths[path_id].keyframe_ids])
+                              for path_id in self._taught.path_ids]
+        canvas = self._topdown.canvas
+        top = self._topdown.draw(sim, frame, self._taught.memory.camera.fov_deg)
+        cv2.polylines(top, self._paths_px, False, (160, 160, 160), 1, cv2.LINE_AA)
         if len(self._trail) > 1:
             cv2.polylines(top, [canvas.px(self._trail)], False, (0, 0, 230), 2, cv2.LINE_AA)
         scale = min(size[0] / top.shape[1], size[1] / top.shape[0])
@@ -236,10 +237,13 @@ class VideoWriter:
 
         if self._writer is None:
             self._size = (image.shape[1], image.shape[0])
+            # x264's "veryfast" on one thread: the encoder runs beside the simulation on a
+            # 2-core machine (`make demo`'s repeat took 84 s with the default "medium" on
+            # x264's own threads, 70 s so; the file is no larger).
             self._writer = imageio_ffmpeg.write_frames(
                 str(self._path), self._size, pix_fmt_in="bgr24", fps=self._fps,
                 codec="libx264", macro_block_size=2, ffmpeg_log_level="error",
-                output_params=["-movflags", "+faststart"])
+                output_params=["-preset", "veryfast", "-threads", "1", "-movflags", "+faststart"])
             self._writer.send(None)
         self._writer.send(np.ascontiguousarray(image).tobytes())
 
