@@ -47,3 +47,14 @@ def compute_threads(count: int) -> None:
 
     set_render_threads(count)
     cv2.setNumThreads(count)
+
+
+def leave_a_cpu() -> None:
+    """Compute on every CPU this process may use but one, or on fewer if fewer were set
+    (:func:`compute_threads`; never more): for a lock-step simulation with a helper
+    process beside it, such as the demo's video encoder.
+    """
+    import numba
+
+    cpus = len(os.sched_getaffinity(0))
+    compute_threads(max(1, min(numba.get_num_threads(), cpus - 1)))
