@@ -75,7 +75,6 @@ def run(args: argparse.Namespace) -> int:
         taught_memory,
     )
     from tools.harness.demo_log import DemoLog
-    from tools.threads import leave_a_cpu
 
     setup = repeat_setup_from_args(args)
     config, sim_config, change, routes = setup.config, setup.sim_config, setup.change, setup.routes
@@ -108,11 +107,6 @@ def run(args: argparse.Namespace) -> int:
          "control_law": config.control.law},
         unix_offset_ns=time.time_ns())  # the repeat's simulation clock starts at 0 about now
     consumers = [c.add for c in (video, robot_log) if c is not None]
-    # The repeat computes on every CPU but one: ffmpeg encodes the video beside it, and the
-    # pools' idle threads spin on the CPUs while the robot's loop runs between frames
-    # (`make demo`'s repeat, 2026-11-30, idle 2-core machine: 101 s of wall time on two
-    # render threads, 84 s on one; without video, 62 and 59 s).
-    leave_a_cpu()
     repeat_started = time.perf_counter()
     try:
         with Progress(f"repeat to key image {goal}") as bar:

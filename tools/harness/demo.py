@@ -189,7 +189,8 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
                   start_offset_m: float = START_OFFSET_M,
                   vehicle_dir: Path | None = None) -> RepeatRun:
     """Place the robot, dispatch the goal from the ground station, and let the robot
-    localize, plan and follow (see the module docstring).
+    localize, plan and follow (see the module docstring), computing on every CPU but one
+    (:func:`tools.threads.leave_a_cpu`: never on more threads than were set).
 
     Args:
         taught: the memory and its truth.
@@ -228,9 +229,15 @@ def repeat_in_sim(taught: TaughtMemory, goal_id: int, config: VmnavConfig,
     from sim.world import load_world
     from tools.harness.ground_dispatch import GroundDispatch
     from tools.harness.lockstep_pioneer import lockstep_pioneer
+    from tools.threads import leave_a_cpu
 
     memory = taught.memory
     check_goal(memory, goal_id)
+    # Every CPU but one: beside the lock-step loop run ffmpeg (the demo's video) and the
+    # ground station, and idle render threads spin while the robot's loop runs between
+    # frames (`make demo`'s repeat, 2026-11-30, idle 2-core machine: 101 s of wall time on
+    # two render threads, 84 s on one; without video, 62 and 59 s).
+    leave_a_cpu()
     rng = np.random.default_rng([sim_config.seed, _REPEAT_STREAM])
     start = start_pose(taught, start_offset_m)
     taught_world = load_world(sim_config.world)

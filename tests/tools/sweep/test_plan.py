@@ -56,7 +56,8 @@ def test_the_shipped_plans_read_and_check(tmp_path: Path) -> None:
         plan = read_plan(path)
         check_plan(plan)
         counts[path.name] = len(plan.cases())
-    assert counts == {"building-campus-20.toml": 40, "lab-campus-1000.toml": 1008,
+    assert counts == {"building-20.toml": 20, "building-campus-20.toml": 40,
+                      "lab-campus-1000.toml": 1008,
                       "front-end-teblid.toml": 12, "lab-changes-20.toml": 20,
                       "lab-dim-relocalize.toml": 12,
                       "lab-light.toml": 18, "lab-other-lens.toml": 20,
