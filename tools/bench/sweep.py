@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     load_start = os.getloadavg()
     started = time.perf_counter()
     teacher = PoolExecutor(cpu_count())
-    memories = {case.memory_name: case.memory_argv for case in cases}
+    memories = {case.memory_name: case.run_memory_argv for case in cases}
     taught = [teacher.submit(teach_task, argv, out / name, 1)
               for name, argv in memories.items()]
     wait(taught)

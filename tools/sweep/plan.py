@@ -24,6 +24,13 @@ A plan file (docs/sweeps.md; ``examples/sweeps/*.toml``)::
 An axis left out takes ``vmnav demo``'s default. A case is a ``vmnav demo`` command
 line (:mod:`tools.harness.repeat_args`): its options say everything it depends on, its
 id is a hash of them, and the same options rerun it alone.
+
+Files (a world, a camera, the config) are taken relative to the plan and named in the
+options relative to the working directory where they lie under it
+(``docs/sweeps/lens1024.json`` from the project's root), so that a case's id, the plan
+stored with its results and the commands that rerun its cases are the same in every clone
+run from its root; the tasks are given them as absolute paths (:attr:`Case.run_argv`: a
+Ray worker runs in a folder of its own).
 """
 
 from __future__ import annotations
@@ -82,6 +89,16 @@ class Case:
     case_id: str
     memory_argv: tuple[str, ...]
     memory_name: str
+
+    @property
+    def run_argv(self) -> tuple[str, ...]:
+        """:attr:`argv` with its files as absolute paths (what a task is given)."""
+        return _absolute_files(self.argv)
+
+    @property
+    def run_memory_argv(self) -> tuple[str, ...]:
+        """:attr:`memory_argv` with its files as absolute paths."""
+        return _absolute_files(self.memory_argv)
 
 
 @dataclass(frozen=True)
@@ -197,7 +214,7 @@ def plan_from_data(data: dict[str, Any], folder: Path, source: str = "plan") -> 
     omega = sweep.get("max_omega_deg")
     return SweepPlan(axes=axes, routes=None if routes is None else tuple(routes),
                      goal_id=sweep.get("goal"),
-                     config=None if config is None else str(_resolve(folder, config)),
+                     config=None if config is None else _resolve(folder, config),
                      max_omega_deg=None if omega is None else float(omega), source=source)
 
 
@@ -226,7 +243,7 @@ def _axis_values(name: str, raw: object, folder: Path, source: str) -> tuple[obj
         if kind is str and isinstance(value, str) and value.strip():
             text = value.strip()
             values.append(None if text in NO_VALUE else
-                          str(_resolve(folder, text)) if name in _FILE_AXES and _is_file(text)
+                          _resolve(folder, text) if name in _FILE_AXES and _is_file(text)
                           else text)
         elif kind is int and isinstance(value, int) and not isinstance(value, bool):
             values.append(value)
@@ -248,9 +265,27 @@ def _is_file(text: str) -> bool:
     return text.endswith((".toml", ".json")) or "/" in text
 
 
-def _resolve(folder: Path, text: str) -> Path:
+def _resolve(folder: Path, text: str) -> str:
+    """A file named in a plan in ``folder``, as options name it (module docstring)."""
     path = Path(text).expanduser()
-    return path if path.is_absolute() else (folder / path).resolve()
+    path = path if path.is_absolute() else (folder / path).resolve()
+    try:
+        return str(path.relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+#: The options whose values may be files (:data:`_FILE_AXES` and ``[sweep] config``).
+_FILE_OPTIONS = frozenset({AXES[name][0] for name in _FILE_AXES} | {"--config"})
+
+
+def _absolute_files(argv: tuple[str, ...]) -> tuple[str, ...]:
+    """``argv`` with the values of :data:`_FILE_OPTIONS` that name files made absolute."""
+    out = list(argv)
+    for i in range(1, len(out), 2):
+        if out[i - 1] in _FILE_OPTIONS and _is_file(out[i]):
+            out[i] = str(Path(out[i]).resolve())
+    return tuple(out)
 
 
 def _text(value: object) -> str:

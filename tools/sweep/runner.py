@@ -79,7 +79,7 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
 
     def teach_next() -> None:
         folder, group = untaught.pop(0)
-        future = _submit(executor, teach_task, group[0].memory_argv, folder, processes,
+        future = _submit(executor, teach_task, group[0].run_memory_argv, folder, processes,
                          executor.render_threads)
         teaches[future] = folder
         pending.add(future)
@@ -105,7 +105,7 @@ def run_sweep(cases: list[Case], memories: Callable[[Case], Path], executor: Exe
                         record(case, {"status": "crashed", "error": "teaching its memory "
                                       f"in {folder} failed:\n{result['error']}"})
                         continue
-                    submitted = _submit(executor, case_task, case.argv, folder,
+                    submitted = _submit(executor, case_task, case.run_argv, folder,
                                         executor.render_threads)
                     running[submitted] = (case, result["teach_wall_time_s"])
                     pending.add(submitted)

@@ -36,15 +36,33 @@ def test_a_plan_expands_to_every_combination(tmp_path: Path) -> None:
     assert dict(first.values)["lighting"] is None and list(dict(first.values)) == list(AXES)
     assert cases[1].argv[-4:] == ("--law", "paper+ff", "--speed", "0.2")
     assert "--lighting" in cases[2].argv and "--lighting" not in cases[1].argv
-    # relative files are taken from the plan's folder
-    assert str(tmp_path / "worlds" / "mine.toml") in cases[8].argv
-    assert str(tmp_path / "cams" / "wide.json") in cases[1].argv
+    # relative files are taken from the plan's folder; tasks get them as absolute paths
+    assert str(tmp_path / "worlds" / "mine.toml") in cases[8].run_argv
+    assert str(tmp_path / "cams" / "wide.json") in cases[1].run_argv
+    assert str(tmp_path / "cams" / "wide.json") in cases[1].run_memory_argv
     # the same memory for the light levels, another for another camera or seed
     assert cases[0].memory_name == cases[2].memory_name != cases[1].memory_name
     assert len({c.memory_name for c in cases}) == 2 * 2 * 2
     assert cases[0].memory_name.startswith("lab-seed3-")
     assert len({c.case_id for c in cases}) == len(cases)
     assert read_plan(tmp_path / "plan.toml").cases() == cases  # ids are stable
+
+
+def test_files_are_named_from_the_working_directory_so_ids_hold_in_any_clone(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    ids = []
+    for clone in ("a", "b"):
+        (tmp_path / clone / "plans" / "cams").mkdir(parents=True)
+        (tmp_path / clone / "plans" / "plan.toml").write_text(PLAN)
+        monkeypatch.chdir(tmp_path / clone)
+        cases = read_plan(Path("plans/plan.toml")).cases()
+        assert "plans/cams/wide.json" in cases[1].argv  # as a user types it from the root
+        assert str(tmp_path / clone / "plans/cams/wide.json") in cases[1].run_argv
+        ids.append([(c.case_id, c.memory_name) for c in cases])
+    assert ids[0] == ids[1]
+    monkeypatch.chdir(tmp_path / "b")  # a's files do not lie under it: absolute paths
+    outside = read_plan(tmp_path / "a" / "plans" / "plan.toml").cases()
+    assert str(tmp_path / "a" / "plans" / "cams" / "wide.json") in outside[1].argv
 
 
 def test_the_shipped_plans_read_and_check(tmp_path: Path) -> None:

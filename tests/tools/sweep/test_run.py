@@ -82,11 +82,15 @@ def test_a_crashing_case_is_a_row_with_its_traceback(interrupted_sweep) -> None:
 
 
 @pytest.mark.slow
-def test_ray_gives_the_pool_s_figures(interrupted_sweep, tmp_path, capsys) -> None:
+def test_ray_gives_the_pool_s_figures(interrupted_sweep, tmp_path, capsys, monkeypatch) -> None:
     """Two cases as Ray tasks (a local Ray of 2 CPUs), on the memory the pool's sweep
     taught (copied: a folder holding only memories is a sweep's to start): each case's
-    figures are those its pool process gave, the wall-clock ones aside."""
+    figures are those its pool process gave, the wall-clock ones aside. Run from the pool
+    sweep's folder (so the world file has the same name and the cases the same ids), the
+    plan elsewhere; Ray's workers run in folders of their own (they are given absolute
+    paths)."""
     pool_out, _, _, _ = interrupted_sweep
+    monkeypatch.chdir(pool_out.parent)
     plan = write_plan(tmp_path, pool_out.parent / "lab_short.toml", [0.3, 0.2])
     shutil.copytree(pool_out / "memories", tmp_path / "out" / "memories")
     assert main(["sweep", "run", str(plan), "--out", str(tmp_path / "out"),
