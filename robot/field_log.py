@@ -45,7 +45,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import uuid
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -144,13 +144,13 @@ def note_level(level: int) -> str:
     return next((name for floor, name in _NOTE_LEVELS if level >= floor), "DEBUG")
 
 
-def key_image_id(record: CycleRecord, targets: Sequence[int]) -> int | None:
-    """The key image a following cycle heads for, from the route's ``targets``
-    (:attr:`robot.follower.RouteFollower.targets`); None when not following or not known."""
+def key_image_id(record: CycleRecord) -> int | None:
+    """The key image a following cycle heads for (of :attr:`CycleRecord.targets`); None when
+    not following or not known."""
     follow = record.follow
-    if follow is None or not 0 <= follow.target_index < len(targets):
+    if follow is None or not 0 <= follow.target_index < len(record.targets):
         return None
-    return targets[follow.target_index]
+    return record.targets[follow.target_index]
 
 
 class FieldLog:
@@ -187,18 +187,16 @@ class FieldLog:
             "stamp_ns": t_ns, "goal_key_image_id": goal_id, "rng_state": dict(rng_state),
             "config": dataclasses.asdict(config)})
 
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
-              targets: Sequence[int] = ()) -> None:
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8]) -> None:
         """One mission cycle on its (H, W) uint8 grey frame.
 
         Args:
-            record: what the cycle did.
+            record: what the cycle did (its ``targets`` name the key image headed for;
+                empty: ``key_image_id`` is null).
             image: the frame the cycle consumed (copied when queued).
-            targets: the route's targets (``run.follower.targets``), to name the key image
-                headed for; empty: ``key_image_id`` is null.
         """
         writer, t_ns, follow = self._writer, record.t_ns, record.follow
-        state = servo_state(record, key_image_id(record, targets))
+        state = servo_state(record, key_image_id(record))
         if writer.log_image(t_ns, topics.CAMERA_IMAGE, image,
                             lossless=self.config.replay_frames):
             # OpenCV's pixel centres are at integers, Foxglove's at +0.5 (messages.image_points).

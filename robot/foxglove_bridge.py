@@ -42,7 +42,7 @@ from __future__ import annotations
 import collections
 import logging
 import threading
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from typing import Any, NamedTuple
 
 import cv2
@@ -100,7 +100,6 @@ class _Frame(NamedTuple):
 
 class _Cycle(NamedTuple):
     record: CycleRecord
-    targets: Sequence[int]
 
 
 class _Line(NamedTuple):
@@ -198,11 +197,9 @@ class FoxgloveBridge:
         after its step."""
         self._frame = _Frame(t_ns, image, telemetry)
 
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
-              targets: Sequence[int] = ()) -> None:
-        """A mission cycle (its frame comes through :meth:`offer`); ``targets``: the
-        route's key images."""
-        self._put(_Cycle(record, targets))
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8]) -> None:
+        """A mission cycle (its frame comes through :meth:`offer`)."""
+        self._put(_Cycle(record))
 
     def event(self, event: AppEvent) -> None:
         """A mission event, a ``foxglove.Log`` line."""
@@ -267,7 +264,7 @@ class FoxgloveBridge:
 
     def _publish_cycle(self, cycle: _Cycle) -> None:
         record = cycle.record
-        state = servo_state(record, key_image_id(record, cycle.targets))
+        state = servo_state(record, key_image_id(record))
         self._last_cycle = record
         self._last_label = frame_label(record.state.value, state["key_image_id"],
                                        state["matched_points"])

@@ -111,9 +111,9 @@ class GoalRuns:
         assert run is not None
         record = run.cycle(t_ns, image)
         if record.follow is not None:
-            self.servo = _servo_telemetry(run, record)
+            self.servo = _servo_telemetry(record)
         if self._log is not None:
-            self._log.cycle(record, image, () if run.follower is None else run.follower.targets)
+            self._log.cycle(record, image)
         self._forward_events(run)
         return record, self.finish() if run.finished else None
 
@@ -177,12 +177,10 @@ def _detail(result: MissionResult) -> str:
     return f"{result.reason}: {result.detail}"
 
 
-def _servo_telemetry(run: MissionRun, record: CycleRecord) -> ServoTelemetry:
+def _servo_telemetry(record: CycleRecord) -> ServoTelemetry:
     """The follower's state of a following cycle, for VISUAL_SERVO_STATUS."""
-    follow = record.follow
-    follower = run.follower
-    assert follow is not None and follower is not None
-    targets = follower.targets
+    follow, targets = record.follow, record.targets
+    assert follow is not None and targets
     vision = follow.vision
     nan = math.nan
     return ServoTelemetry(

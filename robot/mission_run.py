@@ -109,6 +109,9 @@ class CycleRecord:
         follow: the servo cycle, when following.
         localization: the localization, when localizing.
         route: the planned route (key image ids), once planned.
+        targets: the key images headed for along it, junction crossings merged
+            (:attr:`robot.follower.RouteFollower.targets`; ``follow.target_index`` indexes
+            these, not ``route``).
         compute_ns: processing time of the cycle (frame in to command out), ns of
             the stopwatch (wall time on any clock).
     """
@@ -120,6 +123,7 @@ class CycleRecord:
     localization: Localization | None
     route: tuple[int, ...]
     compute_ns: int
+    targets: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,7 +299,8 @@ class MissionRun:
             self._feed(Tick(t_ns))
         return CycleRecord(t_ns=t_ns, state=self._mission.state, base=base,
                            follow=follow, localization=localization, route=self._route,
-                           compute_ns=self._stopwatch() - started)
+                           compute_ns=self._stopwatch() - started,
+                           targets=() if self._follower is None else self._follower.targets)
 
     def _safety_hold(self, t_ns: int, base: BaseState) -> None:
         """Rule 1's wait and resume."""

@@ -3,7 +3,6 @@ topics')."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -22,9 +21,8 @@ class RuntimeLog(Protocol):
         """A mission run to ``goal_id`` starts; ``rng_state`` is its generator's state."""
         ...
 
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
-              targets: Sequence[int] = ()) -> None:
-        """One mission cycle on its (H, W) uint8 frame; ``targets``: the route's key images."""
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8]) -> None:
+        """One mission cycle on its (H, W) uint8 frame."""
         ...
 
     def event(self, event: AppEvent) -> None:
@@ -53,10 +51,9 @@ class RuntimeLogs:
         for log in self._logs:
             log.mission_started(t_ns, goal_id, rng_state, config)
 
-    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8],
-              targets: Sequence[int] = ()) -> None:
+    def cycle(self, record: CycleRecord, image: npt.NDArray[np.uint8]) -> None:
         for log in self._logs:
-            log.cycle(record, image, targets)
+            log.cycle(record, image)
 
     def event(self, event: AppEvent) -> None:
         for log in self._logs:

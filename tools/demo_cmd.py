@@ -164,9 +164,9 @@ def _status(sample: CycleSample) -> str:
     """One cycle as the progress line shows it: state, the key image headed for, time."""
     record = sample.record
     where = ""
-    if record.follow is not None and record.route:
-        index = min(record.follow.target_index, len(record.route) - 1)
-        where = f" to key image {record.route[index]} ({index + 1} of {len(record.route)})"
+    if record.follow is not None and record.targets:
+        index = min(record.follow.target_index, len(record.targets) - 1)
+        where = f" to key image {record.targets[index]} ({index + 1} of {len(record.targets)})"
     return f"{record.state.name.lower()}{where}, {record.t_ns / 1e9:.0f} s simulated"
 
 

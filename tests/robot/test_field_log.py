@@ -53,7 +53,7 @@ def record(i: int, following: bool) -> CycleRecord:
         s_m=-0.5 + 0.1 * i, switch=None, lost=None)
     return CycleRecord(t_ns=t_ns, state=MissionState.FOLLOWING if following
                        else MissionState.LOCALIZING, base=base, follow=follow, localization=None,
-                       route=(4, 5, 6), compute_ns=0)
+                       route=(4, 5, 6), compute_ns=0, targets=(4, 6))
 
 
 def by_topic(files: tuple[Path, ...]) -> dict[str, list[LogMessage]]:
@@ -80,7 +80,7 @@ def logged(tmp_path_factory: pytest.TempPathFactory):
     with FieldLog(LogConfig(output_dir=str(folder)), "robot", MOUNT,
                   {"robot": "p3at"}, unix_offset_ns=EPOCH_NS) as log:
         for r in records:
-            log.cycle(r, frame(rng), targets=(4, 6))
+            log.cycle(r, frame(rng))
         log.event(AppEvent(records[1].t_ns, "lost", "no_estimate", "no estimate for 2 s"))
         log.note(records[2].t_ns, logging.ERROR, "memory not written")
         log.sip(records[2].t_ns, Sip(flags=SipFlags.MOTORS_ENABLED, battery_v=12.5))
@@ -167,7 +167,7 @@ def test_every_servo_state_field_is_in_the_schema_the_file_declares(tmp_path: Pa
     with FieldLog(LogConfig(output_dir=str(tmp_path)), "robot", MOUNT, {},
                   unix_offset_ns=0) as log:
         for r in (record(0, False), record(1, True), switched):
-            log.cycle(r, frame(rng), targets=(4, 6))
+            log.cycle(r, frame(rng))
     (file,) = log.close().files
     with open(file, "rb") as f:
         summary = make_reader(f).get_summary()

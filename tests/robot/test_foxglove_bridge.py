@@ -62,7 +62,7 @@ def test_a_client_sees_the_loops_frames_cycles_and_lines_live() -> None:
         def feed(i: int) -> int:
             """Cycle ``i`` as the loop gives it (the cycle, then its frame); its time."""
             r = record(i, True)
-            live.cycle(r, image(i), targets=(4, 6))
+            live.cycle(r, image(i))
             live.offer(r.t_ns, image(i), telemetry(i))
             return r.t_ns
 

@@ -104,9 +104,8 @@ def logged(tmp_path_factory: pytest.TempPathFactory, east_a: tuple[Path, Path]) 
 
         def observe(record: CycleRecord, run: MissionRun = run) -> None:
             records.append(record)
-            targets = () if run.follower is None else run.follower.targets
             for log in logs:
-                log.cycle(record, frames.last, targets)
+                log.cycle(record, frames.last)
 
         result = run.run(goal, frames, clock, sim_config.frame_period_ns, 30 * 10**9, observe)
         assert result.reached_goal

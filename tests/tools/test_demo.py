@@ -256,6 +256,25 @@ def test_a_plan_made_between_two_key_images_is_measured_from_the_first() -> None
         true_poses[1])  # type: ignore[arg-type]
 
 
+def test_the_key_image_headed_for_is_named_from_the_targets_not_the_route() -> None:
+    # Route 4, 5, 6 where 5 is a junction crossing merged with 6: target 1 is key image 6.
+    from robot.control_law import Twist
+    from robot.follower import FollowStep
+    from tools.demo_cmd import _status
+    from tools.figures.demo_plots import _target_key
+
+    base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
+                     stalled=False, battery_v=13.0, motors_enabled=True)
+    follow = FollowStep(t_ns=0, target_index=1, twist=Twist(0.2, 0.0), vision=None,
+                        corners_xy=np.zeros((0, 2)), y_m=None, theta_rad=None, s_m=None,
+                        switch=None, lost=None)
+    sample = CycleSample(record=CycleRecord(
+        t_ns=0, state=MissionState.FOLLOWING, base=base, follow=follow, localization=None,
+        route=(4, 5, 6), compute_ns=0, targets=(4, 6)), pose_w=(0.0, 0.0, 0.0))
+    assert _target_key(sample) == 6
+    assert _status(sample).startswith("following to key image 6 (2 of 2)")
+
+
 def test_the_summary_rounds_for_people() -> None:
     from tools.figures.demo_report import summary_text
 

@@ -195,7 +195,7 @@ class VideoWriter:
             matches = follow.vision.matches if follow.vision is not None else 0
             target = _target_key(sample)
             lines.append(f"key image {target} ({follow.target_index + 1} of "
-                         f"{len(record.route)})  matches {matches}")
+                         f"{len(record.targets)})  matches {matches}")
             if follow.y_m is not None and follow.theta_rad is not None:
                 lines.append(f"y {100 * follow.y_m:+5.1f} cm  "
                              f"theta {np.degrees(follow.theta_rad):+5.1f} deg")
@@ -256,10 +256,10 @@ class VideoWriter:
 
 def _target_key(sample: CycleSample) -> int | None:
     """The key image the follower heads for in ``sample`` (None when not following)."""
-    follow, route = sample.record.follow, sample.record.route
-    if follow is None or not route:
+    follow, targets = sample.record.follow, sample.record.targets
+    if follow is None or not targets:
         return None
-    return route[min(follow.target_index, len(route) - 1)]
+    return targets[min(follow.target_index, len(targets) - 1)]
 
 
 def _label(image: npt.NDArray[np.uint8], lines: list[str], scale: float) -> None:
