@@ -97,8 +97,9 @@ class ResultsTable:
         if meta.exists():
             stored = read_json(meta)
             if stored.get("plan") != plan:
-                raise InputError(folder, "holds the results of another plan (sweep.json): "
-                                 "choose another --out")
+                raise InputError(folder, "holds the results of another plan (sweep.json; a "
+                                 "plan's files are named from the folder it runs in): "
+                                 "choose another --out, or run from that folder")
         elif folder.exists() and any(p.name != MEMORIES_NAME for p in folder.iterdir()):
             raise InputError(folder, "holds files of no sweep: choose a new or empty --out")
         else:
