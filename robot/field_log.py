@@ -88,7 +88,7 @@ def camera_transform(mount: CameraMountConfig) -> FrameTransform:
                           (mount.x_m, mount.y_m, mount.height_m), (w, x, y, z))
 
 
-def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]:
+def servo_state(record: CycleRecord) -> dict[str, Any]:
     """The flat ``vmnav.ServoState`` of one cycle: every field of
     :data:`shared.logs.schemas.SERVO_STATE`, which describes them.
 
@@ -102,8 +102,7 @@ def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]
     those of the localization.
 
     Args:
-        record: the cycle.
-        key_image_id: the key image headed for (None when not following or not known).
+        record: the cycle (``key_image_id`` is its :attr:`CycleRecord.target_key`).
     """
     follow, vision = record.follow, None if record.follow is None else record.follow.vision
     ok = vision is not None and vision.state.ok
@@ -115,7 +114,7 @@ def servo_state(record: CycleRecord, key_image_id: int | None) -> dict[str, Any]
         "mode": "repeat",
         "mission_state": record.state.value,
         "target_index": -1 if follow is None else follow.target_index,
-        "key_image_id": key_image_id,
+        "key_image_id": record.target_key,
         "lateral_error_m": None if follow is None else follow.y_m,
         "angular_error_rad": None if follow is None else follow.theta_rad,
         "progress_m": None if follow is None else follow.s_m,
@@ -142,15 +141,6 @@ def event_line(event: AppEvent) -> tuple[str, str]:
 def note_level(level: int) -> str:
     """The ``foxglove.Log`` level of a ``logging`` level (CRITICAL becomes FATAL)."""
     return next((name for floor, name in _NOTE_LEVELS if level >= floor), "DEBUG")
-
-
-def key_image_id(record: CycleRecord) -> int | None:
-    """The key image a following cycle heads for (of :attr:`CycleRecord.targets`); None when
-    not following or not known."""
-    follow = record.follow
-    if follow is None or not 0 <= follow.target_index < len(record.targets):
-        return None
-    return record.targets[follow.target_index]
 
 
 class FieldLog:
@@ -191,12 +181,11 @@ class FieldLog:
         """One mission cycle on its (H, W) uint8 grey frame.
 
         Args:
-            record: what the cycle did (its ``targets`` name the key image headed for;
-                empty: ``key_image_id`` is null).
+            record: what the cycle did.
             image: the frame the cycle consumed (copied when queued).
         """
         writer, t_ns, follow = self._writer, record.t_ns, record.follow
-        state = servo_state(record, key_image_id(record))
+        state = servo_state(record)
         if writer.log_image(t_ns, topics.CAMERA_IMAGE, image,
                             lossless=self.config.replay_frames):
             # OpenCV's pixel centres are at integers, Foxglove's at +0.5 (messages.image_points).

@@ -57,7 +57,6 @@ from robot.field_log import (
     camera_transform,
     event_line,
     frame_label,
-    key_image_id,
     note_level,
     servo_state,
 )
@@ -264,7 +263,7 @@ class FoxgloveBridge:
 
     def _publish_cycle(self, cycle: _Cycle) -> None:
         record = cycle.record
-        state = servo_state(record, key_image_id(record))
+        state = servo_state(record)
         self._last_cycle = record
         self._last_label = frame_label(record.state.value, state["key_image_id"],
                                        state["matched_points"])

@@ -125,6 +125,14 @@ class CycleRecord:
     compute_ns: int
     targets: tuple[int, ...] = ()
 
+    @property
+    def target_key(self) -> int | None:
+        """The key image headed for (of :attr:`targets`; the last, the goal, on the cycle
+        that arrives); None when not following or the targets are not known."""
+        if self.follow is None or not self.targets:
+            return None
+        return self.targets[min(self.follow.target_index, len(self.targets) - 1)]
+
 
 @dataclass(frozen=True, eq=False)
 class MissionResult:

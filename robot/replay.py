@@ -254,7 +254,7 @@ def logged_fields(servo: Mapping[str, Any], command: Mapping[str, Any] | None) -
 
 def replayed_fields(record: CycleRecord, command: tuple[float, float] | None) -> dict[str, Any]:
     """The :data:`FIELDS` of a replayed cycle and the command the base got (None: none)."""
-    state = servo_state(record, None)
+    state = servo_state(record)
     fields = {name: state[name] for name in SERVO_FIELDS}
     fields["cmd_linear_x_m_s"] = None if command is None else command[0]
     fields["cmd_angular_z_rad_s"] = None if command is None else command[1]

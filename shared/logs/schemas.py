@@ -158,9 +158,11 @@ SERVO_STATE = _flat("vmnav.ServoState", "One mission cycle of the robot "
     "mode": ("string", "teach, repeat, idle, ..."),
     "mission_state": ("string", "the mission state after the cycle (robot.mission.MissionState: "
                       "idle, localizing, following, lost, arrived, aborted, failed)"),
-    "target_index": ("integer", "index of the key image headed for in the route; -1 when not "
-                     "following"),
-    "key_image_id": (["integer", "null"], "id of that key image"),
+    "target_index": ("integer", "index of the key image headed for among the route's targets "
+                     "(its key images, junction crossings merged; their count on the cycle "
+                     "that arrives); -1 when not following"),
+    "key_image_id": (["integer", "null"], "id of that key image (the goal on the cycle that "
+                     "arrives); null when not following"),
     "lateral_error_m": (["number", "null"], "y: lateral offset from the taught path, m "
                         "(filtered, what the control law used)"),
     "angular_error_rad": (["number", "null"], "theta: heading error to the taught path, rad "

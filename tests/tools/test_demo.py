@@ -261,7 +261,6 @@ def test_the_key_image_headed_for_is_named_from_the_targets_not_the_route() -> N
     from robot.control_law import Twist
     from robot.follower import FollowStep
     from tools.demo_cmd import _status
-    from tools.figures.demo_plots import _target_key
 
     base = BaseState(odom_pose=(0.0, 0.0, 0.0), odom_distance_m=0.0, bumped=False,
                      stalled=False, battery_v=13.0, motors_enabled=True)
@@ -271,7 +270,7 @@ def test_the_key_image_headed_for_is_named_from_the_targets_not_the_route() -> N
     sample = CycleSample(record=CycleRecord(
         t_ns=0, state=MissionState.FOLLOWING, base=base, follow=follow, localization=None,
         route=(4, 5, 6), compute_ns=0, targets=(4, 6)), pose_w=(0.0, 0.0, 0.0))
-    assert _target_key(sample) == 6
+    assert sample.record.target_key == 6
     assert _status(sample).startswith("following to key image 6 (2 of 2)")
 
 

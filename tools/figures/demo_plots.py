@@ -176,7 +176,7 @@ class VideoWriter:
         view = self._live_view(frame, sample)
         height, width = view.shape[:2]
         side = (width // 2) & ~1, (height // 2) & ~1  # the right column: half size, even
-        target = _target_key(sample)
+        target = sample.record.target_key
         panel = np.zeros((side[1], side[0], 3), np.uint8)
         if target is not None:
             panel = cv2.cvtColor(cv2.resize(self._key_image(target), side), cv2.COLOR_GRAY2BGR)
@@ -193,9 +193,9 @@ class VideoWriter:
             for x, y in follow.corners_xy.astype(int):
                 cv2.circle(view, (int(x), int(y)), 3, (0, 200, 0), 1, cv2.LINE_AA)
             matches = follow.vision.matches if follow.vision is not None else 0
-            target = _target_key(sample)
-            lines.append(f"key image {target} ({follow.target_index + 1} of "
-                         f"{len(record.targets)})  matches {matches}")
+            count = len(record.targets)
+            lines.append(f"key image {record.target_key} ({min(follow.target_index + 1, count)} "
+                         f"of {count})  matches {matches}")
             if follow.y_m is not None and follow.theta_rad is not None:
                 lines.append(f"y {100 * follow.y_m:+5.1f} cm  "
                              f"theta {np.degrees(follow.theta_rad):+5.1f} deg")
@@ -252,14 +252,6 @@ class VideoWriter:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
-
-
-def _target_key(sample: CycleSample) -> int | None:
-    """The key image the follower heads for in ``sample`` (None when not following)."""
-    follow, targets = sample.record.follow, sample.record.targets
-    if follow is None or not targets:
-        return None
-    return targets[min(follow.target_index, len(targets) - 1)]
 
 
 def _label(image: npt.NDArray[np.uint8], lines: list[str], scale: float) -> None:
