@@ -185,7 +185,7 @@ def _servo_telemetry(record: CycleRecord) -> ServoTelemetry:
     nan = math.nan
     return ServoTelemetry(
         current_key=targets[follow.target_index - 1] if follow.target_index > 0 else None,
-        next_key=targets[min(follow.target_index, len(targets) - 1)],
+        next_key=record.target_key,
         matches=0 if vision is None else vision.matches,
         err_image_max_px=nan if vision is None else vision.image_errors.err_image_max_px,
         err_points_px=nan if vision is None else vision.image_errors.err_points_px,

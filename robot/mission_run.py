@@ -126,12 +126,18 @@ class CycleRecord:
     targets: tuple[int, ...] = ()
 
     @property
-    def target_key(self) -> int | None:
-        """The key image headed for (of :attr:`targets`; the last, the goal, on the cycle
-        that arrives); None when not following or the targets are not known."""
+    def target_number(self) -> int | None:
+        """Which of the :attr:`targets` is headed for, counted from 1 (the last, the goal, on
+        the cycle that arrives); None when not following or the targets are not known."""
         if self.follow is None or not self.targets:
             return None
-        return self.targets[min(self.follow.target_index, len(self.targets) - 1)]
+        return min(self.follow.target_index, len(self.targets) - 1) + 1
+
+    @property
+    def target_key(self) -> int | None:
+        """The key image headed for (:attr:`target_number`); None as it is."""
+        number = self.target_number
+        return None if number is None else self.targets[number - 1]
 
 
 @dataclass(frozen=True, eq=False)

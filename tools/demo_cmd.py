@@ -164,9 +164,9 @@ def _status(sample: CycleSample) -> str:
     """One cycle as the progress line shows it: state, the key image headed for, time."""
     record = sample.record
     where = ""
-    if record.follow is not None and record.target_key is not None:
-        index = min(record.follow.target_index, len(record.targets) - 1)
-        where = f" to key image {record.target_key} ({index + 1} of {len(record.targets)})"
+    if record.target_number is not None:
+        where = (f" to key image {record.target_key} ({record.target_number} of "
+                 f"{len(record.targets)})")
     return f"{record.state.name.lower()}{where}, {record.t_ns / 1e9:.0f} s simulated"
 
 

@@ -193,9 +193,8 @@ class VideoWriter:
             for x, y in follow.corners_xy.astype(int):
                 cv2.circle(view, (int(x), int(y)), 3, (0, 200, 0), 1, cv2.LINE_AA)
             matches = follow.vision.matches if follow.vision is not None else 0
-            count = len(record.targets)
-            lines.append(f"key image {record.target_key} ({min(follow.target_index + 1, count)} "
-                         f"of {count})  matches {matches}")
+            lines.append(f"key image {record.target_key} ({record.target_number} of "
+                         f"{len(record.targets)})  matches {matches}")
             if follow.y_m is not None and follow.theta_rad is not None:
                 lines.append(f"y {100 * follow.y_m:+5.1f} cm  "
                              f"theta {np.degrees(follow.theta_rad):+5.1f} deg")
